@@ -1,0 +1,51 @@
+# railradio — set-up and entry points.  Every target bootstraps .venv when missing.
+PYTHON ?= python3.11
+VENV   := .venv
+BIN    := $(VENV)/bin
+STAMP  := $(VENV)/.installed
+JOBS   ?= 2
+SNAKE  := $(BIN)/snakemake --workflow-profile workflow/profiles/default
+export HDF5_USE_FILE_LOCKING := FALSE
+export MPLBACKEND := Agg
+
+.PHONY: all figures numbers paper test test-fast bench reproduce report lint clean
+
+all: figures numbers
+
+$(STAMP): pyproject.toml constraints.txt
+	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
+	$(BIN)/python -m pip install -q --disable-pip-version-check -c constraints.txt -e '.[test]'
+	touch $(STAMP)
+
+figures: $(STAMP)  ## every paper figure at paper scale
+	$(SNAKE) figures -j$(JOBS)
+
+numbers: $(STAMP)  ## results/key_numbers.json and results/paper/numbers.tex
+	$(SNAKE) numbers -j$(JOBS)
+
+paper: $(STAMP)  ## results/paper/main.pdf (needs latexmk, see README)
+	$(SNAKE) paper -j$(JOBS)
+
+report: figures numbers  ## results/report.html
+	$(SNAKE) all --report results/report.html
+
+lint: $(STAMP)
+	$(BIN)/snakemake --lint
+
+test: $(STAMP)  ## lint, dry runs, unit + integration tests, CI-scale pipeline, key numbers
+	$(BIN)/snakemake --lint
+	$(SNAKE) all -n -q rules
+	$(BIN)/python -m pytest
+
+test-fast: $(STAMP)  ## unit tests only
+	$(BIN)/python -m pytest -m "not slow"
+
+bench: $(STAMP)  ## benchmarks -> results/benchmarks/*.json
+	$(BIN)/python benchmarks/bench_fusion.py --out results/benchmarks/fusion_bench.json
+
+reproduce: $(STAMP)  ## paper scale from nothing, compared with paper/numbers.json
+	$(SNAKE) numbers -j$(JOBS) --forceall
+	$(BIN)/python -m railradio.keynumbers results/key_numbers.json paper/numbers.json
+
+clean:
+	rm -rf results .snakemake

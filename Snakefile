@@ -1,0 +1,38 @@
+# railradio — the study pipeline.  Thin: config, validation, rule files, targets.
+# Run with `make figures` or `snakemake -j2 --workflow-profile workflow/profiles/default figures`.
+from snakemake.utils import min_version
+
+min_version("9.0")
+
+
+configfile: "config/config.yaml"
+
+
+include: "workflow/rules/common.smk"
+include: "workflow/rules/fusion.smk"
+include: "workflow/rules/paper.smk"
+
+
+rule all:
+    default_target: True
+    input:
+        FIGURES,
+        "results/key_numbers.json",
+        "results/paper/numbers.tex",
+
+
+rule figures:
+    input:
+        FIGURES,
+
+
+rule numbers:
+    input:
+        "results/key_numbers.json",
+        "results/paper/numbers.tex",
+
+
+rule fusion:
+    input:
+        STUDY_FIGURES["fusion"],
+        "results/fusion/key_numbers.json",

@@ -1,0 +1,95 @@
+"""Config validation against the workflow's JSON schema, with messages a user can act on.
+
+Only the workflow reads ``config/``; this module turns a loaded config mapping into a
+validated one (schema defaults filled in) or raises :class:`ConfigError` naming the key,
+the bad value and the allowed range, before any job runs.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import MutableMapping
+from typing import Any
+
+import jsonschema
+import yaml
+
+
+class ConfigError(ValueError):
+    """A config value violates the schema; the message names the key and the range."""
+
+
+def load_schema(path: str | os.PathLike[str]) -> dict[str, Any]:
+    """Load a YAML/JSON schema file."""
+    with open(path, encoding="utf-8") as fh:
+        return yaml.safe_load(fh)
+
+
+def _key_path(path: Any) -> str:
+    out = ""
+    for p in path:
+        out += f"[{p}]" if isinstance(p, int) else (f".{p}" if out else str(p))
+    return out or "<top level>"
+
+
+def describe_allowed(schema: dict[str, Any]) -> str:
+    """A one-line human description of what a schema node allows."""
+    parts: list[str] = []
+    if "enum" in schema:
+        parts.append("one of " + ", ".join(repr(v) for v in schema["enum"]))
+    if "type" in schema:
+        parts.append(f"type {schema['type']}")
+    lo = [f"> {schema['exclusiveMinimum']}"] if "exclusiveMinimum" in schema else []
+    lo += [f">= {schema['minimum']}"] if "minimum" in schema else []
+    hi = [f"< {schema['exclusiveMaximum']}"] if "exclusiveMaximum" in schema else []
+    hi += [f"<= {schema['maximum']}"] if "maximum" in schema else []
+    if lo or hi:
+        parts.append("value " + " and ".join(lo + hi))
+    if "minItems" in schema:
+        parts.append(f"at least {schema['minItems']} item(s)")
+    if "maxItems" in schema:
+        parts.append(f"at most {schema['maxItems']} item(s)")
+    if "items" in schema and isinstance(schema["items"], dict):
+        parts.append("each item " + describe_allowed(schema["items"]))
+    if schema.get("uniqueItems"):
+        parts.append("no repeated items")
+    return "; ".join(parts) if parts else "see the schema"
+
+
+def _fill_defaults(cfg: MutableMapping[str, Any], schema: dict[str, Any]) -> None:
+    for name, sub in schema.get("properties", {}).items():
+        if name not in cfg and "default" in sub:
+            cfg[name] = sub["default"]
+        if isinstance(cfg.get(name), MutableMapping) and sub.get("type") == "object":
+            _fill_defaults(cfg[name], sub)
+
+
+def validate_config(cfg: MutableMapping[str, Any], schema: dict[str, Any]) -> MutableMapping[str, Any]:
+    """Fill schema defaults into ``cfg`` in place and validate it.
+
+    Raises
+    ------
+    ConfigError
+        On the first violation (deepest, most specific first), naming the key, the value,
+        what is allowed and the key's description.
+    """
+    _fill_defaults(cfg, schema)
+    validator = jsonschema.Draft202012Validator(schema)
+    errors = sorted(validator.iter_errors(cfg), key=lambda e: (-len(e.path), list(map(str, e.path))))
+    if errors:
+        lines = []
+        for err in errors:
+            node = err.schema if isinstance(err.schema, dict) else {}
+            # report the allowed range of the offending key's own schema node
+            key_schema = node
+            desc = node.get("description", "")
+            if err.validator in ("required", "additionalProperties"):
+                what = err.message
+            else:
+                what = f"{err.instance!r} is not allowed ({err.message})"
+            lines.append(
+                f"config key '{_key_path(err.absolute_path)}': {what}. "
+                f"Allowed: {describe_allowed(key_schema)}." + (f" [{desc}]" if desc else "")
+            )
+        raise ConfigError("invalid configuration:\n  " + "\n  ".join(lines))
+    return cfg

@@ -1,0 +1,43 @@
+"""Figures of the fusion study (seed 002, Fig. 3–5): RMSE against the swept parameter,
+TDOA, AOA, both fusions and the CRLB."""
+
+from __future__ import annotations
+
+import numpy as np
+import xarray as xr
+
+from railradio import plotting
+from railradio.constants import SPEED_OF_LIGHT_M_S
+from railradio.fusion.montecarlo import ESTIMATOR_LABELS, SWEEP_PARAMETER  # noqa: F401
+
+SWEEP_AXES = {
+    "d_m": ("BS distance from the track $d$ [m]", 1.0),
+    "sigma_tdoa_s": (r"TDOA error std $c\,\sigma_\mathrm{TDOA}$ [m]", SPEED_OF_LIGHT_M_S),
+    "sigma_aoa_rad": (r"AOA error std $\sigma_\mathrm{AOA}$ [rad]", 1.0),
+}
+MARKERS = {"tdoa": "o", "aoa": "s", "fused_genie": "^", "fused_propagated": "v"}
+
+
+def plot_sweep(ds: xr.Dataset, parameter: str, pdf_path: str, png_path: str | None = None,
+               log_y: bool = True) -> None:
+    """Plot one sweep dataset (:func:`railradio.fusion.sweep_dataset`) to PDF and PNG.
+
+    Error bars are ±2 Monte Carlo standard errors (mostly smaller than the markers).
+    """
+    if parameter not in SWEEP_AXES:
+        raise ValueError(f"parameter must be one of {sorted(SWEEP_AXES)}, got {parameter!r}")
+    label, scale = SWEEP_AXES[parameter]
+    x = np.asarray(ds[parameter].values) * scale
+    fig, ax = plotting.figure()
+    for est in ds["estimator"].values:
+        y = ds["rmse"].sel(estimator=est).values
+        se = ds["rmse_se"].sel(estimator=est).values
+        ax.errorbar(x, y, yerr=2 * se, marker=MARKERS[str(est)], label=ESTIMATOR_LABELS[str(est)],
+                    capsize=2, markerfacecolor="none")
+    ax.plot(x, ds["crlb_m"].values, label="CRLB", **plotting.BOUND_STYLE)
+    ax.set_xlabel(label)
+    ax.set_ylabel("position RMSE [m]")
+    if log_y:
+        plotting.log_axis(ax, "y")
+    ax.legend()
+    plotting.save(fig, pdf_path, png_path)

@@ -1,0 +1,90 @@
+"""Railway cell geometry of the fusion study (seed 002, Fig. 2).
+
+The track is the line y = 0.  The serving base station BS1 stands at (0, d) and the
+neighbour BS2 at (D, d), both a distance d from the track on the same side.  The cell
+radius is R = k·d (the seed: k = 2), so the serving cell covers the track segment
+|x| <= sqrt(R² - d²) and adjacent cells meet at half the baseline: D = 2·sqrt(R² - d²)
+(= 2√3·d for k = 2).  The train is placed on [0, sqrt(R² - d²)] (seed §3.1).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+
+@dataclass(frozen=True)
+class CellGeometry:
+    """Two base stations beside a straight track.
+
+    Parameters
+    ----------
+    d_m
+        Perpendicular distance of both base stations from the track [m], > 0.
+    cell_radius_factor
+        R / d, the cell radius in units of d (seed: 2), > 1.
+    """
+
+    d_m: float
+    cell_radius_factor: float = 2.0
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.d_m) and self.d_m > 0):
+            raise ValueError(f"d_m must be a finite number > 0 [m], got {self.d_m!r}")
+        if not (math.isfinite(self.cell_radius_factor) and self.cell_radius_factor > 1):
+            raise ValueError("cell_radius_factor must be a finite number > 1, "
+                             f"got {self.cell_radius_factor!r}")
+
+    @property
+    def cell_radius_m(self) -> float:
+        """Cell radius R [m]."""
+        return self.cell_radius_factor * self.d_m
+
+    @property
+    def half_segment_m(self) -> float:
+        """Half length of the serving cell's track segment, sqrt(R² - d²) [m]."""
+        return self.d_m * math.sqrt(self.cell_radius_factor**2 - 1.0)
+
+    @property
+    def baseline_m(self) -> float:
+        """Distance D between BS1 and BS2 along the track [m]."""
+        return 2.0 * self.half_segment_m
+
+    @property
+    def segment_m(self) -> tuple[float, float]:
+        """The serving cell's track segment [x_lo, x_hi] [m]."""
+        return (-self.half_segment_m, self.half_segment_m)
+
+    @property
+    def train_interval_m(self) -> tuple[float, float]:
+        """Where the seed places the train: [0, sqrt(R² - d²)] [m]."""
+        return (0.0, self.half_segment_m)
+
+    def ranges_m(self, x_m: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Distances r1, r2 [m] from a train at (x, 0) to BS1 and BS2 (seed eq. 3)."""
+        x = np.asarray(x_m, dtype=float)
+        return np.hypot(x, self.d_m), np.hypot(self.baseline_m - x, self.d_m)
+
+    def range_difference_m(self, x_m: ArrayLike) -> NDArray[np.float64]:
+        """Range difference r2 - r1 [m] (seed eq. 4), c times the TDOA t_{2,1}."""
+        r1, r2 = self.ranges_m(x_m)
+        return r2 - r1
+
+    def range_difference_slope(self, x_m: ArrayLike) -> NDArray[np.float64]:
+        """g(x) = d(r2 - r1)/dx [m/m], negative everywhere on the track."""
+        x = np.asarray(x_m, dtype=float)
+        r1, r2 = self.ranges_m(x)
+        return -(self.baseline_m - x) / r2 - x / r1
+
+    def aoa_rad(self, x_m: ArrayLike) -> NDArray[np.float64]:
+        """Angle of arrival at BS1 of the train's signal, atan2(0 - d, x - 0) [rad]."""
+        x = np.asarray(x_m, dtype=float)
+        return np.arctan2(-self.d_m, x)
+
+    def aoa_slope(self, x_m: ArrayLike) -> NDArray[np.float64]:
+        """dθ/dx = d / r1² [rad/m]."""
+        r1, _ = self.ranges_m(x_m)
+        return self.d_m / r1**2

@@ -1,0 +1,280 @@
+"""Monte Carlo driver of the fusion study, vectorized over positions × trials.
+
+One call of :func:`simulate_point` is one sweep point (one d, σ_TDOA, σ_AOA): n_positions
+train positions on [0, sqrt(R² - d²)], n_trials independent (TDOA, AOA) measurement pairs
+at each (seed §3.1: 1000 × 10 000).  Reading of the seed [ours, stated in the paper]: the
+seed "takes the mean of several position measurements" per algorithm; we read it as
+per-trial estimates whose mean and variance per position feed the fusion weights, and
+the RMSE (eq. 11) over all trials and positions.
+
+Every position draws its noise from its own generator, spawned from the point's key and
+the position index, so results do not depend on how positions are chunked.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+
+import numpy as np
+import xarray as xr
+
+from railradio.constants import SPEED_OF_LIGHT_M_S
+from railradio.fusion.crlb import fisher_information
+from railradio.fusion.estimators import (
+    aoa_on_track,
+    aoa_variance_propagated,
+    clip_to_segment,
+    fuse,
+    tdoa_on_track,
+    tdoa_variance_propagated,
+)
+from railradio.fusion.geometry import CellGeometry
+from railradio.rng import make_rng
+
+ESTIMATORS = ("tdoa", "aoa", "fused_genie", "fused_propagated")
+"""Estimators compared: TDOA ∩ track, AOA ∩ track, and the inverse-variance fusion with
+per-position Monte Carlo variances (``fused_genie``: the seed's reading, which needs the
+true position) or first-order variances propagated at the estimates (``fused_propagated``:
+what a receiver can do)."""
+
+ESTIMATOR_LABELS = {
+    "tdoa": "TDOA",
+    "aoa": "AOA",
+    "fused_genie": "fusion (MC variances)",
+    "fused_propagated": "fusion (propagated variances)",
+}
+
+SWEEP_PARAMETER = {"reference": "d_m", "d_m": "d_m", "sigma_tdoa_us": "sigma_tdoa_s",
+                   "sigma_aoa_rad": "sigma_aoa_rad"}
+"""Config sweep name -> the SI coordinate of the sweep dataset."""
+
+
+@dataclass(frozen=True)
+class PointParams:
+    """One sweep point.
+
+    Parameters
+    ----------
+    d_m
+        Base-station distance from the track [m].
+    sigma_tdoa_s
+        Standard deviation of the TDOA t_{2,1} [s] (seed eq. 2; 0.1 µs ↔ 29.98 m).
+    sigma_aoa_rad
+        Standard deviation of the AOA at the serving BS [rad].
+    n_positions, n_trials
+        Train positions and trials per position.
+    cell_radius_factor
+        R / d (seed: 2).
+    position_sampling
+        ``"grid"``: midpoints of n_positions equal cells of [0, sqrt(R² - d²)]
+        (stratified, lower Monte Carlo error); ``"random"``: uniform draws.
+    """
+
+    d_m: float
+    sigma_tdoa_s: float
+    sigma_aoa_rad: float
+    n_positions: int
+    n_trials: int
+    cell_radius_factor: float = 2.0
+    position_sampling: str = "grid"
+    clip: str = "no_solution"
+
+    def __post_init__(self) -> None:
+        for name in ("sigma_tdoa_s", "sigma_aoa_rad"):
+            v = getattr(self, name)
+            if not (math.isfinite(v) and v > 0):
+                raise ValueError(f"{name} must be a finite number > 0, got {v!r}")
+        if self.n_positions < 1:
+            raise ValueError(f"n_positions must be >= 1, got {self.n_positions!r}")
+        if self.n_trials < 2:
+            raise ValueError(f"n_trials must be >= 2, got {self.n_trials!r}")
+        if self.position_sampling not in ("grid", "random"):
+            raise ValueError("position_sampling must be 'grid' or 'random', "
+                             f"got {self.position_sampling!r}")
+        if self.clip not in ("no_solution", "segment"):
+            raise ValueError(f"clip must be 'no_solution' or 'segment', got {self.clip!r}")
+
+    @property
+    def geometry(self) -> CellGeometry:
+        return CellGeometry(self.d_m, self.cell_radius_factor)
+
+    @property
+    def sigma_delta_m(self) -> float:
+        """Range-difference standard deviation c·σ_TDOA [m]."""
+        return SPEED_OF_LIGHT_M_S * self.sigma_tdoa_s
+
+
+def train_positions(params: PointParams, rng: np.random.Generator) -> np.ndarray:
+    """Train positions on [0, sqrt(R² - d²)] [m], shape [n_positions]."""
+    lo, hi = params.geometry.train_interval_m
+    n = params.n_positions
+    if params.position_sampling == "grid":
+        return lo + (hi - lo) * (np.arange(n) + 0.5) / n
+    return np.sort(rng.uniform(lo, hi, size=n))
+
+
+def _chunk_stats(params: PointParams, x_true: np.ndarray, n_delta: np.ndarray,
+                 n_theta: np.ndarray) -> dict[str, np.ndarray]:
+    """Per-position statistics of one chunk. x_true [P]; n_delta, n_theta [P, T] ~ N(0, 1)."""
+    geom = params.geometry
+    x = x_true[:, None]  # [P, 1]
+    delta_hat = geom.range_difference_m(x) + params.sigma_delta_m * n_delta  # [P, T]
+    x_t, no_sol = tdoa_on_track(delta_hat, geom)
+    theta_hat = geom.aoa_rad(x) + params.sigma_aoa_rad * n_theta  # [P, T]
+    x_a = aoa_on_track(theta_hat, geom)
+    x_t_clipped, clip_t = clip_to_segment(x_t, geom)
+    x_a_clipped, clip_a = clip_to_segment(x_a, geom)
+    if params.clip == "segment":
+        x_t, x_a = x_t_clipped, x_a_clipped
+    else:  # only estimates without solution (±inf) are clipped
+        clip_t, clip_a = no_sol, ~np.isfinite(x_a)
+        x_t = np.where(clip_t, x_t_clipped, x_t)
+        x_a = np.where(clip_a, x_a_clipped, x_a)
+
+    tiny = 1e-12  # [m²] guards a zero sample variance (every trial clipped to one end)
+    var_t = np.maximum(x_t.var(axis=1, ddof=1), tiny)[:, None]
+    var_a = np.maximum(x_a.var(axis=1, ddof=1), tiny)[:, None]
+    x_fg = fuse(x_t, var_t, x_a, var_a)
+    x_fp = fuse(x_t, tdoa_variance_propagated(x_t, params.sigma_delta_m, geom),
+                x_a, aoa_variance_propagated(x_a, params.sigma_aoa_rad, geom))
+
+    out: dict[str, list[np.ndarray]] = {"mse": [], "bias": [], "sq_err_var": []}
+    for est in (x_t, x_a, x_fg, x_fp):
+        err = est - x
+        sq = err * err
+        out["mse"].append(sq.mean(axis=1))
+        out["bias"].append(err.mean(axis=1))
+        out["sq_err_var"].append(sq.var(axis=1, ddof=1))
+    stats = {k: np.stack(v) for k, v in out.items()}  # [estimator, P]
+    stats["n_tdoa_no_solution"] = no_sol.sum(axis=1)
+    stats["n_tdoa_clipped"] = clip_t.sum(axis=1)
+    stats["n_aoa_clipped"] = clip_a.sum(axis=1)
+    return stats
+
+
+def simulate_point(params: PointParams, seed: int, key: tuple[int, ...],
+                   chunk_positions: int = 50) -> xr.Dataset:
+    """Run one sweep point and return per-position statistics.
+
+    Parameters
+    ----------
+    params
+        The sweep point.
+    seed, key
+        Config seed and the point's spawn key; positions use ``key + (0,)``, the trials of
+        position j ``key + (1, j)``.
+    chunk_positions
+        Positions processed at once (memory/speed only; results do not depend on it).
+
+    Returns
+    -------
+    xarray.Dataset
+        Dimensions ``estimator`` × ``position``: ``mse`` [m²], ``bias`` [m],
+        ``sq_err_var`` [m⁴] (variance of the squared error, for Monte Carlo errors),
+        clip counts, and ``crlb_var`` [m²] = 1/J(x).
+    """
+    if chunk_positions < 1:
+        raise ValueError(f"chunk_positions must be >= 1, got {chunk_positions!r}")
+    x_true = train_positions(params, make_rng(seed, key + (0,)))
+    n, t = params.n_positions, params.n_trials
+    parts: list[dict[str, np.ndarray]] = []
+    for start in range(0, n, chunk_positions):
+        idx = range(start, min(start + chunk_positions, n))
+        n_delta = np.empty((len(idx), t))
+        n_theta = np.empty((len(idx), t))
+        for row, j in enumerate(idx):
+            rng = make_rng(seed, key + (1, j))
+            n_delta[row] = rng.standard_normal(t)
+            n_theta[row] = rng.standard_normal(t)
+        parts.append(_chunk_stats(params, x_true[idx.start:idx.stop], n_delta, n_theta))
+    cat = {k: np.concatenate([p[k] for p in parts], axis=-1) for k in parts[0]}
+
+    geom = params.geometry
+    crlb_var = 1.0 / fisher_information(x_true, params.sigma_delta_m, params.sigma_aoa_rad, geom)
+    pos_dims = ("position",)
+    ds = xr.Dataset(
+        {
+            "mse": (("estimator", "position"), cat["mse"],
+                    {"units": "m2", "long_name": "mean squared position error over trials"}),
+            "bias": (("estimator", "position"), cat["bias"],
+                     {"units": "m", "long_name": "mean position error over trials"}),
+            "sq_err_var": (("estimator", "position"), cat["sq_err_var"],
+                           {"units": "m4", "long_name": "sample variance of the squared error over trials"}),
+            "n_tdoa_no_solution": (pos_dims, cat["n_tdoa_no_solution"].astype(np.int64),
+                                   {"units": "1", "long_name": "trials with |range difference| >= baseline (no TDOA solution)"}),
+            "n_tdoa_clipped": (pos_dims, cat["n_tdoa_clipped"].astype(np.int64),
+                               {"units": "1", "long_name": "trials whose TDOA position was clipped to the cell segment"}),
+            "n_aoa_clipped": (pos_dims, cat["n_aoa_clipped"].astype(np.int64),
+                              {"units": "1", "long_name": "trials whose AOA position was clipped to the cell segment"}),
+            "crlb_var": (pos_dims, crlb_var,
+                         {"units": "m2", "long_name": "Cramer-Rao bound on the position variance, 1/J(x)"}),
+        },
+        coords={
+            "estimator": ("estimator", list(ESTIMATORS), {"units": "1", "long_name": "position estimator"}),
+            "x_true": (pos_dims, x_true, {"units": "m", "long_name": "true train position along the track"}),
+        },
+    )
+    scalars = {
+        "d_m": (params.d_m, "m", "base-station distance from the track"),
+        "sigma_tdoa_s": (params.sigma_tdoa_s, "s", "TDOA error standard deviation"),
+        "sigma_delta_m": (params.sigma_delta_m, "m", "range-difference error standard deviation"),
+        "sigma_aoa_rad": (params.sigma_aoa_rad, "rad", "AOA error standard deviation"),
+        "n_trials": (params.n_trials, "1", "trials per position"),
+        "baseline_m": (geom.baseline_m, "m", "distance between BS1 and BS2 along the track"),
+    }
+    for name, (val, units, long_name) in scalars.items():
+        ds[name] = ((), val, {"units": units, "long_name": long_name})
+    ds.attrs["point_params_json"] = repr(asdict(params))
+    return ds
+
+
+def summarize(ds: xr.Dataset) -> dict[str, float]:
+    """RMSE per estimator over trials and positions, its Monte Carlo standard error, the
+    aggregated CRLB and clip fractions, from a :func:`simulate_point` dataset."""
+    n_pos = ds.sizes["position"]
+    n_trials = int(ds["n_trials"])
+    out: dict[str, float] = {}
+    for est in ds["estimator"].values:
+        mse = ds["mse"].sel(estimator=est)
+        rmse = float(np.sqrt(mse.mean()))
+        se_mse = float(np.sqrt((ds["sq_err_var"].sel(estimator=est) / n_trials).sum())) / n_pos
+        out[f"rmse_{est}_m"] = rmse
+        out[f"rmse_{est}_se_m"] = se_mse / (2.0 * rmse) if rmse > 0 else 0.0
+    out["crlb_m"] = float(np.sqrt(ds["crlb_var"].mean()))
+    total = n_pos * n_trials
+    for name in ("n_tdoa_no_solution", "n_tdoa_clipped", "n_aoa_clipped"):
+        out[name.replace("n_", "frac_", 1)] = float(ds[name].sum()) / total
+    return out
+
+
+SUMMARY_ATTRS = {
+    "crlb_m": ("m", "Cramer-Rao bound, sqrt(mean over positions of 1/J)"),
+    "frac_tdoa_no_solution": ("1", "share of trials without TDOA solution"),
+    "frac_tdoa_clipped": ("1", "share of trials with the TDOA position clipped"),
+    "frac_aoa_clipped": ("1", "share of trials with the AOA position clipped"),
+}
+
+
+def sweep_dataset(points: list[xr.Dataset], parameter: str) -> xr.Dataset:
+    """Collect sweep points into ``rmse`` [estimator, point] etc. along ``parameter``."""
+    summaries = [summarize(p) for p in points]
+    values = [float(p[parameter]) for p in points]
+    ds = xr.Dataset(coords={
+        parameter: (parameter, values, dict(points[0][parameter].attrs)),
+        "estimator": ("estimator", list(ESTIMATORS), {"units": "1", "long_name": "position estimator"}),
+    })
+    ds["rmse"] = (("estimator", parameter),
+                  np.array([[s[f"rmse_{e}_m"] for s in summaries] for e in ESTIMATORS]),
+                  {"units": "m", "long_name": "position RMSE over trials and positions (seed eq. 11)"})
+    ds["rmse_se"] = (("estimator", parameter),
+                     np.array([[s[f"rmse_{e}_se_m"] for s in summaries] for e in ESTIMATORS]),
+                     {"units": "m", "long_name": "Monte Carlo standard error of the RMSE"})
+    for name, (units, long_name) in SUMMARY_ATTRS.items():
+        ds[name] = ((parameter,), np.array([s[name] for s in summaries]),
+                    {"units": units, "long_name": long_name})
+    for other in ("d_m", "sigma_tdoa_s", "sigma_aoa_rad"):
+        if other != parameter:
+            ds[other] = ((parameter,), np.array([float(p[other]) for p in points]),
+                         dict(points[0][other].attrs))
+    return ds.sortby(parameter)

@@ -1,0 +1,68 @@
+"""Helpers for the Snakemake side: code fingerprints and script set-up.
+
+Kept free of Snakemake imports so the library stays importable without it.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import logging
+import signal
+import sys
+from importlib.util import find_spec
+from pathlib import Path
+
+
+def code_hash(*modules: str, exclude: tuple[str, ...] = ()) -> str:
+    """SHA-256 (16 hex digits) of the source of the given railradio modules/subpackages.
+
+    Used as a rule ``param`` so that Snakemake re-runs a rule exactly when the library
+    code it depends on changes (it fingerprints params, not imported code).
+
+    Parameters
+    ----------
+    modules
+        Dotted names, e.g. ``"railradio.fusion"`` (all ``.py`` files below it) or
+        ``"railradio.io"`` (one file).
+    exclude
+        File names to leave out (e.g. ``("figures.py",)`` so a plot change does not
+        re-run a simulation).
+    """
+    h = hashlib.sha256()
+    for mod in sorted(modules):
+        spec = find_spec(mod)
+        if spec is None or spec.origin is None:
+            raise ValueError(f"module {mod!r} not found")
+        origin = Path(spec.origin)
+        paths = sorted(origin.parent.rglob("*.py")) if origin.name == "__init__.py" else [origin]
+        for p in paths:
+            if p.name in exclude:
+                continue
+            h.update(p.name.encode())
+            h.update(p.read_bytes())
+    return h.hexdigest()[:16]
+
+
+def _raise_on_sigterm(signum, frame):  # pragma: no cover - signal path
+    raise SystemExit(128 + signum)
+
+
+def setup_script(log_path: str | None) -> logging.Logger:
+    """Prepare a workflow script: log to the rule's log file; SIGTERM cleans up like Ctrl-C.
+
+    Turning SIGTERM into ``SystemExit`` lets :func:`railradio.io.atomic_path` remove its
+    temporary file when Snakemake (or SLURM) terminates a job.
+    """
+    signal.signal(signal.SIGTERM, _raise_on_sigterm)
+    logger = logging.getLogger("railradio")
+    logger.setLevel(logging.INFO)
+    handler: logging.Handler
+    if log_path:
+        Path(log_path).parent.mkdir(parents=True, exist_ok=True)
+        handler = logging.FileHandler(log_path, mode="w", encoding="utf-8")
+        sys.stderr = open(log_path, "a", encoding="utf-8")  # noqa: SIM115 - lives with the job
+    else:
+        handler = logging.StreamHandler()
+    handler.setFormatter(logging.Formatter("%(asctime)s %(levelname)s %(message)s"))
+    logger.handlers[:] = [handler]
+    return logger

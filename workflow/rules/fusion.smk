@@ -1,0 +1,121 @@
+# Study `fusion`: TDOA/AOA fusion with the track constraint (seed 002, STUDY.md §3).
+# Chain: one Monte Carlo job per sweep point -> one dataset per sweep -> figures;
+# reference point + sweeps -> key numbers.
+
+FUSION = config["fusion"]
+FUSION_SWEEPS = list(FUSION["sweeps"])  # d_m, sigma_tdoa_us, sigma_aoa_rad
+FUSION_FIGURE_SWEEP = {
+    "distance": "d_m",
+    "tdoa_error": "sigma_tdoa_us",
+    "aoa_error": "sigma_aoa_rad",
+}
+CODE_FUSION_SIM = code_hash("railradio.fusion", exclude=("figures.py", "keys.py")) + CODE_SHARED
+
+register_figures("fusion", [f"fusion_rmse_vs_{n}" for n in FUSION_FIGURE_SWEEP])
+KEY_NUMBER_FRAGMENTS.append("results/fusion/key_numbers.json")
+
+
+def fusion_n_points(sweep):
+    return 1 if sweep == "reference" else len(FUSION["sweeps"][sweep])
+
+
+def fusion_point(wildcards):
+    """The plain-value parameters of one sweep point (what Snakemake fingerprints)."""
+    point = dict(FUSION["reference"])
+    if wildcards.sweep != "reference":
+        point[wildcards.sweep] = FUSION["sweeps"][wildcards.sweep][int(wildcards.point)]
+    point.update(
+        {k: FUSION[k] for k in ("n_positions", "n_trials", "position_sampling",
+                                "cell_radius_factor", "clip")}
+    )
+    return dict(sorted(point.items()))
+
+
+wildcard_constraints:
+    sweep="reference|d_m|sigma_tdoa_us|sigma_aoa_rad",
+    point=r"\d+",
+
+
+rule fusion_point:
+    """Monte Carlo of one sweep point: per-position error statistics (NetCDF)."""
+    output:
+        "results/fusion/points/{sweep}/p{point}.nc",
+    params:
+        point=fusion_point,
+        seed=config["seed"],
+        chunk_positions=FUSION["chunk_positions"],
+        code=CODE_FUSION_SIM,
+    log:
+        "results/logs/fusion/point_{sweep}_p{point}.log",
+    benchmark:
+        "results/benchmarks/fusion/point_{sweep}_p{point}.tsv"
+    resources:
+        mem_mb=2000,
+        runtime=10,
+    conda:
+        "../envs/railradio.yaml"
+    script:
+        "../scripts/fusion/point.py"
+
+
+rule fusion_sweep:
+    """Collect the points of one sweep: RMSE, Monte Carlo errors, CRLB (NetCDF)."""
+    input:
+        lambda w: expand(
+            "results/fusion/points/{sweep}/p{point}.nc",
+            sweep=w.sweep,
+            point=range(fusion_n_points(w.sweep)),
+        ),
+    output:
+        "results/fusion/sweep_{sweep}.nc",
+    params:
+        sweep="{sweep}",
+        code=CODE_FUSION_SIM,
+    log:
+        "results/logs/fusion/sweep_{sweep}.log",
+    conda:
+        "../envs/railradio.yaml"
+    script:
+        "../scripts/fusion/sweep.py"
+
+
+rule fusion_figure:
+    """Plot one sweep (seed Fig. 3-5) with the CRLB."""
+    input:
+        lambda w: f"results/fusion/sweep_{FUSION_FIGURE_SWEEP[w.name]}.nc",
+    output:
+        pdf=report(
+            "results/figures/fusion_rmse_vs_{name}.pdf",
+            caption="../report/fusion_rmse.rst",
+            category="fusion",
+        ),
+        png="results/figures/fusion_rmse_vs_{name}.png",
+    params:
+        sweep=lambda w: FUSION_FIGURE_SWEEP[w.name],
+        code=code_hash("railradio.fusion.figures") + CODE_PLOT,
+    log:
+        "results/logs/fusion/figure_{name}.log",
+    wildcard_constraints:
+        name="distance|tdoa_error|aoa_error",
+    conda:
+        "../envs/railradio.yaml"
+    script:
+        "../scripts/fusion/figure.py"
+
+
+rule fusion_key_numbers:
+    """Key numbers fusion.* from the reference point and the sweeps."""
+    input:
+        reference="results/fusion/points/reference/p0.nc",
+        sweeps=expand("results/fusion/sweep_{sweep}.nc", sweep=FUSION_SWEEPS),
+    output:
+        "results/fusion/key_numbers.json",
+    params:
+        sweeps=FUSION_SWEEPS,
+        code=code_hash("railradio.fusion.keys", "railradio.keynumbers"),
+    log:
+        "results/logs/fusion/key_numbers.log",
+    conda:
+        "../envs/railradio.yaml"
+    script:
+        "../scripts/fusion/key_numbers.py"

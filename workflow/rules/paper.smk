@@ -1,0 +1,36 @@
+# Key numbers of all studies -> results/key_numbers.json + LaTeX macros; the manuscript.
+
+
+rule key_numbers:
+    """Merge the studies' key-number fragments; write the JSON and the LaTeX macros."""
+    input:
+        KEY_NUMBER_FRAGMENTS,
+    output:
+        json=report("results/key_numbers.json", caption="../report/key_numbers.rst", category="numbers"),
+        tex="results/paper/numbers.tex",
+        claims="results/paper/claims.tex",
+    params:
+        code=code_hash("railradio.keynumbers"),
+    log:
+        "results/logs/paper/key_numbers.log",
+    conda:
+        "../envs/railradio.yaml"
+    script:
+        "../scripts/paper/numbers.py"
+
+
+rule paper:
+    """Build results/paper/main.pdf from paper/main.tex (needs latexmk; see README)."""
+    input:
+        tex="paper/main.tex",
+        numbers="results/paper/numbers.tex",
+        claims="results/paper/claims.tex",
+        figures=[f for f in FIGURES if f.endswith(".pdf")],
+    output:
+        "results/paper/main.pdf",
+    log:
+        "results/logs/paper/latexmk.log",
+    conda:
+        "../envs/railradio.yaml"
+    script:
+        "../scripts/paper/build.py"

@@ -1,0 +1,17 @@
+"""Adapter: key-number fragments -> results/key_numbers.json, numbers.tex, claims.tex."""
+import json
+
+from railradio.io import write_json, write_text
+from railradio.keynumbers import claims_table, merge, to_latex
+from railradio.workflow import setup_script
+
+smk = snakemake  # noqa: F821 - injected by Snakemake
+setup_script(smk.log[0])
+fragments = []
+for path in smk.input:
+    with open(path, encoding="utf-8") as fh:
+        fragments.append(json.load(fh))
+numbers = merge(fragments)
+write_json(smk.output.json, numbers)
+write_text(smk.output.tex, to_latex(numbers))
+write_text(smk.output.claims, claims_table(numbers))
