@@ -56,6 +56,17 @@ def describe_allowed(schema: dict[str, Any]) -> str:
     return "; ".join(parts) if parts else "see the schema"
 
 
+def _description_at(schema: dict[str, Any], path: Any) -> str:
+    """The description of the deepest schema node on ``path`` that has one."""
+    node, desc = schema, schema.get("description", "")
+    for p in path:
+        node = node.get("items", {}) if isinstance(p, int) else node.get("properties", {}).get(p, {})
+        desc = node.get("description", desc) if isinstance(node, dict) else desc
+        if not isinstance(node, dict):
+            break
+    return desc
+
+
 def _fill_defaults(cfg: MutableMapping[str, Any], schema: dict[str, Any]) -> None:
     for name, sub in schema.get("properties", {}).items():
         if name not in cfg and "default" in sub:
@@ -80,9 +91,8 @@ def validate_config(cfg: MutableMapping[str, Any], schema: dict[str, Any]) -> Mu
         lines = []
         for err in errors:
             node = err.schema if isinstance(err.schema, dict) else {}
-            # report the allowed range of the offending key's own schema node
-            key_schema = node
-            desc = node.get("description", "")
+            key_schema = node  # the offending value's own schema node
+            desc = _description_at(schema, err.absolute_path)
             if err.validator in ("required", "additionalProperties"):
                 what = err.message
             else:

@@ -24,8 +24,12 @@ from collections.abc import Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-import xarray as xr
+# HDF5 file locking fails on many network filesystems (cluster scratch); our writes are
+# atomic renames of private temporary files, so locking buys nothing.  Before h5py loads.
+os.environ.setdefault("HDF5_USE_FILE_LOCKING", "FALSE")
+
+import numpy as np  # noqa: E402
+import xarray as xr  # noqa: E402
 
 from railradio import __version__
 from railradio.rng import canonical_json
@@ -165,7 +169,7 @@ def read_dataset(path: str | os.PathLike[str]) -> xr.Dataset:
     with xr.open_dataset(path, engine=ENGINE) as ds:
         ds = ds.load()
     for name in list(ds.data_vars):
-        if ds[name].attrs.get("complex_part") == "real":
+        if name in ds and ds[name].attrs.get("complex_part") == "real":
             base = name[: -len("_real")]
             attrs = {k: v for k, v in ds[name].attrs.items() if k != "complex_part"}
             attrs["long_name"] = attrs["long_name"].removesuffix(" (real part)")

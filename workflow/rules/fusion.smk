@@ -9,26 +9,12 @@ FUSION_FIGURE_SWEEP = {
     "tdoa_error": "sigma_tdoa_us",
     "aoa_error": "sigma_aoa_rad",
 }
+from railradio.fusion.montecarlo import sweep_points
+
 CODE_FUSION_SIM = code_hash("railradio.fusion", exclude=("figures.py", "keys.py")) + CODE_SHARED
 
 register_figures("fusion", [f"fusion_rmse_vs_{n}" for n in FUSION_FIGURE_SWEEP])
 KEY_NUMBER_FRAGMENTS.append("results/fusion/key_numbers.json")
-
-
-def fusion_n_points(sweep):
-    return 1 if sweep == "reference" else len(FUSION["sweeps"][sweep])
-
-
-def fusion_point(wildcards):
-    """The plain-value parameters of one sweep point (what Snakemake fingerprints)."""
-    point = dict(FUSION["reference"])
-    if wildcards.sweep != "reference":
-        point[wildcards.sweep] = FUSION["sweeps"][wildcards.sweep][int(wildcards.point)]
-    point.update(
-        {k: FUSION[k] for k in ("n_positions", "n_trials", "position_sampling",
-                                "cell_radius_factor", "clip")}
-    )
-    return dict(sorted(point.items()))
 
 
 wildcard_constraints:
@@ -41,7 +27,7 @@ rule fusion_point:
     output:
         "results/fusion/points/{sweep}/p{point}.nc",
     params:
-        point=fusion_point,
+        point=lambda w: sweep_points(FUSION, w.sweep)[int(w.point)],
         seed=config["seed"],
         chunk_positions=FUSION["chunk_positions"],
         code=CODE_FUSION_SIM,
@@ -64,7 +50,7 @@ rule fusion_sweep:
         lambda w: expand(
             "results/fusion/points/{sweep}/p{point}.nc",
             sweep=w.sweep,
-            point=range(fusion_n_points(w.sweep)),
+            point=range(len(sweep_points(FUSION, w.sweep))),
         ),
     output:
         "results/fusion/sweep_{sweep}.nc",

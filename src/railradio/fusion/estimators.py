@@ -48,7 +48,7 @@ def tdoa_on_track(delta_m: ArrayLike, geom: CellGeometry) -> tuple[NDArray[np.fl
     with np.errstate(divide="ignore", invalid="ignore"):
         root = np.sqrt(1.0 + 4.0 * geom.d_m**2 / (big_d**2 - delta**2))
         x = 0.5 * big_d - 0.5 * delta * root
-    x = np.where(no_solution, -np.sign(delta) * np.inf, x)
+    x = np.where(no_solution, np.where(delta > 0, -np.inf, np.inf), x)
     return x, no_solution
 
 

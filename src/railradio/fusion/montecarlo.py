@@ -105,6 +105,44 @@ class PointParams:
         return SPEED_OF_LIGHT_M_S * self.sigma_tdoa_s
 
 
+POINT_KEYS = ("n_positions", "n_trials", "position_sampling", "cell_radius_factor", "clip")
+
+
+def sweep_points(study_cfg: dict, sweep: str) -> list[dict]:
+    """The plain-value parameters of every point of one sweep of the study's config.
+
+    ``sweep`` is ``"reference"`` (one point) or a key of ``study_cfg["sweeps"]``; each
+    point is the reference with the swept value replaced, plus the Monte Carlo settings,
+    key-sorted (what Snakemake fingerprints and what seeds the point).
+    """
+    if sweep != "reference" and sweep not in study_cfg["sweeps"]:
+        raise ValueError(f"sweep must be 'reference' or one of {sorted(study_cfg['sweeps'])}, "
+                         f"got {sweep!r}")
+    values = [None] if sweep == "reference" else study_cfg["sweeps"][sweep]
+    points = []
+    for v in values:
+        point = dict(study_cfg["reference"])
+        if sweep != "reference":
+            point[sweep] = v
+        point.update({k: study_cfg[k] for k in POINT_KEYS})
+        points.append(dict(sorted(point.items())))
+    return points
+
+
+def point_params(point: dict) -> PointParams:
+    """:class:`PointParams` (SI units) of a point of :func:`sweep_points`."""
+    return PointParams(
+        d_m=float(point["d_m"]),
+        sigma_tdoa_s=float(point["sigma_tdoa_us"]) * 1e-6,
+        sigma_aoa_rad=float(point["sigma_aoa_rad"]),
+        n_positions=int(point["n_positions"]),
+        n_trials=int(point["n_trials"]),
+        cell_radius_factor=float(point["cell_radius_factor"]),
+        position_sampling=point["position_sampling"],
+        clip=point["clip"],
+    )
+
+
 def train_positions(params: PointParams, rng: np.random.Generator) -> np.ndarray:
     """Train positions on [0, sqrt(R² - d²)] [m], shape [n_positions]."""
     lo, hi = params.geometry.train_interval_m

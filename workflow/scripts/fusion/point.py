@@ -1,5 +1,5 @@
 """Adapter: one fusion sweep point -> results/fusion/points/{sweep}/p{point}.nc."""
-from railradio.fusion import PointParams, simulate_point
+from railradio.fusion.montecarlo import point_params, simulate_point
 from railradio.io import write_dataset
 from railradio.rng import spawn_key, stable_id
 from railradio.workflow import setup_script
@@ -7,16 +7,7 @@ from railradio.workflow import setup_script
 smk = snakemake  # noqa: F821 - injected by Snakemake
 log = setup_script(smk.log[0])
 point = dict(smk.params.point)
-params = PointParams(
-    d_m=point["d_m"],
-    sigma_tdoa_s=point["sigma_tdoa_us"] * 1e-6,
-    sigma_aoa_rad=point["sigma_aoa_rad"],
-    n_positions=point["n_positions"],
-    n_trials=point["n_trials"],
-    cell_radius_factor=point["cell_radius_factor"],
-    position_sampling=point["position_sampling"],
-    clip=point["clip"],
-)
+params = point_params(point)
 # the point's randomness is keyed by its physical parameters, not by its list index
 key = spawn_key("fusion", stable_id(point))
 log.info("point %s, spawn key %s", point, key)

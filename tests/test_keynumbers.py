@@ -1,0 +1,47 @@
+import pytest
+
+from railradio.keynumbers import KeySpec, claims_table, compare, format_number, merge, to_latex
+
+
+def test_entry_and_merge():
+    a = {"x.a": KeySpec("x.a", "m", "a thing", 1.3, "<").entry(1.2, 0.01)}
+    b = {"y.b": KeySpec("y.b", "1", "b").entry(3.0)}
+    m = merge([b, a])
+    assert list(m) == ["x.a", "y.b"]
+    assert m["x.a"] == {"value": 1.2, "unit": "m", "source_value": 1.3, "source_relation": "<",
+                        "description": "a thing", "mc_stderr": 0.01}
+    with pytest.raises(ValueError, match="twice"):
+        merge([a, a])
+
+
+def test_spec_validation():
+    with pytest.raises(ValueError):
+        KeySpec("k", "m", "d", 1.0, None)
+    with pytest.raises(ValueError):
+        KeySpec("k", "m", "d", 1.0, "<<")
+    with pytest.raises(ValueError, match="finite"):
+        KeySpec("k", "m", "d").entry(float("nan"))
+
+
+@pytest.mark.parametrize(("v", "s"), [(15.126, "15.1"), (0.66, "0.660"), (3.0, "3"), (0.0025, "0.00250"),
+                                      (123456.7, "123457"), (1.5e-7, r"1.50\times10^{-7}"), (None, "--")])
+def test_format_number(v, s):
+    assert format_number(v) == s
+
+
+def test_latex_macros_and_claims():
+    nums = {"fusion.d1500.rmse_tdoa_m": KeySpec("fusion.d1500.rmse_tdoa_m", "m", "TDOA σ", 2.0, "≤").entry(20.8)}
+    tex = to_latex(nums)
+    assert r"\@namedef{kn@fusion.d1500.rmse_tdoa_m}{20.8}" in tex
+    assert r"\@namedef{knsrc@fusion.d1500.rmse_tdoa_m}{$\le\,$2}" in tex
+    assert r"\PackageError" in tex  # undefined keys fail the build
+    row = claims_table(nums)
+    assert r"\kn{fusion.d1500.rmse_tdoa_m}" in row and r"fusion.d1500.rmse\_tdoa\_m" in row
+
+
+def test_compare_uses_monte_carlo_errors():
+    ref = {"k": {"value": 10.0, "mc_stderr": 0.1}}
+    assert compare({"k": {"value": 10.3, "mc_stderr": 0.1}}, ref) == []  # 2.1 sigma
+    assert compare({"k": {"value": 10.7, "mc_stderr": 0.1}}, ref)  # 4.9 sigma
+    assert compare({}, ref) == ["k: missing from the new numbers"]
+    assert compare({"k": {"value": 10.0}}, {"k": {"value": 10.0}}) == []

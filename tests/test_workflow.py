@@ -1,0 +1,197 @@
+"""The pipeline end to end at CI scale, in a private copy of the workflow.
+
+Each test works in a temporary copy of Snakefile, workflow/, config/, paper/ and src/
+(with PYTHONPATH pointing at the copy, so a test may edit library code without touching
+the repository).
+"""
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+import xarray as xr
+
+from railradio.keynumbers import compare
+
+from .conftest import ROOT
+
+pytestmark = pytest.mark.slow
+SNAKEMAKE = str(Path(sys.executable).parent / "snakemake")
+EXPECTED = ROOT / "tests/expected/key_numbers_ci.json"
+
+
+def _copy_workflow(dest: Path) -> Path:
+    for name in ("Snakefile", "workflow", "config", "paper", "src"):
+        src = ROOT / name
+        if src.is_dir():
+            shutil.copytree(src, dest / name, ignore=shutil.ignore_patterns("__pycache__", "*.egg-info"))
+        else:
+            shutil.copy2(src, dest / name)
+    return dest
+
+
+def _env(wd: Path) -> dict[str, str]:
+    return {**os.environ, "PYTHONPATH": str(wd / "src"), "MPLBACKEND": "Agg"}
+
+
+def smk(wd: Path, *args: str, check: bool = True, ci: bool = True) -> subprocess.CompletedProcess:
+    cmd = [SNAKEMAKE, *args, "--workflow-profile", "workflow/profiles/default"]
+    if ci:
+        cmd += ["--configfile", "config/ci.yaml"]
+    run = subprocess.run(cmd, cwd=wd, env=_env(wd), capture_output=True, text=True, check=False)
+    if check and run.returncode != 0:
+        raise AssertionError(f"{' '.join(cmd)} failed:\n{run.stdout[-3000:]}\n{run.stderr[-5000:]}")
+    return run
+
+
+def job_counts(output: str) -> dict[str, int]:
+    """Parse Snakemake's 'Job stats' table."""
+    counts, inside = {}, False
+    for line in output.splitlines():
+        if line.startswith("Job stats"):
+            inside = True
+            continue
+        if inside:
+            parts = line.split()
+            if len(parts) == 2 and parts[1].isdigit():
+                if parts[0] == "total":
+                    break
+                counts[parts[0]] = int(parts[1])
+    return counts
+
+
+@pytest.fixture(scope="module")
+def ci_run_j2(tmp_path_factory) -> Path:
+    wd = _copy_workflow(tmp_path_factory.mktemp("j2"))
+    smk(wd, "all", "-j2")
+    return wd
+
+
+def _numbers(wd: Path) -> dict:
+    return json.loads((wd / "results/key_numbers.json").read_text())
+
+
+def test_lint_is_clean():
+    run = subprocess.run([SNAKEMAKE, "--lint"], cwd=ROOT, capture_output=True, text=True, check=False)
+    assert run.returncode == 0, run.stdout + run.stderr
+
+
+def test_paper_scale_dag_resolves(tmp_path):
+    wd = _copy_workflow(tmp_path)
+    run = smk(wd, "all", "-n", ci=False)
+    counts = job_counts(run.stdout + run.stderr)
+    # 10 distances + 12 TDOA errors + 10 AOA errors + the reference point
+    assert counts["fusion_point"] == 33 and counts["fusion_figure"] == 3
+
+
+def test_slurm_profile_dry_run_resolves(tmp_path):
+    wd = _copy_workflow(tmp_path)
+    run = subprocess.run([SNAKEMAKE, "figures", "-n", "--workflow-profile", "workflow/profiles/slurm"],
+                         cwd=wd, env=_env(wd), capture_output=True, text=True, check=False)
+    assert run.returncode == 0, run.stdout[-2000:] + run.stderr[-2000:]
+    assert job_counts(run.stdout + run.stderr)["fusion_point"] == 33
+
+
+@pytest.mark.parametrize(
+    ("override", "key"),
+    [("fusion:\n  reference:\n    sigma_aoa_rad: -0.01\n", "fusion.reference.sigma_aoa_rad"),
+     ("fusion:\n  sweeps:\n    d_m: []\n", "fusion.sweeps.d_m"),
+     ("fusion:\n  n_trials: lots\n", "fusion.n_trials")],
+)
+def test_bad_config_stops_before_any_job(tmp_path, override, key):
+    wd = _copy_workflow(tmp_path)
+    (wd / "bad.yaml").write_text(override)
+    run = subprocess.run([SNAKEMAKE, "all", "-j1", "--configfile", "bad.yaml"], cwd=wd, env=_env(wd),
+                         capture_output=True, text=True, check=False)
+    assert run.returncode != 0
+    assert f"config key '{key}'" in run.stderr + run.stdout
+    assert "Allowed:" in run.stderr + run.stdout
+    assert not (wd / "results").exists()
+
+
+def test_ci_key_numbers_match_expected(ci_run_j2):
+    msgs = compare(_numbers(ci_run_j2), json.loads(EXPECTED.read_text()), n_sigma=4.0)
+    assert msgs == [], "\n".join(msgs)
+
+
+def test_ci_numbers_consistent_with_published_paper_scale(ci_run_j2):
+    """The CI-scale Monte Carlo agrees with paper/numbers.json within both MC errors."""
+    paper = json.loads((ROOT / "paper/numbers.json").read_text())
+    ours = _numbers(ci_run_j2)
+    keys = [k for k in paper if k.startswith("fusion.d1500.")]
+    assert keys
+    msgs = compare({k: ours[k] for k in keys}, {k: paper[k] for k in keys}, n_sigma=5.0)
+    # the CRLB is exact, but CI averages it over fewer positions: allow 0.5 %
+    msgs = [m for m in msgs if not m.startswith("fusion.d1500.crlb_m")]
+    assert abs(ours["fusion.d1500.crlb_m"]["value"] / paper["fusion.d1500.crlb_m"]["value"] - 1) < 5e-3
+    assert msgs == [], "\n".join(msgs)
+
+
+def test_identical_at_j1_and_j2(ci_run_j2, tmp_path):
+    wd = _copy_workflow(tmp_path)
+    smk(wd, "numbers", "-j1")
+    assert _numbers(wd) == _numbers(ci_run_j2)
+    a = xr.open_dataset(wd / "results/fusion/sweep_d_m.nc")
+    b = xr.open_dataset(ci_run_j2 / "results/fusion/sweep_d_m.nc")
+    xr.testing.assert_equal(a, b)
+    a.close(), b.close()
+
+
+def test_intermediates_are_self_explaining(ci_run_j2):
+    paths = sorted((ci_run_j2 / "results/fusion").rglob("*.nc"))
+    assert len(paths) == 4 + 4 + 4 + 1 + 3
+    for p in paths:
+        with xr.open_dataset(p) as ds:
+            for name, var in {**ds.data_vars, **ds.coords}.items():
+                assert "units" in var.attrs and "long_name" in var.attrs, (p, name)
+            for attr in ("config_json", "config_sha256", "seed_spawn_key", "railradio_version", "git_commit"):
+                assert attr in ds.attrs, (p, attr)
+    for name in ("fusion_rmse_vs_distance", "fusion_rmse_vs_tdoa_error", "fusion_rmse_vs_aoa_error"):
+        assert (ci_run_j2 / f"results/figures/{name}.pdf").stat().st_size > 1000
+    tex = (ci_run_j2 / "results/paper/numbers.tex").read_text()
+    assert r"\@namedef{kn@fusion.d1500.rmse_fused_m}" in tex
+
+
+def test_only_affected_rules_rerun(ci_run_j2, tmp_path):
+    wd = tmp_path / "wd"
+    shutil.copytree(ci_run_j2, wd, symlinks=True)
+    assert job_counts(smk(wd, "all", "-n").stdout) == {}  # nothing to do
+    # one AOA sweep value changes: its point, that sweep, its figure, the numbers
+    ci = (wd / "config/ci.yaml").read_text().replace("sigma_aoa_rad: [0.005,", "sigma_aoa_rad: [0.004,")
+    (wd / "config/ci.yaml").write_text(ci)
+    counts = job_counts(smk(wd, "all", "-n").stdout)
+    assert counts == {"all": 1, "fusion_point": 1, "fusion_sweep": 1, "fusion_figure": 1,
+                      "fusion_key_numbers": 1, "key_numbers": 1}, counts
+    # a plotting change re-runs the figures only, never a simulation
+    (wd / "config/ci.yaml").write_text((ci_run_j2 / "config/ci.yaml").read_text())
+    fig = wd / "src/railradio/fusion/figures.py"
+    fig.write_text(fig.read_text() + "\n# a cosmetic change\n")
+    counts = job_counts(smk(wd, "all", "-n").stdout)
+    assert counts == {"all": 1, "fusion_figure": 3}, counts
+
+
+def test_interrupted_run_leaves_nothing_half_written_and_resumes(tmp_path):
+    wd = _copy_workflow(tmp_path)
+    cmd = [SNAKEMAKE, "all", "-j1", "--workflow-profile", "workflow/profiles/default",
+           "--configfile", "config/ci.yaml"]
+    proc = subprocess.Popen(cmd, cwd=wd, env=_env(wd), stdout=subprocess.DEVNULL,
+                            stderr=subprocess.DEVNULL, start_new_session=True)
+    points = wd / "results/fusion/points"
+    deadline = time.time() + 120
+    while time.time() < deadline and len(list(points.rglob("*.nc"))) < 2:
+        time.sleep(0.05)
+    os.killpg(proc.pid, signal.SIGINT)
+    proc.wait(timeout=60)
+    assert proc.returncode != 0
+    assert not list((wd / "results").rglob("*.part"))
+    for p in points.rglob("*.nc"):  # whatever exists is whole
+        xr.open_dataset(p).close()
+    smk(wd, "all", "-j2")
+    assert (wd / "results/key_numbers.json").exists()
