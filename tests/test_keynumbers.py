@@ -9,7 +9,7 @@ def test_entry_and_merge():
     m = merge([b, a])
     assert list(m) == ["x.a", "y.b"]
     assert m["x.a"] == {"value": 1.2, "unit": "m", "source_value": 1.3, "source_relation": "<",
-                        "description": "a thing", "mc_stderr": 0.01}
+                        "description": "a thing", "mc_stderr": 0.01, "digits": 3}
     with pytest.raises(ValueError, match="twice"):
         merge([a, a])
 
@@ -24,7 +24,7 @@ def test_spec_validation():
 
 
 @pytest.mark.parametrize(("v", "s"), [(15.126, "15.1"), (0.66, "0.660"), (3.0, "3"), (0.0025, "0.00250"),
-                                      (123456.7, "123457"), (1.5e-7, r"1.50\times10^{-7}"), (None, "--")])
+                                      (123456.7, "123457"), (1.5e-7, r"\ensuremath{1.50\times10^{-7}}"), (None, "--")])
 def test_format_number(v, s):
     assert format_number(v) == s
 
@@ -36,7 +36,8 @@ def test_latex_macros_and_claims():
     assert r"\@namedef{knsrc@fusion.d1500.rmse_tdoa_m}{$\le\,$2}" in tex
     assert r"\PackageError" in tex  # undefined keys fail the build
     row = claims_table(nums)
-    assert r"\kn{fusion.d1500.rmse_tdoa_m}" in row and r"fusion.d1500.rmse\_tdoa\_m" in row
+    assert r"\kn{fusion.d1500.rmse_tdoa_m}" in row and r"d1500.\allowbreak{}rmse\_tdoa\_m" in row
+    assert row.startswith(r"\begin{tabularx}") and row.rstrip().endswith(r"\end{tabularx}")
 
 
 def test_compare_uses_monte_carlo_errors():

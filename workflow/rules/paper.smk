@@ -9,7 +9,9 @@ rule key_numbers:
         json=report("results/key_numbers.json", caption="../report/key_numbers.rst", category="numbers"),
         tex="results/paper/numbers.tex",
         claims="results/paper/claims.tex",
+        config="results/paper/config.tex",
     params:
+        config=config,
         code=code_hash("railradio.keynumbers"),
     log:
         "results/logs/paper/key_numbers.log",
@@ -25,6 +27,7 @@ rule paper:
         tex="paper/main.tex",
         numbers="results/paper/numbers.tex",
         claims="results/paper/claims.tex",
+        config="results/paper/config.tex",
         figures=[f for f in FIGURES if f.endswith(".pdf")],
     output:
         "results/paper/main.pdf",

@@ -30,9 +30,12 @@ SPECS = {
     "fusion.claim.aoa_d_ratio": KeySpec(
         "fusion.claim.aoa_d_ratio", "1",
         "AOA RMSE at the largest over the smallest d (grows with d)"),
+    "fusion.claim.tdoa_no_solution_frac_dmin": KeySpec(
+        "fusion.claim.tdoa_no_solution_frac_dmin", "1",
+        "share of TDOA trials without solution at the smallest d swept"),
     "fusion.claim.fused_over_crlb_max": KeySpec(
         "fusion.claim.fused_over_crlb_max", "1",
-        "largest fused-RMSE/CRLB ratio over all sweep points"),
+        "largest fused-RMSE/CRLB ratio over all sweep points", digits=4),
 }
 
 
@@ -64,5 +67,7 @@ def key_numbers(reference: xr.Dataset, sweeps: dict[str, xr.Dataset]) -> dict[st
     out["fusion.claim.fused_below_both_frac"] = SPECS["fusion.claim.fused_below_both_frac"].entry(below / total)
     out["fusion.claim.tdoa_d_ratio"] = SPECS["fusion.claim.tdoa_d_ratio"].entry(float(tdoa_d.max() / tdoa_d.min()))
     out["fusion.claim.aoa_d_ratio"] = SPECS["fusion.claim.aoa_d_ratio"].entry(float(aoa_d[-1] / aoa_d[0]))
+    out["fusion.claim.tdoa_no_solution_frac_dmin"] = SPECS["fusion.claim.tdoa_no_solution_frac_dmin"].entry(
+        float(d["frac_tdoa_no_solution"].values[0]))
     out["fusion.claim.fused_over_crlb_max"] = SPECS["fusion.claim.fused_over_crlb_max"].entry(ratio_max)
     return out

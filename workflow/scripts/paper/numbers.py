@@ -2,7 +2,7 @@
 import json
 
 from railradio.io import write_json, write_text
-from railradio.keynumbers import claims_table, merge, to_latex
+from railradio.keynumbers import claims_table, config_to_latex, merge, to_latex
 from railradio.workflow import setup_script
 
 smk = snakemake  # noqa: F821 - injected by Snakemake
@@ -15,3 +15,4 @@ numbers = merge(fragments)
 write_json(smk.output.json, numbers)
 write_text(smk.output.tex, to_latex(numbers))
 write_text(smk.output.claims, claims_table(numbers))
+write_text(smk.output.config, config_to_latex(smk.params.config))
