@@ -8,7 +8,7 @@ SNAKE  := $(BIN)/snakemake --workflow-profile workflow/profiles/default
 export HDF5_USE_FILE_LOCKING := FALSE
 export MPLBACKEND := Agg
 
-.PHONY: all figures numbers paper test test-fast bench reproduce report lint clean
+.PHONY: all figures numbers paper test test-fast bench reproduce report lint expected publish clean
 
 all: figures numbers
 
@@ -46,6 +46,15 @@ bench: $(STAMP)  ## benchmarks -> results/benchmarks/*.json
 reproduce: $(STAMP)  ## paper scale from nothing, compared with paper/numbers.json
 	$(SNAKE) numbers -j$(JOBS) --forceall
 	$(BIN)/python -m railradio.keynumbers results/key_numbers.json paper/numbers.json
+
+expected: $(STAMP)  ## regenerate tests/expected/key_numbers_ci.json (CI scale, private dir)
+	d=$$(mktemp -d) && cp -r Snakefile workflow config paper $$d/ && \
+	  (cd $$d && $(CURDIR)/$(BIN)/snakemake numbers -j$(JOBS) --workflow-profile workflow/profiles/default \
+	     --configfile config/ci.yaml -q rules) && \
+	  cp $$d/results/key_numbers.json tests/expected/key_numbers_ci.json && rm -rf $$d
+
+publish: numbers  ## copy the paper-scale key numbers to paper/numbers.json (commit it)
+	cp results/key_numbers.json paper/numbers.json
 
 clean:
 	rm -rf results .snakemake

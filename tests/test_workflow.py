@@ -195,3 +195,12 @@ def test_interrupted_run_leaves_nothing_half_written_and_resumes(tmp_path):
         xr.open_dataset(p).close()
     smk(wd, "all", "-j2")
     assert (wd / "results/key_numbers.json").exists()
+
+
+@pytest.mark.skipif(shutil.which("latexmk") is None, reason="latexmk not installed (see README)")
+def test_paper_builds_without_undefined_references(ci_run_j2):
+    smk(ci_run_j2, "paper", "-j2")
+    pdf = ci_run_j2 / "results/paper/main.pdf"
+    assert pdf.stat().st_size > 10_000
+    log = (ci_run_j2 / "results/paper/main.log").read_text(errors="replace")
+    assert "undefined" not in log.lower()
