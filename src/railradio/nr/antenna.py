@@ -1,0 +1,93 @@
+"""Antenna element and ULA beam patterns (seed eq. 1; TR 38.901 Table 7.3-1).
+
+Azimuth-only (horizontal cut, θ = 90°): the elevation of every link is below 30° at
+d2D ≥ 15 m and the vertical pattern is not modelled [ours, stated].
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+from numpy.typing import NDArray
+
+ELEMENT_MAX_GAIN_DBI = 8.0   # TR 38.901 Table 7.3-1
+ELEMENT_HPBW_DEG = 65.0
+ELEMENT_FRONT_BACK_DB = 30.0
+ARRAY_NULL_FLOOR = 1e-3
+"""Array-factor floor (-30 dB): ideal nulls are filled in real arrays [ours]."""
+
+
+def wrap_rad(a: NDArray) -> NDArray:
+    """Wrap angles to (-π, π]."""
+    return -((-np.asarray(a) + np.pi) % (2 * np.pi) - np.pi)
+
+
+def element_gain_db(phi_rel_rad: NDArray) -> NDArray[np.float64]:
+    """TR 38.901 element gain [dBi] at azimuth φ' from boresight:
+    8 - min(12 (φ'/65°)², 30)."""
+    phi_deg = np.degrees(wrap_rad(phi_rel_rad))
+    return ELEMENT_MAX_GAIN_DBI - np.minimum(12.0 * (phi_deg / ELEMENT_HPBW_DEG) ** 2,
+                                             ELEMENT_FRONT_BACK_DB)
+
+
+def ula_gain(phi_rel_rad: NDArray, steer_rel_rad: NDArray, n_elements: int) -> NDArray[np.float64]:
+    """Linear array gain of an N-element λ/2 ULA steered to ``steer_rel_rad`` (angles from the
+    array broadside = panel boresight): |Σ_n e^{jπ n (sin φ - sin φ_s)}|² / N (peak N)."""
+    if n_elements < 1:
+        raise ValueError(f"n_elements must be >= 1, got {n_elements!r}")
+    u = np.sin(np.asarray(phi_rel_rad))[..., None] - np.sin(np.asarray(steer_rel_rad))[..., None]
+    n = np.arange(n_elements)
+    af = np.exp(1j * np.pi * u * n).sum(axis=-1)
+    return np.maximum(np.abs(af) ** 2 / n_elements, ARRAY_NULL_FLOOR)
+
+
+@dataclass(frozen=True)
+class RrhArray:
+    """An RRH's two panels and its SS-burst beams (seed §4; STUDY.md §2.1).
+
+    Beam k points at -(k + 0.5)·180/n_beams degrees; beams of the first half on the
+    -45° panel, the rest on the -135° panel [ours].
+    """
+
+    n_elements: int = 32
+    n_beams: int = 64
+    boresights_deg: tuple[float, float] = (-45.0, -135.0)
+
+    @cached_property
+    def beam_angles_rad(self) -> NDArray[np.float64]:
+        k = np.arange(self.n_beams)
+        return -np.radians((k + 0.5) * 180.0 / self.n_beams)
+
+    @cached_property
+    def beam_panel(self) -> NDArray[np.int64]:
+        return (np.arange(self.n_beams) >= self.n_beams // 2).astype(np.int64)
+
+    def beam_gains_db(self, aod_rad: NDArray) -> NDArray[np.float64]:
+        """Gain [dBi] of every beam toward ``aod_rad``: shape [..., n_beams]."""
+        aod = np.asarray(aod_rad)[..., None]
+        bore = np.radians(np.asarray(self.boresights_deg))[self.beam_panel]
+        phi_rel = wrap_rad(aod - bore)
+        steer_rel = wrap_rad(self.beam_angles_rad - bore)
+        af = ula_gain(phi_rel, np.broadcast_to(steer_rel, phi_rel.shape), self.n_elements)
+        return element_gain_db(phi_rel) + 10 * np.log10(af)
+
+
+@dataclass(frozen=True)
+class TrainArray:
+    """The train's two panels (forward 0°, backward 180°), beams fixed along the track,
+    co-located at the reference point by default; their chains are summed (power gains
+    add, noise of both chains) [ours]."""
+
+    n_elements: int = 8
+    n_chains: int = 2
+
+    def gain_db(self, aoa_rad: NDArray) -> NDArray[np.float64]:
+        """Total receive gain [dBi] toward azimuth ``aoa_rad`` (both panels)."""
+        total = np.zeros(np.shape(aoa_rad))
+        for bore in (0.0, np.pi):
+            phi = wrap_rad(np.asarray(aoa_rad) - bore)
+            g = element_gain_db(phi) + 10 * np.log10(ula_gain(phi, 0.0 * phi, self.n_elements))
+            total = total + 10 ** (g / 10)
+        return 10 * np.log10(total)

@@ -1,0 +1,127 @@
+"""Large-scale link budget of every RRH in range at one epoch (seed eq. 1; STUDY.md §2.1–2.3).
+
+P_R = P_T - PL(d3D) + S + G_T(θ_T) + G_R(θ_R): the transmit power is spread evenly over the
+600 active subcarriers (equal EPRE); beam gains from :mod:`railradio.nr.antenna`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+from numpy.typing import NDArray
+
+from railradio.constants import SPEED_OF_LIGHT_M_S
+from railradio.nr.antenna import RrhArray, TrainArray
+from railradio.nr.channel import pathloss_umi_los_db, shadowing_field_db
+from railradio.nr.geometry import Deployment
+from railradio.nr.numerology import N_ACTIVE
+from railradio.nr.receiver import Links
+from railradio.rng import make_rng
+
+BOLTZMANN_DBM_HZ = -174.0
+
+
+@dataclass(frozen=True)
+class RadioParams:
+    """Radio parameters [seed unless noted].
+
+    carrier_hz 30 GHz; tx_power_dbm 33 (whole carrier); noise_figure_db 5;
+    shadow_sigma_db 4 and shadow_corr_m 10 [3GPP UMi-LOS]; range_m: RRHs within this 2-D
+    distance are synthesized (5 km: the UMi model's validity) [ours].
+    """
+
+    carrier_hz: float = 30e9
+    tx_power_dbm: float = 33.0
+    noise_figure_db: float = 5.0
+    shadow_sigma_db: float = 4.0
+    shadow_corr_m: float = 10.0
+    range_m: float = 5000.0
+
+    @property
+    def wavelength_m(self) -> float:
+        return SPEED_OF_LIGHT_M_S / self.carrier_hz
+
+    @property
+    def noise_psd_w_hz(self) -> float:
+        return 10 ** ((BOLTZMANN_DBM_HZ + self.noise_figure_db - 30) / 10)
+
+    @property
+    def epre_w(self) -> float:
+        return 10 ** ((self.tx_power_dbm - 30) / 10) / N_ACTIVE
+
+
+class ShadowingMap:
+    """Spatially correlated shadowing of each RRH along the track, on a 1 m grid.
+
+    The field of RRH k spans [x_k - range, x_k + range] and is drawn from its own generator
+    (seed, realization, k), so it is the same in every shard of the track.
+    """
+
+    def __init__(self, seed: int, key: tuple[int, ...], dep: Deployment, radio: RadioParams):
+        self.seed, self.key, self.dep, self.radio = seed, key, dep, radio
+        self._fields: dict[int, NDArray[np.float64]] = {}
+
+    def field(self, rrh: int) -> NDArray[np.float64]:
+        if rrh not in self._fields:
+            n = int(2 * self.radio.range_m) + 2
+            rng = make_rng(self.seed, self.key + (int(rrh),))
+            self._fields[rrh] = shadowing_field_db(rng, n, self.radio.shadow_sigma_db, self.radio.shadow_corr_m)
+        return self._fields[rrh]
+
+    def at(self, x_m: float, rrh: NDArray[np.int64]) -> NDArray[np.float64]:
+        out = np.empty(len(rrh))
+        for i, k in enumerate(rrh):
+            pos = int(round(x_m - self.dep.x_m[k] + self.radio.range_m))
+            f = self.field(int(k))
+            out[i] = f[min(max(pos, 0), f.size - 1)]
+        return out
+
+
+@dataclass
+class LinkBudget:
+    """Per-epoch large-scale quantities of the RRHs in range (arrays over RRHs)."""
+
+    rrh: NDArray[np.int64]
+    d3d_m: NDArray[np.float64]
+    pathloss_db: NDArray[np.float64]
+    shadowing_db: NDArray[np.float64]
+    aod_rad: NDArray[np.float64]
+    aoa_rad: NDArray[np.float64]
+    beam_gain_db: NDArray[np.float64]  # [R, n_beams]
+    rx_gain_db: NDArray[np.float64]
+    links: Links
+
+    @cached_property
+    def rx_power_dbm(self) -> NDArray[np.float64]:
+        """Received power over the carrier with the best beam [dBm]."""
+        return (self.links.extra["tx_power_dbm"] - self.pathloss_db + self.shadowing_db
+                + self.beam_gain_db.max(axis=1) + self.rx_gain_db)
+
+
+def link_budget(x_m: float, speed_m_s: float, dep: Deployment, radio: RadioParams, rrh_array: RrhArray,
+                train: TrainArray, shadow: ShadowingMap, shadowing: bool = True) -> LinkBudget:
+    """Large-scale parameters and the synthesis inputs of every RRH within ``radio.range_m``."""
+    d2d_all = np.hypot(dep.x_m - x_m, dep.offset_m)
+    rrh = np.flatnonzero(d2d_all <= radio.range_m)
+    d3d = dep.distance_3d_m(x_m, rrh)
+    d2d = dep.distance_2d_m(x_m, rrh)
+    pl = pathloss_umi_los_db(d3d, d2d, radio.carrier_hz, dep.h_bs_m, dep.h_ut_m)
+    sh = shadow.at(x_m, rrh) if shadowing else np.zeros(rrh.size)
+    aod = dep.aod_rad(np.full(rrh.size, x_m), rrh)
+    aoa = dep.aoa_rad(np.full(rrh.size, x_m), rrh)
+    gt = rrh_array.beam_gains_db(aod)
+    gr = train.gain_db(aoa)
+    amp = np.sqrt(radio.epre_w * 10 ** ((-pl + sh + gr) / 10))
+    n1, n2 = dep.n_id()
+    lam = radio.wavelength_m
+    links = Links(
+        n_id1=n1[rrh], n_id2=n2[rrh], tau_s=d3d / SPEED_OF_LIGHT_M_S, amp=amp,
+        beam_amp=10 ** (gt / 20), data_amp=10 ** (gt.max(axis=1) / 20),
+        f_los_hz=speed_m_s / lam * (dep.x_m[rrh] - x_m) / d3d,
+        phase0=(-2 * np.pi * d3d / lam) % (2 * np.pi),
+        doppler_hz=abs(speed_m_s) / lam, noise_psd_w_hz=radio.noise_psd_w_hz,
+        n_chains=train.n_chains, extra={"tx_power_dbm": radio.tx_power_dbm},
+    )
+    return LinkBudget(rrh, d3d, pl, sh, aod, aoa, gt, gr, links)
