@@ -106,6 +106,23 @@ def tdl_profile(name: str, delay_spread_s: float) -> TdlProfile:
                       pw / total, dl)
 
 
+def sos_params(rng: np.random.Generator, n_taps: int, n_sinusoids: int) -> tuple[NDArray, NDArray]:
+    """Random arrival angles α and phases φ [rad] of a sum-of-sinusoids process, [taps, M]."""
+    alpha = rng.uniform(0, 2 * np.pi, size=(n_taps, n_sinusoids))
+    phi = rng.uniform(0, 2 * np.pi, size=(n_taps, n_sinusoids))
+    return alpha, phi
+
+
+def sos_eval(powers: NDArray, doppler_hz: float, times_s: NDArray, alpha: NDArray,
+             phi: NDArray) -> NDArray[np.complex128]:
+    """Evaluate a sum-of-sinusoids process with given (α, φ) at ``times_s``: [n_times, n_taps]."""
+    powers = np.asarray(powers, dtype=float)
+    f = doppler_hz * np.cos(alpha)
+    t = np.asarray(times_s, dtype=float)
+    phase = 2 * np.pi * f[None, :, :] * t[:, None, None] + phi[None, :, :]
+    return np.sqrt(powers / alpha.shape[1])[None, :] * np.exp(1j * phase).sum(axis=-1)
+
+
 def sos_taps(rng: np.random.Generator, powers: NDArray, doppler_hz: float, times_s: NDArray,
              n_sinusoids: int = 32) -> NDArray[np.complex128]:
     """Rayleigh tap gains by a sum of sinusoids (Clarke's model, random arrival angles).
@@ -117,11 +134,5 @@ def sos_taps(rng: np.random.Generator, powers: NDArray, doppler_hz: float, times
     -------
     ndarray, shape [n_times, n_taps]
     """
-    powers = np.asarray(powers, dtype=float)
-    n_taps = powers.size
-    alpha = rng.uniform(0, 2 * np.pi, size=(n_taps, n_sinusoids))
-    phi = rng.uniform(0, 2 * np.pi, size=(n_taps, n_sinusoids))
-    f = doppler_hz * np.cos(alpha)  # [taps, M]
-    t = np.asarray(times_s, dtype=float)
-    phase = 2 * np.pi * f[None, :, :] * t[:, None, None] + phi[None, :, :]
-    return np.sqrt(powers / n_sinusoids)[None, :] * np.exp(1j * phase).sum(axis=-1)
+    alpha, phi = sos_params(rng, np.asarray(powers).size, n_sinusoids)
+    return sos_eval(powers, doppler_hz, times_s, alpha, phi)

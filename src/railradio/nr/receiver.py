@@ -31,7 +31,7 @@ import numpy as np
 import scipy.fft as sfft
 from numpy.typing import NDArray
 
-from railradio.nr.channel import TdlProfile, sos_taps
+from railradio.nr.channel import TdlProfile, sos_eval, sos_params
 from railradio.nr.numerology import N_FFT, SUBCARRIER_SPACING_HZ, Numerology, ssb_first_symbols
 from railradio.nr.ssb import band_bins, burst_grid, reference_waveform
 
@@ -205,8 +205,19 @@ class Synthesizer:
             self._overlays[key] = (rows, bins, marked[rows, bins])
         return self._overlays[key]
 
+    def draws(self, links: Links, rng: np.random.Generator) -> list[dict]:
+        """The random draws of one burst per RRH: data pool indices and fading (α, φ)."""
+        sp = self.span(float(np.max(links.tau_s)) if links.n else 0.0)
+        out = []
+        for _ in range(links.n):
+            idx = rng.integers(0, self.pool_band.shape[0], size=sp["symbols"].size)
+            alpha, phi = sos_params(rng, self.profile.powers.size, self.n_sinusoids)
+            out.append({"pool_idx": idx, "alpha": alpha, "phi": phi})
+        return out
+
     def __call__(self, links: Links, rng: np.random.Generator, t0_s: float = 0.0,
-                 noise: bool = True, d2d_m: NDArray | None = None) -> tuple[NDArray[np.complex64], int]:
+                 noise: bool = True, d2d_m: NDArray | None = None,
+                 draws: list[dict] | None = None) -> tuple[NDArray[np.complex64], int]:
         """The received burst at F_s/D (sum over RRHs in range + AWGN).
 
         Returns ``(z, s_min)``: samples from the CP start of symbol ``s_min`` (negative:
@@ -221,8 +232,10 @@ class Synthesizer:
         t_sym = (num.symbol_start(symbols) + sp["cps"] + n / 2) / fs + t0_s
         chunk = 256
         n_chunks = -(-total // chunk)
+        if draws is None:
+            draws = self.draws(links, rng)
         for r in range(links.n):
-            grid = self.pool_band[rng.integers(0, self.pool_band.shape[0], size=symbols.size)]
+            grid = self.pool_band[draws[r]["pool_idx"]]
             rows, bins, vals = self.overlay(links.n_id1[r], links.n_id2[r])
             grid[rows, bins] = vals
             g_sym = np.where(sp["block_of"] >= 0, links.beam_amp[r][np.maximum(sp["block_of"], 0)],
@@ -230,7 +243,7 @@ class Synthesizer:
             ramp = np.exp(-2j * np.pi * self.f_k * links.tau_s[r]).astype(np.complex64)
             full = d2d_m is None or d2d_m[r] <= self.full_channel_range_m
             if full and prof.powers.size:
-                taps = sos_taps(rng, prof.powers, links.doppler_hz, t_sym, self.n_sinusoids)
+                taps = sos_eval(prof.powers, links.doppler_hz, t_sym, draws[r]["alpha"], draws[r]["phi"])
                 taps *= np.exp(-1j * (2 * np.pi * links.f_los_hz[r] * t_sym + links.phase0[r]))[:, None]
                 h = (np.sqrt(prof.los_power) + taps.astype(np.complex64) @ self.basis) * ramp[None, :]
                 x = grid * h
@@ -280,14 +293,29 @@ class BlockCorrelation:
     corr: NDArray[np.float32] | None = None
 
 
+def cfar_threshold(window_s: float, pfa: float, n_sc: int = 127) -> float:
+    """t with T sqrt(2π) β_rms t exp(-t²/2) = P_fa (Rice's envelope up-crossing rate), in
+    units of the Rayleigh parameter σ_R; β_rms = Δf sqrt((n_sc² - 1)/12) [Hz]."""
+    from scipy.optimize import brentq
+
+    beta = SUBCARRIER_SPACING_HZ * np.sqrt((n_sc**2 - 1) / 12)
+    c = window_s * np.sqrt(2 * np.pi) * beta
+
+    def f(t: float) -> float:
+        return np.log(c * t) - t * t / 2 - np.log(pfa)
+
+    return float(brentq(f, 1.0, 50.0))
+
+
 class Correlator:
     """The seed's correlation receiver for a set of candidate cells (seed eq. 4–9).
 
     Detection rule ``detector``: ``"seed"`` η_i > μ_i + kσ_i (seed eq. 6, k = 4), or
-    ``"cfar"`` [ours] η_i > μ_i · sqrt(2 ln(n_eff / P_fa)) / sqrt(π/2): the threshold at
-    which the maximum of n_eff independent Rayleigh samples (the correlation magnitude of
-    noise, μ = σ_R sqrt(π/2)) exceeds it with probability P_fa per block, with
-    n_eff = K · 127 Δf / F_s independent lags.
+    ``"cfar"`` [ours] η_i > t · μ_i / sqrt(π/2): on noise the correlation magnitude is a
+    Rayleigh envelope (μ = σ_R sqrt(π/2)) whose expected number of up-crossings of t·σ_R
+    over the window T = K/F_s is T sqrt(2π) β_rms t e^{-t²/2} (Rice, 1945), with β_rms the
+    RMS bandwidth of the 127-subcarrier reference, Δf sqrt((127² - 1)/12); t solves that
+    number = P_fa, the false-alarm probability per block.
     """
 
     def __init__(self, cfg: ReceiverConfig, detector: str = "seed", pfa: float = 1e-3):
@@ -307,8 +335,7 @@ class Correlator:
         self.offsets = np.arange(-d, d + 1) / d
         self.offset_phasors = np.exp(2j * np.pi * np.outer(self.freqs, self.offsets) / self.n_win).astype(np.complex64)
         self.lag_phasor_step = np.exp(2j * np.pi * self.freqs / self.n_win)
-        n_eff = cfg.lags_full * 127 * SUBCARRIER_SPACING_HZ / Numerology(1).sample_rate_hz
-        self.cfar_factor = np.sqrt(2 * np.log(n_eff / pfa)) / np.sqrt(np.pi / 2)
+        self.cfar_factor = cfar_threshold(cfg.lags_full / Numerology(1).sample_rate_hz, pfa) / np.sqrt(np.pi / 2)
 
     def spectrum(self, n_id1: int, n_id2: int) -> NDArray[np.complex64]:
         """conj(B): the conjugate reference spectrum of a cell, n_win bins."""
