@@ -174,10 +174,12 @@ class Synthesizer:
         cps = num.cp_length(symbols)
         starts = num.symbol_start(symbols) - num.symbol_start(symbols[0])
         total = int(starts[-1] + n + cps[-1])
-        # flat read-out: sample j of the burst = y[row[j], (col[j] + n_c) mod n]
+        # flat read-out: symbol s occupies n + cp_s samples read cyclically from its IFFT
+        # output y_s (0..n-1 then 0..cp_s-1); the CP and the placement offset are folded
+        # into the subcarrier phase ramp, so the gather index is fixed
         row = np.repeat(np.arange(symbols.size), n + cps)
         m = np.arange(total) - np.repeat(starts, n + cps)
-        col = m - np.repeat(cps, n + cps)
+        flat = row * n + (m % n)
         # SS-block symbol -> block index
         block_of = np.full(symbols.size, -1, dtype=np.int64)
         first_pos = {int(sv): i for i, sv in enumerate(symbols)}
@@ -185,8 +187,11 @@ class Synthesizer:
             for off in range(4):
                 if int(f) + off in first_pos:
                     block_of[first_pos[int(f) + off]] = b
+        cp0 = int(num.cp_length(1))
+        long_rows = np.flatnonzero(cps != cp0)
+        long_ramp = np.exp(-2j * np.pi * np.outer(cps[long_rows] - cp0, np.fft.fftfreq(n, 1.0 / n)) / n).astype(np.complex64)
         self._span = dict(n_pre=n_pre, symbols=symbols, cps=cps, starts=starts, total=total,
-                          row=row, col=col, block_of=block_of, s_min=int(symbols[0]))
+                          flat=flat, cp0=cp0, long_rows=long_rows, long_ramp=long_ramp, block_of=block_of, s_min=int(symbols[0]))
         self._overlays.clear()
         return self._span
 
@@ -240,7 +245,11 @@ class Synthesizer:
             grid[rows, bins] = vals
             g_sym = np.where(sp["block_of"] >= 0, links.beam_amp[r][np.maximum(sp["block_of"], 0)],
                              links.data_amp[r]) * links.amp[r]
-            ramp = np.exp(-2j * np.pi * self.f_k * links.tau_s[r]).astype(np.complex64)
+            # delay τ0 = (n_c - ε)/F_s: placement at n_c, the rest (and the CP start) as a
+            # per-symbol phase ramp: sample m of symbol s is x(t_m - τ0) at m - cp_s + n_c
+            n_c = int(np.ceil(links.tau_s[r] * fs - 1e-9))
+            frac = links.tau_s[r] * fs - n_c  # in (-1, 0]
+            ramp = np.exp(-2j * np.pi * (frac + sp["cp0"]) * self.k / n).astype(np.complex64)  # [n]
             full = d2d_m is None or d2d_m[r] <= self.full_channel_range_m
             if full and prof.powers.size:
                 taps = sos_eval(prof.powers, links.doppler_hz, t_sym, draws[r]["alpha"], draws[r]["phi"])
@@ -250,18 +259,18 @@ class Synthesizer:
                 x *= g_sym[:, None].astype(np.complex64)
             else:  # far interferer: one tap with the profile's total power, LOS Doppler
                 x = grid * (ramp[None, :] * g_sym[:, None].astype(np.complex64))
-            y = sfft.ifft(x, axis=1, workers=1)
-            y *= n
-            n_c = int(np.ceil(links.tau_s[r] * fs - 1e-9))
             if n_c >= total:
                 continue
-            wave = y.reshape(-1)[sp["row"][: total - n_c] * n + (sp["col"][: total - n_c] + n_c) % n]
+            x[sp["long_rows"]] *= sp["long_ramp"]  # the long-CP symbols' extra CP samples
+            y = sfft.ifft(x, axis=1, workers=1)
+            y *= n
+            wave = y.reshape(-1)[sp["flat"][: total - n_c]]
             # LOS phase e^{j(2π f t + φ0)} at receive times, as coarse × fine phasors
             t_first = (num.symbol_start(sp["s_min"]) + n_c) / fs + t0_s
             w = 2 * np.pi * links.f_los_hz[r]
-            coarse = np.exp(1j * (w * (t_first + np.arange(n_chunks) * chunk / fs) + links.phase0[r]))
-            fine = np.exp(1j * w * np.arange(chunk) / fs)
-            phasor = np.outer(coarse, fine).reshape(-1)[: total - n_c].astype(np.complex64)
+            coarse = np.exp(1j * (w * (t_first + np.arange(n_chunks) * chunk / fs) + links.phase0[r])).astype(np.complex64)
+            fine = np.exp(1j * w * np.arange(chunk) / fs).astype(np.complex64)
+            phasor = (coarse[:, None] * fine[None, :]).reshape(-1)[: total - n_c]
             z[n_c:] += wave * phasor
         if noise:
             var = links.noise_psd_w_hz * fs * links.n_chains
@@ -334,7 +343,8 @@ class Correlator:
         # e^{j2π f δ/N} for the full-rate offsets δ = -1 ... +1 (decimated units, step 1/D)
         self.offsets = np.arange(-d, d + 1) / d
         self.offset_phasors = np.exp(2j * np.pi * np.outer(self.freqs, self.offsets) / self.n_win).astype(np.complex64)
-        self.lag_phasor_step = np.exp(2j * np.pi * self.freqs / self.n_win)
+        self.freq_int = np.round(self.freqs).astype(np.int64)
+        self.roots = np.exp(2j * np.pi * np.arange(self.n_win) / self.n_win).astype(np.complex64)
         self.cfar_factor = cfar_threshold(cfg.lags_full / Numerology(1).sample_rate_hz, pfa) / np.sqrt(np.pi / 2)
 
     def spectrum(self, n_id1: int, n_id2: int) -> NDArray[np.complex64]:
@@ -348,7 +358,7 @@ class Correlator:
     def _at_offsets(self, p: NDArray[np.complex64], k0: NDArray[np.int64]) -> NDArray[np.float64]:
         """|c(k0 + δ)| for δ in ``self.offsets`` from cross-spectra p [n, N] (band-limited
         evaluation: c(λ) = (1/N) Σ_f p[f] e^{j2π f λ/N})."""
-        shift = np.exp(2j * np.pi * np.outer(k0, self.freqs) / self.n_win).astype(np.complex64)
+        shift = self.roots[np.outer(k0, self.freq_int) % self.n_win]  # e^{j2π f k0/N}
         return np.abs((p * shift) @ self.offset_phasors) / self.n_win
 
     def correlate(self, z: NDArray[np.complex64], s_min: int, n_id1: NDArray, n_id2: NDArray,
