@@ -302,6 +302,26 @@ class BlockCorrelation:
     corr: NDArray[np.float32] | None = None
 
 
+DETECTORS = ("seed", "cfar", "cacfar")
+
+
+def local_mean(r: NDArray, window: int, guard: int) -> NDArray[np.float64]:
+    """Cell-averaging noise floor: mean of r over ``window`` lags on each side of every
+    lag, skipping ``guard`` lags next to it (fewer at the ends); r [..., K]."""
+    k = r.shape[-1]
+    c = np.concatenate([np.zeros(r.shape[:-1] + (1,)), np.cumsum(r, axis=-1, dtype=float)], axis=-1)
+    idx = np.arange(k)
+
+    def span_sum(lo, hi):  # sum over [lo, hi)
+        lo = np.clip(lo, 0, k)
+        hi = np.clip(hi, 0, k)
+        return c[..., hi] - c[..., lo], (hi - lo)
+
+    s1, n1 = span_sum(idx - guard - window, idx - guard)
+    s2, n2 = span_sum(idx + guard + 1, idx + guard + 1 + window)
+    return (s1 + s2) / np.maximum(n1 + n2, 1)
+
+
 def cfar_threshold(window_s: float, pfa: float, n_sc: int = 127) -> float:
     """t with T sqrt(2π) β_rms t exp(-t²/2) = P_fa (Rice's envelope up-crossing rate), in
     units of the Rayleigh parameter σ_R; β_rms = Δf sqrt((n_sc² - 1)/12) [Hz]."""
@@ -327,9 +347,11 @@ class Correlator:
     number = P_fa, the false-alarm probability per block.
     """
 
-    def __init__(self, cfg: ReceiverConfig, detector: str = "seed", pfa: float = 1e-3):
-        if detector not in ("seed", "cfar"):
-            raise ValueError(f"detector must be 'seed' or 'cfar', got {detector!r}")
+    def __init__(self, cfg: ReceiverConfig, detector: str = "seed", pfa: float = 1e-3,
+                 ca_window: int = 64, ca_guard: int = 4):
+        if detector not in DETECTORS:
+            raise ValueError(f"detector must be one of {DETECTORS}, got {detector!r}")
+        self.ca_window, self.ca_guard = ca_window, ca_guard
         if not 0 < pfa < 1:
             raise ValueError(f"pfa must be in (0, 1), got {pfa!r}")
         self.cfg, self.detector, self.pfa = cfg, detector, pfa
@@ -379,10 +401,20 @@ class Correlator:
         sigma = r.std(axis=2)
         k_lo = r.argmax(axis=2)
         eta = r.max(axis=2).astype(float)
-        threshold = (mu * self.cfar_factor if self.detector == "cfar"
-                     else mu + cfg.detect_k_sigma * sigma)
-        pre = (mu * self.cfar_factor * 0.8 if self.detector == "cfar"
-               else mu + cfg.prescreen_k_sigma * sigma)
+        if self.detector == "cacfar":  # [ours] local noise floor per lag
+            floor = local_mean(r, self.ca_window, self.ca_guard)
+            ratio = r / np.maximum(floor, 1e-30)
+            k_lo = ratio.argmax(axis=2)
+            eta = np.take_along_axis(r, k_lo[..., None], axis=2)[..., 0].astype(float)
+            floor_at = np.take_along_axis(floor, k_lo[..., None], axis=2)[..., 0]
+            threshold = floor_at * self.cfar_factor
+            pre = threshold * 0.8
+        elif self.detector == "cfar":
+            threshold = mu * self.cfar_factor
+            pre = threshold * 0.8
+        else:
+            threshold = mu + cfg.detect_k_sigma * sigma
+            pre = mu + cfg.prescreen_k_sigma * sigma
         cand = eta > pre
         if d > 1 and np.any(cand):  # η at full-rate lags around promising peaks
             ci, bi = np.nonzero(cand)
