@@ -10,6 +10,7 @@ configfile: "config/config.yaml"
 
 include: "workflow/rules/common.smk"
 include: "workflow/rules/fusion.smk"
+include: "workflow/rules/nr.smk"
 include: "workflow/rules/paper.smk"
 
 
@@ -36,3 +37,9 @@ rule fusion:
     input:
         STUDY_FIGURES["fusion"],
         "results/fusion/key_numbers.json",
+
+
+rule nr:
+    input:
+        STUDY_FIGURES["nr"],
+        "results/nr/key_numbers.json",

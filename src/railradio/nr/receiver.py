@@ -65,6 +65,8 @@ class ReceiverConfig:
     n_aod_blocks: int = 3
     subsample: bool = False
     prescreen_k_sigma: float = 3.0
+    template: str = "pss_sss"
+    """Correlation reference: PSS + SSS (seed) or SSS only [ours]."""
     toa_blocks: int | None = None
     """TOA combining (eq. 8) over all detected blocks (``None``, the seed) or over the
     ``toa_blocks`` detected blocks with the largest (η - μ)/σ [ours]."""
@@ -373,7 +375,7 @@ class Correlator:
         """conj(B): the conjugate reference spectrum of a cell, n_win bins."""
         key = (int(n_id1), int(n_id2))
         if key not in self._spectra:
-            b = reference_waveform(self.cfg.num, *key, int(self.cfg.ssb_first[0]))
+            b = reference_waveform(self.cfg.num, *key, int(self.cfg.ssb_first[0]), self.cfg.template)
             self._spectra[key] = np.conj(sfft.fft(b, self.n_win)).astype(np.complex64)
         return self._spectra[key]
 

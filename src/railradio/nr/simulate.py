@@ -41,6 +41,9 @@ class Scenario:
     delay_spread_s: float = 20e-9
     detector: str = "seed"
     pfa: float = 1e-3
+    variants: tuple = ()
+    """Extra receivers run on the same bursts: ((name, ReceiverConfig, detector), ...);
+    they must share the decimation and SS-block pattern of ``receiver``."""
     n_candidates: int = 6
     full_channel_range_m: float = 1500.0
     n_sinusoids: int = 16
@@ -81,12 +84,17 @@ def simulate_epochs(scn: Scenario, epochs: np.ndarray, seed: int, key: tuple[int
     shadow = ShadowingMap(seed, key + (KEY_SHADOWING,), dep, radio)
     pool = qpsk_pool(make_rng(seed, key + (KEY_POOL,)), scn.pool_size)
     syn = Synthesizer(scn.receiver, scn.profile, pool, scn.n_sinusoids, scn.full_channel_range_m)
-    cor = Correlator(scn.receiver, scn.detector, scn.pfa)
+    receivers = [("seed", scn.receiver, scn.detector)] + list(scn.variants)
+    for _, rc, _ in receivers:
+        if rc.decimation != scn.receiver.decimation or rc.ssb_pattern != scn.receiver.ssb_pattern:
+            raise ValueError("receiver variants must share decimation and ssb_pattern")
+    cors = [Correlator(rc, det, scn.pfa) for _, rc, det in receivers]
+    n_r = len(receivers)
     n_e, n_c = epochs.size, scn.n_candidates
-    out = {name: np.full((n_e, n_c), np.nan) for name in
-           ("d3d_m", "aod_true_rad", "rx_power_dbm", "aod_hat_rad", "toa_hat_s", "peak", "best_score")}
+    out = {name: np.full((n_e, n_c), np.nan) for name in ("d3d_m", "aod_true_rad", "rx_power_dbm")}
+    est = {name: np.full((n_r, n_e, n_c), np.nan) for name in ("aod_hat_rad", "toa_hat_s", "peak", "best_score")}
     out["rrh"] = np.zeros((n_e, n_c), dtype=np.int64)
-    out["n_detected"] = np.zeros((n_e, n_c), dtype=np.int64)
+    est["n_detected"] = np.zeros((n_r, n_e, n_c), dtype=np.int64)
     sinr_proxy = np.full(n_e, np.nan)
     corr_keep = {}
     for i, (e, xe, ve) in enumerate(zip(epochs, x, v, strict=True)):
@@ -95,22 +103,25 @@ def simulate_epochs(scn: Scenario, epochs: np.ndarray, seed: int, key: tuple[int
         z, s_min = syn(lb.links, rng, t0_s=float(t[i]), d2d_m=np.hypot(dep.x_m[lb.rrh] - xe, dep.offset_m))
         cand = dep.nearest(float(xe), n_c)
         pos = np.searchsorted(lb.rrh, cand)
-        res = cor.correlate(z, s_min, lb.links.n_id1[pos], lb.links.n_id2[pos], keep_corr=int(e) in keep_corr_epochs)
         out["rrh"][i] = cand
         out["d3d_m"][i] = lb.d3d_m[pos]
         out["aod_true_rad"][i] = lb.aod_rad[pos]
         out["rx_power_dbm"][i] = lb.rx_power_dbm[pos]
-        out["aod_hat_rad"][i] = res.aod_rad
-        out["toa_hat_s"][i] = res.toa_samples / SAMPLE_RATE_HZ
-        out["peak"][i] = res.peak_comb
-        out["n_detected"][i] = res.detected.sum(axis=1)
-        score = (res.eta - res.mu) / np.maximum(res.sigma, 1e-30)
-        out["best_score"][i] = score.max(axis=1)
+        for j, cor in enumerate(cors):
+            res = cor.correlate(z, s_min, lb.links.n_id1[pos], lb.links.n_id2[pos],
+                                keep_corr=(j == 0 and int(e) in keep_corr_epochs))
+            est["aod_hat_rad"][j, i] = res.aod_rad
+            est["toa_hat_s"][j, i] = res.toa_samples / SAMPLE_RATE_HZ
+            est["peak"][j, i] = res.peak_comb
+            est["n_detected"][j, i] = res.detected.sum(axis=1)
+            score = np.where(res.detected, (res.eta - res.mu) / np.maximum(res.sigma, 1e-30), -np.inf)
+            est["best_score"][j, i] = np.where(res.detected.any(axis=1), score.max(axis=1), np.nan)
+            if res.corr is not None:
+                corr_keep[int(e)] = (res.corr, cand)
         p_all = 10 ** (lb.rx_power_dbm / 10)
         sinr_proxy[i] = 10 * np.log10(p_all.max() / (p_all.sum() - p_all.max()))
-        if res.corr is not None:
-            corr_keep[int(e)] = (res.corr, cand)
     cd = ("epoch", "cand")
+    rd = ("receiver", "epoch", "cand")
     ds = xr.Dataset(
         {
             "t": (("epoch",), t, {"units": "s", "long_name": "time of the burst start (truth instant)"}),
@@ -122,16 +133,17 @@ def simulate_epochs(scn: Scenario, epochs: np.ndarray, seed: int, key: tuple[int
             "toa_true": (cd, out["d3d_m"] / SPEED_OF_LIGHT_M_S, {"units": "s", "long_name": "true propagation delay"}),
             "aod_true": (cd, out["aod_true_rad"], {"units": "rad", "long_name": "true azimuth of departure at the RRH"}),
             "rx_power": (cd, out["rx_power_dbm"], {"units": "dBm", "long_name": "received power with the best beam"}),
-            "aod_hat": (cd, out["aod_hat_rad"], {"units": "rad", "long_name": "AOD estimate (seed eq. 7), NaN if nothing detected"}),
-            "toa_hat": (cd, out["toa_hat_s"], {"units": "s", "long_name": "TOA estimate (seed eq. 9), NaN if nothing detected"}),
-            "peak": (cd, out["peak"], {"units": "1", "long_name": "combined correlation peak (decimated-rate units)"}),
-            "best_score": (cd, out["best_score"], {"units": "1", "long_name": "largest (eta - mu)/sigma over blocks"}),
-            "n_detected": (cd, out["n_detected"], {"units": "1", "long_name": "SS blocks detected (seed eq. 6)"}),
+            "aod_hat": (rd, est["aod_hat_rad"], {"units": "rad", "long_name": "AOD estimate (seed eq. 7), NaN if nothing detected"}),
+            "toa_hat": (rd, est["toa_hat_s"], {"units": "s", "long_name": "TOA estimate (seed eq. 9), NaN if nothing detected"}),
+            "peak": (rd, est["peak"], {"units": "1", "long_name": "combined correlation peak (decimated-rate units)"}),
+            "best_score": (rd, est["best_score"], {"units": "1", "long_name": "largest (eta - mu)/sigma over detected blocks"}),
+            "n_detected": (rd, est["n_detected"], {"units": "1", "long_name": "SS blocks detected (seed eq. 6)"}),
             "sir_best": (("epoch",), sinr_proxy, {"units": "dB", "long_name": "strongest RRH power over the sum of the others"}),
         },
         coords={
             "epoch": ("epoch", epochs, {"units": "1", "long_name": "measurement epoch index (dt apart)"}),
             "cand": ("cand", np.arange(n_c), {"units": "1", "long_name": "candidate rank by distance"}),
+            "receiver": ("receiver", [name for name, _, _ in receivers], {"units": "1", "long_name": "receiver variant"}),
         },
     )
     if corr_keep:
@@ -141,3 +153,38 @@ def simulate_epochs(scn: Scenario, epochs: np.ndarray, seed: int, key: tuple[int
                              {"units": "1", "long_name": f"|r_i[k]| of epoch {e0} (decimated lags)"})
         ds["corr_sample_epoch"] = ((), e0, {"units": "1", "long_name": "epoch of corr_sample"})
     return ds
+
+
+def scenario_from_config(c: dict) -> Scenario:
+    """Build the :class:`Scenario` from the ``nr`` section of the workflow config."""
+    from railradio.nr.antenna import RrhArray, TrainArray
+
+    rx = c["receiver"]
+    return Scenario(
+        trajectory=Trajectory(tuple(tuple(map(float, p)) for p in c["trajectory"]["phases"]),
+                              float(c["trajectory"]["dt_s"])),
+        deployment=Deployment(**{k: float(v) for k, v in c["deployment"].items()}),
+        radio=RadioParams(**{k: float(v) for k, v in c["radio"].items()}),
+        rrh_array=RrhArray(n_elements=int(c["antenna"]["rrh_elements"]), n_beams=int(c["antenna"]["n_beams"])),
+        train_array=TrainArray(n_elements=int(c["antenna"]["train_elements"])),
+        receiver=ReceiverConfig(decimation=int(rx["decimation"]), ssb_pattern=rx["ssb_pattern"],
+                                n_blocks=int(c["antenna"]["n_beams"]), toa_blocks=rx["toa_blocks"],
+                                subsample=bool(rx["subsample"]), template=rx["template"]),
+        tdl=c["channel"]["tdl"], delay_spread_s=float(c["channel"]["delay_spread_s"]),
+        detector=rx["detector"], pfa=float(rx["pfa"]), n_candidates=int(rx["n_candidates"]),
+        variants=tuple(
+            (name, ReceiverConfig(decimation=int(rx["decimation"]), ssb_pattern=rx["ssb_pattern"],
+                                  n_blocks=int(c["antenna"]["n_beams"]), toa_blocks=v["toa_blocks"],
+                                  subsample=bool(v["subsample"]), template=v["template"]), v["detector"])
+            for name, v in c.get("receiver_variants", {}).items()),
+        full_channel_range_m=float(c["channel"]["full_channel_range_m"]),
+        n_sinusoids=int(c["channel"]["n_sinusoids"]),
+    )
+
+
+def shard_epochs(n_epochs: int, n_shards: int, shard: int) -> np.ndarray:
+    """Epoch indices of one shard: contiguous, near-equal blocks."""
+    if not 0 <= shard < n_shards:
+        raise ValueError(f"shard must be in 0..{n_shards - 1}, got {shard!r}")
+    edges = np.linspace(0, n_epochs, n_shards + 1).round().astype(int)
+    return np.arange(edges[shard], edges[shard + 1])

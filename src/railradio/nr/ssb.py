@@ -112,16 +112,21 @@ def burst_grid(
     return grid, block_of
 
 
-def reference_waveform(num: Numerology, n_id1: int, n_id2: int, first_symbol: int) -> NDArray[np.complex64]:
+def reference_waveform(num: Numerology, n_id1: int, n_id2: int, first_symbol: int,
+                       template: str = "pss_sss") -> NDArray[np.complex64]:
     """The correlator's reference b of one SS block (seed eq. 4): PSS in the block's symbol 0
     and SSS in its symbol 2 (with their CPs), every other subcarrier and symbol empty;
-    time samples from the CP start of symbol 0 to the end of symbol 2, unit EPRE."""
+    time samples from the CP start of symbol 0 to the end of symbol 2, unit EPRE.
+    ``template="sss"`` [ours] keeps only the SSS (unique per cell: the PSS repeats every
+    third RRH, whose stronger PSS otherwise leaks into a weaker cell's correlation)."""
+    if template not in ("pss_sss", "sss"):
+        raise ValueError(f"template must be 'pss_sss' or 'sss', got {template!r}")
     n = num.n_fft
     out = []
     for off in range(3):
         sym = first_symbol + off
         x = np.zeros(n, dtype=np.complex64)
-        if off == 0:
+        if off == 0 and template == "pss_sss":
             x[kbin(RANGES["seq"], n)] = pss(n_id2)
         elif off == 2:
             x[kbin(RANGES["seq"], n)] = sss(n_id1, n_id2)

@@ -145,10 +145,12 @@ def snapshot_ls(rrh_xy: NDArray, aod: NDArray, toa: NDArray, dh_m: float, cfg: T
     return p, cov
 
 
-def run_ekf(rrh_xy: list[NDArray], aod: list[NDArray], toa: list[NDArray], dt_s: float, dh_m: float,
-            cfg: TrackerConfig, s0: NDArray, p0: NDArray) -> dict[str, NDArray]:
+def run_ekf(rrh_xy, aod, toa, dt_s: float, dh_m: float,
+            cfg: TrackerConfig, s0: NDArray, p0: NDArray, n_epochs: int | None = None) -> dict[str, NDArray]:
     """Run the EKF over epochs; epoch n has measurements from RRHs ``rrh_xy[n]`` [m_n, 2]
-    (possibly none: prediction only).
+    (possibly none: prediction only). ``rrh_xy`` may instead be a callable
+    ``select(n, x_pred) -> (rrh_xy, aod, toa)`` choosing the measurements from the
+    predicted state (then ``aod``/``toa`` are ignored and ``n_epochs`` is required).
 
     Returns
     -------
@@ -163,7 +165,8 @@ def run_ekf(rrh_xy: list[NDArray], aod: list[NDArray], toa: list[NDArray], dt_s:
     ekf.Q = process_noise(dt_s, cfg.q)
     res = residual_fn(cfg.variant)
     per = sum(VARIANTS[cfg.variant])
-    n = len(rrh_xy)
+    select = rrh_xy if callable(rrh_xy) else None
+    n = n_epochs if select is not None else len(rrh_xy)
     states = np.zeros((n, 6))
     covs = np.zeros((n, 6, 6))
     nis = np.full(n, np.nan)
@@ -172,9 +175,13 @@ def run_ekf(rrh_xy: list[NDArray], aod: list[NDArray], toa: list[NDArray], dt_s:
     for k in range(n):
         if k > 0:
             ekf.predict()
-        xy = np.asarray(rrh_xy[k], float).reshape(-1, 2)
+        if select is not None:
+            xy, aod_k, toa_k = select(k, ekf.x)
+        else:
+            xy, aod_k, toa_k = rrh_xy[k], aod[k], toa[k]
+        xy = np.asarray(xy, float).reshape(-1, 2)
         if xy.shape[0]:
-            z = cfg.pick(np.asarray(aod[k]), np.asarray(toa[k]))
+            z = cfg.pick(np.asarray(aod_k), np.asarray(toa_k))
             keep = np.ones(xy.shape[0], dtype=bool)
             if cfg.gate:  # per-RRH χ² test on the predicted innovation
                 for i in range(xy.shape[0]):
@@ -193,3 +200,108 @@ def run_ekf(rrh_xy: list[NDArray], aod: list[NDArray], toa: list[NDArray], dt_s:
         states[k] = ekf.x
         covs[k] = ekf.P
     return {"state": states, "cov": covs, "nis": nis, "n_used": used}
+
+
+def select_measurements(cand_rrh: NDArray, cand_ok: NDArray, cand_strength: NDArray, rrh_x: NDArray,
+                        x_pred: float, n_nearest: int = 6, n_use: int = 3) -> NDArray[np.int64]:
+    """Candidate columns to use at one epoch: among the detected candidates that are also
+    among the ``n_nearest`` RRHs to the predicted position, the ``n_use`` strongest
+    (seed §4: the 3 strongest of the audible RRHs) [ours: the nearest-to-prediction rule]."""
+    near = set(np.argsort(np.abs(rrh_x - x_pred), kind="stable")[:n_nearest].tolist())
+    cols = [c for c in range(cand_rrh.size) if cand_ok[c] and int(cand_rrh[c]) in near]
+    cols.sort(key=lambda c: -cand_strength[c])
+    return np.array(cols[:n_use], dtype=np.int64)
+
+
+def track(ds, rrh_x: NDArray, rrh_y: float, dh_m: float, dt_s: float, cfg: TrackerConfig,
+          strength: str = "peak", n_use: int = 3) -> dict[str, NDArray]:
+    """Track one realization from a :func:`railradio.nr.simulate.simulate_epochs` dataset.
+
+    The first epoch with measurements gives the initial state (snapshot LS position, at
+    rest: the seed's trajectory starts from standstill) and P0 (its covariance; speed and
+    acceleration standard deviations 1 m/s and 1 m/s² [ours]). Also returns the snapshot
+    LS fix of every epoch (no tracking) as a baseline.
+    """
+    rrh = ds["rrh"].values
+    aod = ds["aod_hat"].values
+    toa = ds["toa_hat"].values
+    ok = np.isfinite(aod) & np.isfinite(toa)
+    stren = np.nan_to_num(ds[strength].values, nan=-np.inf)
+    n = rrh.shape[0]
+
+    def pick(k: int, x_pred: float):
+        cols = select_measurements(rrh[k], ok[k], stren[k], rrh_x, x_pred, rrh.shape[1], n_use)
+        xy = np.stack([rrh_x[rrh[k, cols]], np.full(cols.size, rrh_y)], axis=1) if cols.size else np.zeros((0, 2))
+        return xy, aod[k, cols], toa[k, cols]
+
+    # initial fix: the first epoch with >= 1 measurement, linearized around the nearest RRH
+    k0 = int(np.argmax(ok.any(axis=1)))
+    xy0, a0, t0 = pick(k0, float(rrh_x[rrh[k0, 0]]))
+    p_fix, cov = snapshot_ls(xy0, a0, t0, dh_m, cfg, np.array([rrh_x[rrh[k0, 0]] + 1.0, 0.0]))
+    s0 = np.array([p_fix[0], p_fix[1], 0.0, 0.0, 0.0, 0.0])
+    p0 = np.diag([cov[0, 0], cov[1, 1], 1.0, 1.0, 1.0, 1.0])
+    p0[0, 1] = p0[1, 0] = cov[0, 1]
+    out = run_ekf(lambda k, s: pick(k + k0, float(s[0])), None, None, dt_s, dh_m, cfg, s0, p0, n_epochs=n - k0)
+    state = np.full((n, 6), np.nan)
+    state[k0:] = out["state"]
+    nis = np.full(n, np.nan)
+    nis[k0:] = out["nis"]
+    used = np.zeros(n, dtype=np.int64)
+    used[k0:] = out["n_used"]
+    # snapshot LS baseline: no tracking; each fix starts from the strongest cell's own
+    # AOD/TOA closed form x_k + ρ cos θ (ρ the horizontal range)
+    snap = np.full((n, 2), np.nan)
+    for k in range(n):
+        xy, a_k, t_k = pick(k, float(rrh_x[rrh[k, 0]]))  # the stored candidates are the nearest
+        if xy.shape[0] >= 1:
+            rho = np.sqrt(max((SPEED_OF_LIGHT_M_S * t_k[0]) ** 2 - dh_m**2, 1.0))
+            guess = np.array([xy[0, 0] + rho * np.cos(a_k[0]), xy[0, 1] + rho * np.sin(a_k[0])])
+            snap[k], _ = snapshot_ls(xy, a_k, t_k, dh_m, cfg, guess)
+    return {"state": state, "nis": nis, "n_used": used, "snapshot": snap, "k0": k0}
+
+
+def measurement_errors(ds, strength: str = "peak", n_use: int = 3, flat: bool = True) -> tuple[NDArray, NDArray]:
+    """AOD [rad, wrapped] and TOA range [m] errors of the measurements the tracker would use
+    (the ``n_use`` strongest detected candidates per epoch); ``flat=False`` returns
+    [epoch, n_use] arrays with NaN where fewer were detected."""
+    aod = ds["aod_hat"].values
+    toa = ds["toa_hat"].values
+    ok = np.isfinite(aod) & np.isfinite(toa)
+    s = np.where(ok, np.nan_to_num(ds[strength].values, nan=-np.inf), -np.inf)
+    order = np.argsort(-s, axis=1)[:, :n_use]
+    sel_ok = np.take_along_axis(ok, order, axis=1)
+    e_aod = wrap_rad(np.take_along_axis(aod - ds["aod_true"].values, order, axis=1))
+    e_rng = np.take_along_axis(toa - ds["toa_true"].values, order, axis=1) * SPEED_OF_LIGHT_M_S
+    if not flat:
+        return np.where(sel_ok, e_aod, np.nan), np.where(sel_ok, e_rng, np.nan)
+    return e_aod[sel_ok], e_rng[sel_ok]
+
+
+def calibrate(ds, variant: str, rrh_x: NDArray, rrh_y: float, dh_m: float, dt_s: float,
+              q_grid: NDArray, gate: bool, strength: str = "peak", fs_hz: float = 245.76e6) -> TrackerConfig:
+    """Measurement and process noise from a calibration run (never the evaluation run).
+
+    σ_AOD, σ_TOA: robust standard deviations (1.4826 · median absolute deviation) of the
+    selected measurements' errors, the TOA one floored at the integer-sample quantization
+    1/(√12 F_s); q: the value of ``q_grid`` whose mean normalized innovation squared
+    (NIS / measurement dimension) on the calibration run is closest to 1.
+    """
+    e_aod, e_rng = measurement_errors(ds, strength)
+    mad = lambda e: 1.4826 * np.median(np.abs(e - np.median(e))) if e.size else np.nan  # noqa: E731
+    s_aod = max(float(mad(e_aod)), 1e-4)
+    s_toa = max(float(mad(e_rng)) / SPEED_OF_LIGHT_M_S, 1.0 / (np.sqrt(12) * fs_hz))
+    per = sum(VARIANTS[variant])
+    best, best_cost = None, np.inf
+    for q in q_grid:
+        cfg = TrackerConfig(variant=variant, q=float(q), sigma_aod_rad=s_aod, sigma_toa_s=s_toa, gate=gate)
+        out = track(ds, rrh_x, rrh_y, dh_m, dt_s, cfg, strength=strength)
+        used = out["n_used"] > 0
+        if not used.any():
+            continue
+        nnis = out["nis"][used] / (per * out["n_used"][used])
+        cost = abs(np.log(np.mean(nnis)))
+        if cost < best_cost:
+            best, best_cost = cfg, cost
+    if best is None:
+        raise ValueError("calibration run has no measurements to calibrate on")
+    return best

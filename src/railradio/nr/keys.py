@@ -1,0 +1,70 @@
+"""Key numbers of the nr study (STUDY.md §2.6): pooled over realizations, with their spread."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+from railradio.keynumbers import KeySpec
+
+SKIP_S = 5.0  # errors are counted after the first 5 s (STUDY.md §2.6)
+
+SPECS = {
+    "meas.aod_err_deg.p95": ("deg", "95th percentile of |AOD error| of the measured RRHs", 1.3, "<"),
+    "meas.toa_err_m.p95": ("m", "95th percentile of |TOA range error| of the measured RRHs", 1.6, "<"),
+    "meas.detection_rate": ("1", "share of (epoch, measured RRH) pairs with a valid TOA", None, None),
+    "track.aod_toa.err_m.mean": ("m", "mean 2-D position error, EKF with AOD+TOA", 0.66, "="),
+    "track.aod_toa.err_m.p95": ("m", "95th percentile of the position error, EKF AOD+TOA", 1.7, "<"),
+    "track.aod_toa.err_m.p99": ("m", "99th percentile of the position error, EKF AOD+TOA", 2.3, "<"),
+    "track.aod_toa.frac_submeter": ("1", "share of epochs with error < 1 m, EKF AOD+TOA", 0.75, "≈"),
+    "track.toa.err_m.mean": ("m", "mean 2-D position error, EKF with TOA", None, None),
+    "track.aod.err_m.mean": ("m", "mean 2-D position error, EKF with AOD", None, None),
+    "track.aod_toa_gated.err_m.mean": ("m", "mean 2-D position error, EKF AOD+TOA with the chi2 gate", None, None),
+    "snapshot.aod_toa.err_m.median": ("m", "median 2-D error of the snapshot LS fix (no tracking)", None, None),
+}
+
+
+def _per_real(tracks: list[xr.Dataset], rx: str, fn) -> tuple[float, float | None]:
+    """Pooled value over all realizations and the standard error from their spread."""
+    pooled = fn(tracks)
+    if len(tracks) < 2:
+        return pooled, None
+    each = np.array([fn([t]) for t in tracks])
+    return pooled, float(np.std(each, ddof=1) / np.sqrt(len(tracks)))
+
+
+def key_numbers(tracks: list[xr.Dataset]) -> dict[str, Any]:
+    out: dict[str, Any] = {}
+    for rx in [str(r) for r in tracks[0]["receiver"].values]:
+        prefix = "nr." if rx == "seed" else f"nr.{rx}."
+
+        def err(ts, variant, gate=0):
+            return np.concatenate([t["pos_err"].sel(receiver=rx, variant=variant, gate=gate).values[t["t"].values >= SKIP_S]
+                                   for t in ts])
+
+        def meas(ts, name):
+            return np.concatenate([t[name].sel(receiver=rx).values.ravel() for t in ts])
+
+        fns = {
+            "meas.aod_err_deg.p95": lambda ts: float(np.nanpercentile(np.abs(np.degrees(meas(ts, "aod_err"))), 95)),
+            "meas.toa_err_m.p95": lambda ts: float(np.nanpercentile(np.abs(meas(ts, "range_err")), 95)),
+            "meas.detection_rate": lambda ts: float(np.mean(np.isfinite(meas(ts, "range_err")))),
+            "track.aod_toa.err_m.mean": lambda ts: float(np.nanmean(err(ts, "aod_toa"))),
+            "track.aod_toa.err_m.p95": lambda ts: float(np.nanpercentile(err(ts, "aod_toa"), 95)),
+            "track.aod_toa.err_m.p99": lambda ts: float(np.nanpercentile(err(ts, "aod_toa"), 99)),
+            "track.aod_toa.frac_submeter": lambda ts: float(np.mean(err(ts, "aod_toa") < 1.0)),
+            "track.toa.err_m.mean": lambda ts: float(np.nanmean(err(ts, "toa"))),
+            "track.aod.err_m.mean": lambda ts: float(np.nanmean(err(ts, "aod"))),
+            "track.aod_toa_gated.err_m.mean": lambda ts: float(np.nanmean(err(ts, "aod_toa", 1))),
+            "snapshot.aod_toa.err_m.median": lambda ts: float(np.nanmedian(np.concatenate(
+                [t["snap_err"].sel(receiver=rx, variant="aod_toa").values for t in ts]))),
+        }
+        for key, (unit, desc, src, rel) in SPECS.items():
+            name = prefix + key
+            if rx != "seed":
+                src, rel, desc = None, None, f"{desc} ({rx} receiver)"
+            value, se = _per_real(tracks, rx, fns[key])
+            out[name] = KeySpec(name, unit, desc, src, rel).entry(value if np.isfinite(value) else None, se)
+    return out

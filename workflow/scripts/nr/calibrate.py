@@ -1,0 +1,27 @@
+"""Adapter: calibration run -> results/nr/calibration.json (noise levels and q)."""
+import sys
+
+import numpy as np
+
+sys.path.insert(0, str(__import__("pathlib").Path(__file__).parent))
+from common import read_shards, scenario  # noqa: E402
+
+from railradio.io import write_json  # noqa: E402
+from railradio.nr.tracking import VARIANTS, calibrate  # noqa: E402
+from railradio.workflow import setup_script  # noqa: E402
+
+smk = snakemake  # noqa: F821
+log = setup_script(smk.log[0])
+scn = scenario(smk)
+dep = scn.deployment
+ds = read_shards(smk.input)
+out = {}
+for rx in ds["receiver"].values:
+    dsr = ds.sel(receiver=rx)
+    for variant in VARIANTS:  # calibrated without the gate; the gated runs use the same values
+        cfg = calibrate(dsr, variant, dep.x_m, dep.offset_m, dep.h_bs_m - dep.h_ut_m,
+                        scn.trajectory.dt_s, np.asarray(smk.params.tracker["q_grid"]), False,
+                        smk.params.selection)
+        out[f"{rx}/{variant}"] = {"q": cfg.q, "sigma_aod_rad": cfg.sigma_aod_rad, "sigma_toa_s": cfg.sigma_toa_s}
+        log.info("%s %s: %s", rx, variant, out[f"{rx}/{variant}"])
+write_json(smk.output[0], out)

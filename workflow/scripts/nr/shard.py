@@ -1,0 +1,23 @@
+"""Adapter: one track shard -> results/nr/estimates/{real}/s{shard}.nc."""
+import sys
+
+sys.path.insert(0, str(__import__("pathlib").Path(__file__).parent))
+from common import scenario  # noqa: E402
+
+from railradio.io import write_dataset  # noqa: E402
+from railradio.nr.simulate import shard_epochs, simulate_epochs  # noqa: E402
+from railradio.rng import spawn_key  # noqa: E402
+from railradio.workflow import setup_script  # noqa: E402
+
+smk = snakemake  # noqa: F821
+log = setup_script(smk.log[0])
+scn = scenario(smk)
+real = smk.wildcards.real
+# realization r<i> -> ID i; the calibration run has its own ID (another seed key)
+rid = 1000 if real == "cal" else int(real[1:])
+key = spawn_key("nr", rid)
+epochs = shard_epochs(smk.params.n_epochs, smk.params.n_shards, int(smk.wildcards.shard))
+log.info("realization %s (key %s): epochs %d..%d", real, key, epochs[0], epochs[-1])
+ds = simulate_epochs(scn, epochs, smk.params.seed, key)
+write_dataset(ds, smk.output[0], dict(smk.params.sim), key,
+              title=f"nr per-cell estimates, realization {real}, shard {smk.wildcards.shard}")
