@@ -14,6 +14,9 @@ NR_REALS = [f"r{i}" for i in range(NR["realizations"])]
 NR_CAL_SHARDS = 2
 NR_SIM_KEYS = ["trajectory", "deployment", "radio", "antenna", "channel", "receiver", "receiver_variants"]
 NR_SIM = {k: NR[k] for k in NR_SIM_KEYS if k in NR}
+NR_SELECTION = {"seed": NR["receiver"]["selection"]} | {
+    name: v["selection"] for name, v in NR.get("receiver_variants", {}).items()
+}
 CODE_NR_SIM = (
     code_hash("railradio.nr", exclude=("figures.py", "keys.py", "tracking.py")) + CODE_SHARED
 )
@@ -85,7 +88,7 @@ rule nr_calibrate:
     params:
         sim=NR_SIM,
         tracker=NR["tracker"],
-        selection=NR["receiver"]["selection"],
+        selection=NR_SELECTION,
         code=CODE_NR_TRACK,
     log:
         "results/logs/nr/calibrate.log",
@@ -107,7 +110,7 @@ rule nr_track:
     params:
         sim=NR_SIM,
         tracker=NR["tracker"],
-        selection=NR["receiver"]["selection"],
+        selection=NR_SELECTION,
         code=CODE_NR_TRACK,
     log:
         "results/logs/nr/track_{real}.log",

@@ -341,7 +341,10 @@ def cfar_threshold(window_s: float, pfa: float, n_sc: int = 127) -> float:
 class Correlator:
     """The seed's correlation receiver for a set of candidate cells (seed eq. 4–9).
 
-    Detection rule ``detector``: ``"seed"`` η_i > μ_i + kσ_i (seed eq. 6, k = 4), or
+    Detection rule ``detector``: ``"seed"`` η_i > μ_i + kσ_i (seed eq. 6, k = 4);
+    ``"cacfar"`` [ours] the seed's test and a cell-averaging CFAR test (the peak against the
+    mean of the ``ca_window`` lags on each side, beyond ``ca_guard``, scaled like ``cfar``):
+    robust to the data interference whose level varies across the window; or
     ``"cfar"`` [ours] η_i > t · μ_i / sqrt(π/2): on noise the correlation magnitude is a
     Rayleigh envelope (μ = σ_R sqrt(π/2)) whose expected number of up-crossings of t·σ_R
     over the window T = K/F_s is T sqrt(2π) β_rms t e^{-t²/2} (Rice, 1945), with β_rms the
@@ -409,7 +412,8 @@ class Correlator:
             k_lo = ratio.argmax(axis=2)
             eta = np.take_along_axis(r, k_lo[..., None], axis=2)[..., 0].astype(float)
             floor_at = np.take_along_axis(floor, k_lo[..., None], axis=2)[..., 0]
-            threshold = floor_at * self.cfar_factor
+            # both tests: the seed's μ + kσ over the window and the local CFAR test
+            threshold = np.maximum(floor_at * self.cfar_factor, mu + cfg.detect_k_sigma * sigma)
             pre = threshold * 0.8
         elif self.detector == "cfar":
             threshold = mu * self.cfar_factor

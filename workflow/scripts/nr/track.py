@@ -28,7 +28,7 @@ meas_rng = np.full((len(receivers), n, 3), np.nan)
 x_true = ds["x_true"].values
 for i, rx in enumerate(receivers):
     dsr = ds.sel(receiver=rx)
-    meas_aod[i], meas_rng[i] = measurement_errors(dsr, smk.params.selection, flat=False)
+    meas_aod[i], meas_rng[i] = measurement_errors(dsr, smk.params.selection[str(rx)], flat=False)
     for j, variant in enumerate(variants):
         for g, gate in enumerate((False, True)):
             c = cal[f"{rx}/{variant}"]
@@ -36,7 +36,7 @@ for i, rx in enumerate(receivers):
                                 sigma_toa_s=c["sigma_toa_s"], gate=gate,
                                 gate_prob=smk.params.tracker["gate_prob"])
             out = track(dsr, dep.x_m, dep.offset_m, dep.h_bs_m - dep.h_ut_m, scn.trajectory.dt_s, cfg,
-                        strength=smk.params.selection)
+                        strength=smk.params.selection[str(rx)])
             err[i, j, g] = np.hypot(out["state"][:, 0] - x_true, out["state"][:, 1])
             if g == 0:
                 snap[i, j] = np.hypot(out["snapshot"][:, 0] - x_true, out["snapshot"][:, 1])
