@@ -21,7 +21,11 @@ SPECS = {
     "track.aod_toa.frac_submeter": ("1", "share of epochs with error < 1 m, EKF AOD+TOA", 0.75, "≈"),
     "track.toa.err_m.mean": ("m", "mean 2-D position error, EKF with TOA", None, None),
     "track.aod.err_m.mean": ("m", "mean 2-D position error, EKF with AOD", None, None),
+    "track.aod_toa.err_m.median": ("m", "median 2-D position error, EKF AOD+TOA", None, None),
     "track.aod_toa_gated.err_m.mean": ("m", "mean 2-D position error, EKF AOD+TOA with the chi2 gate", None, None),
+    "track.aod_toa_gated.err_m.p95": ("m", "95th percentile of the position error, EKF AOD+TOA, gated", None, None),
+    "track.aod_toa_gated.err_m.p99": ("m", "99th percentile of the position error, EKF AOD+TOA, gated", None, None),
+    "track.aod_toa_gated.frac_submeter": ("1", "share of epochs with error < 1 m, EKF AOD+TOA, gated", None, None),
     "snapshot.aod_toa.err_m.median": ("m", "median 2-D error of the snapshot LS fix (no tracking)", None, None),
 }
 
@@ -57,7 +61,11 @@ def key_numbers(tracks: list[xr.Dataset]) -> dict[str, Any]:
             "track.aod_toa.frac_submeter": lambda ts: float(np.mean(err(ts, "aod_toa") < 1.0)),
             "track.toa.err_m.mean": lambda ts: float(np.nanmean(err(ts, "toa"))),
             "track.aod.err_m.mean": lambda ts: float(np.nanmean(err(ts, "aod"))),
+            "track.aod_toa.err_m.median": lambda ts: float(np.nanmedian(err(ts, "aod_toa"))),
             "track.aod_toa_gated.err_m.mean": lambda ts: float(np.nanmean(err(ts, "aod_toa", 1))),
+            "track.aod_toa_gated.err_m.p95": lambda ts: float(np.nanpercentile(err(ts, "aod_toa", 1), 95)),
+            "track.aod_toa_gated.err_m.p99": lambda ts: float(np.nanpercentile(err(ts, "aod_toa", 1), 99)),
+            "track.aod_toa_gated.frac_submeter": lambda ts: float(np.mean(err(ts, "aod_toa", 1) < 1.0)),
             "snapshot.aod_toa.err_m.median": lambda ts: float(np.nanmedian(np.concatenate(
                 [t["snap_err"].sel(receiver=rx, variant="aod_toa").values for t in ts]))),
         }
