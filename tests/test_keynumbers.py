@@ -37,7 +37,8 @@ def test_latex_macros_and_claims():
     assert r"\PackageError" in tex  # undefined keys fail the build
     row = claims_table(nums)
     assert r"\kn{fusion.d1500.rmse_tdoa_m}" in row and r"d1500.\allowbreak{}rmse\_tdoa\_m" in row
-    assert row.startswith(r"\begin{tabularx}") and row.rstrip().endswith(r"\end{tabularx}")
+    assert row.startswith(r"\begin{longtable}") and row.rstrip().endswith(r"\end{longtable}")
+    assert r"\kn{" not in claims_table({"k": KeySpec("k", "m", "x").entry(1.0)}, with_source_only=True)
 
 
 def test_compare_uses_monte_carlo_errors():

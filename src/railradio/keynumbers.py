@@ -153,28 +153,33 @@ def config_to_latex(cfg: Mapping[str, Any]) -> str:
 
 
 def _tex_escape(text: str) -> str:
-    repl = {"_": r"\_", "%": r"\%", "&": r"\&", "#": r"\#", "σ": r"$\sigma$", "≥": r"$\ge$",
+    repl = {"_": r"\_", "%": r"\%", "&": r"\&", "#": r"\#", "|": r"$|$", "<": r"$<$", ">": r"$>$",
+            "σ": r"$\sigma$", "≥": r"$\ge$",
             "≤": r"$\le$", "µ": r"$\mu$", "°": r"$^\circ$", "≈": r"$\approx$"}
     return "".join(repl.get(ch, ch) for ch in text)
 
 
-def claims_table(numbers: Mapping[str, Any], prefixes: Iterable[str] | None = None) -> str:
-    """A LaTeX ``tabularx`` (booktabs): key, meaning, source claim, ours, unit, a row per key.
+def claims_table(numbers: Mapping[str, Any], prefixes: Iterable[str] | None = None,
+                 with_source_only: bool = False) -> str:
+    """A LaTeX ``longtable`` (booktabs): key, meaning, source claim, ours, unit, a row per key.
 
-    The whole environment is generated (an ``\\input`` between rows breaks ``\\bottomrule``).
+    The whole environment is generated (an ``\\input`` between rows breaks ``\\bottomrule``);
+    ``with_source_only`` keeps the keys for which the source paper states a value.
     """
     rows = []
     for name, e in numbers.items():
         if prefixes is not None and not any(name.startswith(p) for p in prefixes):
+            continue
+        if with_source_only and e.get("source_value") is None:
             continue
         key = _tex_escape(name).replace(".", r".\allowbreak{}")
         rows.append(
             rf"\texttt{{\footnotesize {key}}} & {_tex_escape(e['description'])} & "
             rf"\knsrc{{{name}}} & \kn{{{name}}} & {_tex_escape(e['unit'])} \\"
         )
-    head = [r"\begin{tabularx}{\linewidth}{@{}p{0.31\linewidth}Xllr@{}}", r"\toprule",
-            r"key & meaning & source & ours & unit\\", r"\midrule"]
-    tail = [r"\bottomrule", r"\end{tabularx}"]
+    head = [r"\begin{longtable}{@{}p{0.30\linewidth}p{0.40\linewidth}llr@{}}", r"\toprule",
+            r"key & meaning & source & ours & unit\\", r"\midrule", r"\endhead"]
+    tail = [r"\bottomrule", r"\end{longtable}"]
     return "\n".join(head + rows + tail) + "\n"
 
 

@@ -9,6 +9,7 @@ rule key_numbers:
         json=report("results/key_numbers.json", caption="../report/key_numbers.rst", category="numbers"),
         tex="results/paper/numbers.tex",
         claims="results/paper/claims.tex",
+        all_numbers="results/paper/all_numbers.tex",
         config="results/paper/config.tex",
     params:
         config=config,
@@ -27,6 +28,7 @@ rule paper:
         tex="paper/main.tex",
         numbers="results/paper/numbers.tex",
         claims="results/paper/claims.tex",
+        all_numbers="results/paper/all_numbers.tex",
         config="results/paper/config.tex",
         figures=[f for f in FIGURES if f.endswith(".pdf")],
     output:

@@ -15,6 +15,7 @@ SPECS = {
     "meas.aod_err_deg.p95": ("deg", "95th percentile of |AOD error| of the measured RRHs", 1.3, "<"),
     "meas.toa_err_m.p95": ("m", "95th percentile of |TOA range error| of the measured RRHs", 1.6, "<"),
     "meas.detection_rate": ("1", "share of (epoch, measured RRH) pairs with a valid TOA", None, None),
+    "meas.toa_err_m.frac_lt_5m": ("1", "share of (epoch, measured RRH) pairs with a TOA range error below 5 m", None, None),
     "track.aod_toa.err_m.mean": ("m", "mean 2-D position error, EKF with AOD+TOA", 0.66, "="),
     "track.aod_toa.err_m.p95": ("m", "95th percentile of the position error, EKF AOD+TOA", 1.7, "<"),
     "track.aod_toa.err_m.p99": ("m", "99th percentile of the position error, EKF AOD+TOA", 2.3, "<"),
@@ -41,6 +42,10 @@ def _per_real(tracks: list[xr.Dataset], rx: str, fn) -> tuple[float, float | Non
 
 def key_numbers(tracks: list[xr.Dataset]) -> dict[str, Any]:
     out: dict[str, Any] = {}
+    sir = np.concatenate([t["sir_best"].values for t in tracks])
+    out["nr.link.sir_best_db.median"] = KeySpec(
+        "nr.link.sir_best_db.median", "dB",
+        "median power of the strongest RRH over the sum of all others in range").entry(float(np.median(sir)))
     for rx in [str(r) for r in tracks[0]["receiver"].values]:
         prefix = "nr." if rx == "seed" else f"nr.{rx}."
 
@@ -55,6 +60,7 @@ def key_numbers(tracks: list[xr.Dataset]) -> dict[str, Any]:
             "meas.aod_err_deg.p95": lambda ts: float(np.nanpercentile(np.abs(np.degrees(meas(ts, "aod_err"))), 95)),
             "meas.toa_err_m.p95": lambda ts: float(np.nanpercentile(np.abs(meas(ts, "range_err")), 95)),
             "meas.detection_rate": lambda ts: float(np.mean(np.isfinite(meas(ts, "range_err")))),
+            "meas.toa_err_m.frac_lt_5m": lambda ts: float(np.mean(np.abs(meas(ts, "range_err")) < 5.0)),
             "track.aod_toa.err_m.mean": lambda ts: float(np.nanmean(err(ts, "aod_toa"))),
             "track.aod_toa.err_m.p95": lambda ts: float(np.nanpercentile(err(ts, "aod_toa"), 95)),
             "track.aod_toa.err_m.p99": lambda ts: float(np.nanpercentile(err(ts, "aod_toa"), 99)),

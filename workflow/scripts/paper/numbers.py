@@ -14,5 +14,6 @@ for path in smk.input:
 numbers = merge(fragments)
 write_json(smk.output.json, numbers)
 write_text(smk.output.tex, to_latex(numbers))
-write_text(smk.output.claims, claims_table(numbers))
+write_text(smk.output.claims, claims_table(numbers, with_source_only=True))
+write_text(smk.output.all_numbers, claims_table(numbers))
 write_text(smk.output.config, config_to_latex(smk.params.config))
