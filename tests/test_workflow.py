@@ -147,13 +147,19 @@ def test_identical_at_j1_and_j2(ci_run_j2, tmp_path):
 def test_intermediates_are_self_explaining(ci_run_j2):
     paths = sorted((ci_run_j2 / "results/fusion").rglob("*.nc"))
     assert len(paths) == 4 + 4 + 4 + 1 + 3
+    nr_paths = sorted((ci_run_j2 / "results/nr").rglob("*.nc"))
+    # trajectory, samples, 2 calibration + 2 evaluation shards, 1 track
+    assert len(nr_paths) == 1 + 1 + 2 + 2 + 1
+    paths += nr_paths
     for p in paths:
         with xr.open_dataset(p) as ds:
             for name, var in {**ds.data_vars, **ds.coords}.items():
                 assert "units" in var.attrs and "long_name" in var.attrs, (p, name)
             for attr in ("config_json", "config_sha256", "seed_spawn_key", "railradio_version", "git_commit"):
                 assert attr in ds.attrs, (p, attr)
-    for name in ("fusion_rmse_vs_distance", "fusion_rmse_vs_tdoa_error", "fusion_rmse_vs_aoa_error"):
+    for name in ("fusion_rmse_vs_distance", "fusion_rmse_vs_tdoa_error", "fusion_rmse_vs_aoa_error",
+                 "nr_trajectory", "nr_burst_correlation", "nr_measurement_error_cdf",
+                 "nr_position_error_cdf", "nr_position_error_vs_time"):
         assert (ci_run_j2 / f"results/figures/{name}.pdf").stat().st_size > 1000
     tex = (ci_run_j2 / "results/paper/numbers.tex").read_text()
     assert r"\@namedef{kn@fusion.d1500.rmse_fused_m}" in tex
