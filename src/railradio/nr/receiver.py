@@ -31,7 +31,7 @@ import numpy as np
 import scipy.fft as sfft
 from numpy.typing import NDArray
 
-from railradio.nr.channel import TdlProfile, sos_eval, sos_params
+from railradio.nr.channel import TdlProfile, sos_eval_recursive, sos_params
 from railradio.nr.numerology import N_FFT, SUBCARRIER_SPACING_HZ, Numerology, ssb_first_symbols
 from railradio.nr.ssb import band_bins, burst_grid, reference_waveform
 
@@ -254,7 +254,7 @@ class Synthesizer:
             ramp = np.exp(-2j * np.pi * (frac + sp["cp0"]) * self.k / n).astype(np.complex64)  # [n]
             full = d2d_m is None or d2d_m[r] <= self.full_channel_range_m
             if full and prof.powers.size:
-                taps = sos_eval(prof.powers, links.doppler_hz, t_sym, draws[r]["alpha"], draws[r]["phi"])
+                taps = sos_eval_recursive(prof.powers, links.doppler_hz, t_sym, draws[r]["alpha"], draws[r]["phi"])
                 taps *= np.exp(-1j * (2 * np.pi * links.f_los_hz[r] * t_sym + links.phase0[r]))[:, None]
                 h = (np.sqrt(prof.los_power) + taps.astype(np.complex64) @ self.basis) * ramp[None, :]
                 x = grid * h
@@ -311,17 +311,21 @@ def local_mean(r: NDArray, window: int, guard: int) -> NDArray[np.float64]:
     """Cell-averaging noise floor: mean of r over ``window`` lags on each side of every
     lag, skipping ``guard`` lags next to it (fewer at the ends); r [..., K]."""
     k = r.shape[-1]
-    c = np.concatenate([np.zeros(r.shape[:-1] + (1,)), np.cumsum(r, axis=-1, dtype=float)], axis=-1)
+    c = np.concatenate([np.zeros(r.shape[:-1] + (1,), dtype=np.float32),
+                        np.cumsum(r, axis=-1, dtype=np.float32)], axis=-1)  # C[j] = Σ_{i<j} r[i]
+    pad = guard + window + 1
+    cp = np.concatenate([np.repeat(c[..., :1], pad, axis=-1), c,
+                         np.repeat(c[..., -1:], pad, axis=-1)], axis=-1)  # cp[j + pad] = C[clip(j)]
+
+    def at(shift: int) -> NDArray:  # C[clip(idx + shift)] for idx = 0..k-1
+        return cp[..., pad + shift: pad + shift + k]
+
+    left = at(-guard) - at(-guard - window)
+    right = at(guard + 1 + window) - at(guard + 1)
     idx = np.arange(k)
-
-    def span_sum(lo, hi):  # sum over [lo, hi)
-        lo = np.clip(lo, 0, k)
-        hi = np.clip(hi, 0, k)
-        return c[..., hi] - c[..., lo], (hi - lo)
-
-    s1, n1 = span_sum(idx - guard - window, idx - guard)
-    s2, n2 = span_sum(idx + guard + 1, idx + guard + 1 + window)
-    return (s1 + s2) / np.maximum(n1 + n2, 1)
+    n = (np.clip(idx - guard, 0, k) - np.clip(idx - guard - window, 0, k)
+         + np.clip(idx + guard + 1 + window, 0, k) - np.clip(idx + guard + 1, 0, k))
+    return (left + right) / np.maximum(n, 1)
 
 
 def cfar_threshold(window_s: float, pfa: float, n_sc: int = 127) -> float:
