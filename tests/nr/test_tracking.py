@@ -119,3 +119,27 @@ def test_trajectory_seed_profile():
     assert tr.n_epochs == 5775
     with pytest.raises(ValueError):
         Trajectory(((0.0, 1.0),))
+
+
+def test_toa_crb_and_peb_against_hand_values():
+    from railradio.nr.bounds import BETA_RMS_HZ, INTEGER_SAMPLE_SIGMA_M, peb_m, toa_crb_s
+
+    assert BETA_RMS_HZ == pytest.approx(8.8e6, rel=0.01)  # STUDY.md §2.7
+    assert INTEGER_SAMPLE_SIGMA_M == pytest.approx(0.352, abs=1e-3)
+    # E/N0 = 1e4 (40 dB): σ_τ = 1/(2π · 8.8 MHz · sqrt(2e4)) = 0.128 ns
+    assert float(toa_crb_s(1e4)) == pytest.approx(1 / (2 * np.pi * BETA_RMS_HZ * np.sqrt(2e4)))
+    # one RRH straight ahead on the track line (no height): range gives x, angle gives y
+    xy = np.array([[100.0, 0.0]])
+    peb = peb_m(xy, 0.0, 0.0, np.array([0.3]), 0.01)
+    assert peb == pytest.approx(np.hypot(0.3, 100 * 0.01), rel=1e-9)
+
+
+def test_pcrb_settles_below_the_snapshot_bound():
+    from railradio.nr.bounds import pcrb_m
+
+    n = 200
+    xy = [RRH] * n
+    x = 50.0 + 0.1 * np.arange(n)
+    out = pcrb_m(xy, x, DH, [np.full(3, 1e-9)] * n, 0.01, 0.1, 0.1, np.eye(6) * 100)
+    assert out[0] < 10 and np.all(np.diff(out[5:]) < 1e-3)  # non-increasing once informed
+    assert out[-1] < out[0]

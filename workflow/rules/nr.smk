@@ -122,6 +122,28 @@ rule nr_track:
         "../scripts/nr/track.py"
 
 
+rule nr_bounds:
+    """Physical limits along the track: TOA CRB, snapshot PEB, tracker PCRB (STUDY.md §2.7)."""
+    input:
+        calibration="results/nr/calibration.json",
+    output:
+        "results/nr/bounds/{real}.nc",
+    params:
+        sim=NR_SIM,
+        seed=config["seed"],
+        n_epochs=NR_EPOCHS,
+        calibrated="robust/aod_toa" if "robust" in NR.get("receiver_variants", {}) else "seed/aod_toa",
+        code=code_hash("railradio.nr.bounds") + CODE_NR_TRACK,
+    log:
+        "results/logs/nr/bounds_{real}.log",
+    benchmark:
+        "results/benchmarks/nr/bounds_{real}.tsv"
+    conda:
+        "../envs/railradio.yaml"
+    script:
+        "../scripts/nr/bounds.py"
+
+
 rule nr_sample:
     """Raw received IQ and per-block correlations of a few epochs (inspection, figure)."""
     output:
@@ -145,6 +167,7 @@ rule nr_figures:
         trajectory="results/nr/trajectory.nc",
         samples="results/nr/samples.nc",
         tracks=expand("results/nr/track/{real}.nc", real=NR_REALS),
+        bounds=expand("results/nr/bounds/{real}.nc", real=NR_REALS),
     output:
         [report(f, caption="../report/nr.rst", category="nr") for f in STUDY_FIGURES["nr"]],
     params:
@@ -160,7 +183,8 @@ rule nr_figures:
 rule nr_key_numbers:
     """Key numbers nr.* pooled over the realizations, with their spread."""
     input:
-        expand("results/nr/track/{real}.nc", real=NR_REALS),
+        tracks=expand("results/nr/track/{real}.nc", real=NR_REALS),
+        bounds=expand("results/nr/bounds/{real}.nc", real=NR_REALS),
     output:
         "results/nr/key_numbers.json",
     params:

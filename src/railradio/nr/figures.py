@@ -63,7 +63,8 @@ def plot_measurement_cdf(tracks: list[xr.Dataset], pdf: str, png: str) -> None:
     plotting.save(fig, pdf, png)
 
 
-def plot_position_cdf(tracks: list[xr.Dataset], pdf: str, png: str, skip_s: float = 5.0) -> None:
+def plot_position_cdf(tracks: list[xr.Dataset], pdf: str, png: str, skip_s: float = 5.0,
+                      bounds: list[xr.Dataset] | None = None) -> None:
     rxs = tracks[0]["receiver"].values
     fig, axes = plotting.figure(ncols=len(rxs), figsize=(3.4 * len(rxs), 3.0), squeeze=False)
     for ax, rx in zip(axes[0], rxs, strict=True):
@@ -76,7 +77,10 @@ def plot_position_cdf(tracks: list[xr.Dataset], pdf: str, png: str, skip_s: floa
         _cdf(ax, e, label="EKF AOD+TOA, χ² gate", color="C2", linestyle="--")
         e = np.concatenate([t["snap_err"].sel(receiver=rx, variant="aod_toa").values for t in tracks])
         _cdf(ax, e, label="snapshot LS", color="C3", linestyle=":")
-        ax.axvline(INTEGER_SAMPLE_FLOOR_M, **plotting.BOUND_STYLE, label="integer-sample σ")
+        if bounds is not None:
+            pc = np.concatenate([b["pcrb"].values[b["t"].values >= skip_s] for b in bounds])
+            _cdf(ax, pc, label="PCRB (tracker bound)", **plotting.BOUND_STYLE)
+        ax.axvline(INTEGER_SAMPLE_FLOOR_M, color="grey", linestyle=":", linewidth=1.0, label="integer-sample σ")
         ax.set_xscale("log")
         ax.set_xlim(1e-2, 1e4)  # diverged tracks leave the axis: their CDF stays below 1
         ax.set_xlabel("2-D position error [m]")
@@ -86,13 +90,16 @@ def plot_position_cdf(tracks: list[xr.Dataset], pdf: str, png: str, skip_s: floa
     plotting.save(fig, pdf, png)
 
 
-def plot_error_vs_time(track: xr.Dataset, pdf: str, png: str) -> None:
+def plot_error_vs_time(track: xr.Dataset, pdf: str, png: str, bounds: xr.Dataset | None = None) -> None:
     fig, ax = plotting.figure(figsize=(6.4, 3.0))
     for i, rx in enumerate(track["receiver"].values):
         for g, style in ((0, "-"), (1, "--")):
             ax.plot(track["t"], track["pos_err"].sel(receiver=rx, variant="aod_toa", gate=g), linewidth=0.6,
                     linestyle=style, label=f"EKF AOD+TOA ({rx}{', gated' if g else ''})", color=f"C{2 * i + g}")
-    ax.axhline(INTEGER_SAMPLE_FLOOR_M, **plotting.BOUND_STYLE, label="integer-sample σ (0.35 m)")
+    if bounds is not None:
+        ax.plot(bounds["t"], bounds["pcrb"], label="PCRB (tracker bound)", **plotting.BOUND_STYLE)
+        ax.plot(bounds["t"], bounds["peb"], color="grey", linewidth=0.6, label="snapshot PEB (integer-sample TOA)")
+    ax.axhline(INTEGER_SAMPLE_FLOOR_M, color="grey", linestyle=":", linewidth=1.0, label="integer-sample σ (0.35 m)")
     ax.set_yscale("log")
     ax.set_ylim(1e-2, 1e5)
     ax.set_xlabel("time [s]")

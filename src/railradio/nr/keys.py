@@ -40,8 +40,20 @@ def _per_real(tracks: list[xr.Dataset], rx: str, fn) -> tuple[float, float | Non
     return pooled, float(np.std(each, ddof=1) / np.sqrt(len(tracks)))
 
 
-def key_numbers(tracks: list[xr.Dataset]) -> dict[str, Any]:
+BOUND_SPECS = {
+    "nr.bound.toa_crb_m.median": ("toa_crb", np.median, "median TOA range CRB of the best RRH (interference-limited)"),
+    "nr.bound.peb_m.median": ("peb", np.median, "median snapshot position bound (integer-sample TOA floor included)"),
+    "nr.bound.pcrb_m.mean": ("pcrb", np.mean, "mean posterior CRB of the tracked position"),
+}
+
+
+def key_numbers(tracks: list[xr.Dataset], bounds: list[xr.Dataset] | None = None) -> dict[str, Any]:
     out: dict[str, Any] = {}
+    for name, (var, fn, desc) in (BOUND_SPECS.items() if bounds else ()):
+        vals = [float(fn(b[var].values[b["t"].values >= SKIP_S])) for b in bounds]
+        pooled = float(fn(np.concatenate([b[var].values[b["t"].values >= SKIP_S] for b in bounds])))
+        se = float(np.std(vals, ddof=1) / np.sqrt(len(vals))) if len(vals) > 1 else None
+        out[name] = KeySpec(name, "m", desc).entry(pooled, se)
     sir = np.concatenate([t["sir_best"].values for t in tracks])
     out["nr.link.sir_best_db.median"] = KeySpec(
         "nr.link.sir_best_db.median", "dB",

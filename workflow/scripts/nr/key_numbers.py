@@ -5,4 +5,5 @@ from railradio.workflow import setup_script
 
 smk = snakemake  # noqa: F821
 setup_script(smk.log[0])
-write_json(smk.output[0], key_numbers([read_dataset(p) for p in smk.input]))
+write_json(smk.output[0], key_numbers([read_dataset(p) for p in smk.input.tracks],
+                                     [read_dataset(p) for p in smk.input.bounds]))

@@ -1,0 +1,77 @@
+"""Physical limits of the nr study (STUDY.md §2.7).
+
+* TOA Cramér–Rao bound with interference: σ_τ ≥ 1 / (2π β_rms sqrt(2E/N0)), β_rms the RMS
+  bandwidth of the 127-subcarrier PSS+SSS about its centroid, Δf sqrt((127² - 1)/12)
+  ≈ 8.8 MHz; E the PSS+SSS energy of all 64 blocks after beam gains; N0 the thermal noise
+  of both chains plus the other RRHs' received power spread over the carrier (Gaussian
+  interference: the bound is then the interference-limited one).
+* The integer-sample floor c/(F_s √12) = 0.35 m of the seed's TOA estimator.
+* The snapshot position error bound (PEB) of an epoch from its three best RRHs:
+  J = Σ_j u_j u_jᵀ/σ_r,j² + u⊥_j u⊥_jᵀ/(ρ_j² σ_θ²).
+* The posterior CRB of the tracker (Tichavský et al. 1998):
+  J_{k+1} = (Q + F J_k⁻¹ Fᵀ)⁻¹ + Hᵀ W⁻¹ H at the true state.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from railradio.constants import SPEED_OF_LIGHT_M_S
+from railradio.nr.numerology import SAMPLE_RATE_HZ, SUBCARRIER_SPACING_HZ
+from railradio.nr.tracking import jacobian, process_noise, transition
+
+PSS_SSS_SUBCARRIERS = 127
+BETA_RMS_HZ = SUBCARRIER_SPACING_HZ * np.sqrt((PSS_SSS_SUBCARRIERS**2 - 1) / 12)
+INTEGER_SAMPLE_SIGMA_M = SPEED_OF_LIGHT_M_S / SAMPLE_RATE_HZ / np.sqrt(12)
+
+
+def toa_crb_s(e_over_n0: NDArray) -> NDArray[np.float64]:
+    """σ_τ bound [s] for an energy-to-noise-density ratio E/N0 (linear)."""
+    return 1.0 / (2 * np.pi * BETA_RMS_HZ * np.sqrt(2.0 * np.asarray(e_over_n0, dtype=float)))
+
+
+def burst_e_over_n0(links, n_chains: int | None = None) -> NDArray[np.float64]:
+    """E/N0 of every RRH's PSS+SSS over the burst (all blocks) against thermal noise plus
+    the other RRHs' power, treated as white over the carrier. ``links``: a
+    :class:`railradio.nr.receiver.Links`."""
+    t_u = 1.0 / SUBCARRIER_SPACING_HZ
+    chains = links.n_chains if n_chains is None else n_chains
+    p_sc = links.amp**2  # received power per unit-EPRE subcarrier [W]
+    energy = 2 * PSS_SSS_SUBCARRIERS * p_sc * (links.beam_amp**2).sum(axis=1) * t_u  # [J]
+    interf_psd = p_sc * links.data_amp**2 * t_u  # each RRH's data PSD [W/Hz]
+    n0 = links.noise_psd_w_hz * chains + (interf_psd.sum() - interf_psd)
+    return energy / n0
+
+
+def peb_m(rrh_xy: NDArray, x_m: float, dh_m: float, sigma_r_m: NDArray, sigma_theta_rad: float) -> float:
+    """Snapshot 2-D position error bound [m] from RRHs at ``rrh_xy`` [n, 2]."""
+    d = np.array([x_m, 0.0])[None, :] - rrh_xy
+    rho = np.hypot(d[:, 0], d[:, 1])
+    r3 = np.sqrt(rho**2 + dh_m**2)
+    j = np.zeros((2, 2))
+    for k in range(rrh_xy.shape[0]):
+        u = d[k] / r3[k]  # ∂r/∂(x, y) (3-D range, horizontal gradient)
+        up = np.array([-d[k, 1], d[k, 0]]) / rho[k]
+        j += np.outer(u, u) / sigma_r_m[k] ** 2 + np.outer(up, up) / (rho[k] ** 2 * sigma_theta_rad**2)
+    return float(np.sqrt(np.trace(np.linalg.inv(j))))
+
+
+def pcrb_m(rrh_xy_seq: list[NDArray], x_true: NDArray, dh_m: float, sigma_toa_s_seq: list[NDArray],
+           sigma_theta_rad: float, dt_s: float, q: float, p0: NDArray) -> NDArray[np.float64]:
+    """Posterior CRB of the 2-D position [m] along the track (Tichavský et al. 1998)."""
+    f = transition(dt_s)
+    qm = process_noise(dt_s, q)
+    j = np.linalg.inv(p0)
+    out = np.empty(len(rrh_xy_seq))
+    for k, (xy, s_toa) in enumerate(zip(rrh_xy_seq, sigma_toa_s_seq, strict=True)):
+        if k > 0:
+            j = np.linalg.inv(qm + f @ np.linalg.inv(j) @ f.T)
+        if xy.shape[0]:
+            s = np.array([x_true[k], 0.0, 0, 0, 0, 0])
+            h = jacobian(s, xy, dh_m, "aod_toa")
+            w = np.diag(np.ravel(np.column_stack([np.full(xy.shape[0], sigma_theta_rad**2), np.asarray(s_toa) ** 2])))
+            j = j + h.T @ np.linalg.solve(w, h)
+        cov = np.linalg.inv(j)
+        out[k] = np.sqrt(cov[0, 0] + cov[1, 1])
+    return out
