@@ -148,8 +148,8 @@ def test_intermediates_are_self_explaining(ci_run_j2):
     paths = sorted((ci_run_j2 / "results/fusion").rglob("*.nc"))
     assert len(paths) == 4 + 4 + 4 + 1 + 3
     nr_paths = sorted((ci_run_j2 / "results/nr").rglob("*.nc"))
-    # trajectory, samples, 2 calibration + 2 evaluation shards, 1 track
-    assert len(nr_paths) == 1 + 1 + 2 + 2 + 1
+    # trajectory, samples, 2 calibration + 2 evaluation shards, 1 track, 1 bounds
+    assert len(nr_paths) == 1 + 1 + 2 + 2 + 1 + 1
     paths += nr_paths
     for p in paths:
         with xr.open_dataset(p) as ds:

@@ -13,7 +13,7 @@ from importlib.util import find_spec
 from pathlib import Path
 
 
-def code_hash(*modules: str, exclude: tuple[str, ...] = ()) -> str:
+def code_hash(*modules: str, exclude: tuple[str, ...] = (), data: tuple[str, ...] = ()) -> str:
     """SHA-256 (16 hex digits) of the source of the given railradio modules/subpackages.
 
     Used as a rule ``param`` so that Snakemake re-runs a rule exactly when the library
@@ -27,6 +27,8 @@ def code_hash(*modules: str, exclude: tuple[str, ...] = ()) -> str:
     exclude
         File names to leave out (e.g. ``("figures.py",)`` so a plot change does not
         re-run a simulation).
+    data
+        Package data files (under ``railradio/data``) the code reads, e.g. ``("tdl.json",)``.
     """
     h = hashlib.sha256()
     for mod in sorted(modules):
@@ -40,6 +42,11 @@ def code_hash(*modules: str, exclude: tuple[str, ...] = ()) -> str:
                 continue
             h.update(p.name.encode())
             h.update(p.read_bytes())
+    if data:
+        data_dir = Path(find_spec("railradio").origin).parent / "data"
+        for name in sorted(data):
+            h.update(name.encode())
+            h.update((data_dir / name).read_bytes())
     return h.hexdigest()[:16]
 
 

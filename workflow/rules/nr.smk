@@ -18,7 +18,12 @@ NR_SELECTION = {"seed": NR["receiver"]["selection"]} | {
     name: v["selection"] for name, v in NR.get("receiver_variants", {}).items()
 }
 CODE_NR_SIM = (
-    code_hash("railradio.nr", exclude=("figures.py", "keys.py", "tracking.py")) + CODE_SHARED
+    code_hash(
+        "railradio.nr",
+        exclude=("figures.py", "keys.py", "tracking.py", "bounds.py"),
+        data=("tdl.json",),
+    )
+    + CODE_SHARED
 )
 CODE_NR_TRACK = code_hash("railradio.nr.tracking") + CODE_NR_SIM
 
@@ -133,7 +138,7 @@ rule nr_bounds:
         seed=config["seed"],
         n_epochs=NR_EPOCHS,
         calibrated="robust/aod_toa" if "robust" in NR.get("receiver_variants", {}) else "seed/aod_toa",
-        code=code_hash("railradio.nr.bounds") + CODE_NR_TRACK,
+        code=code_hash("railradio.nr.bounds", data=("tdl.json",)) + CODE_NR_TRACK,
     log:
         "results/logs/nr/bounds_{real}.log",
     benchmark:
