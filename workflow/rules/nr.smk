@@ -137,7 +137,11 @@ rule nr_bounds:
         sim=NR_SIM,
         seed=config["seed"],
         n_epochs=NR_EPOCHS,
-        calibrated="robust/aod_toa" if "robust" in NR.get("receiver_variants", {}) else "seed/aod_toa",
+        calibrated=(
+            "robust/aod_toa/gate"
+            if "robust" in NR.get("receiver_variants", {})
+            else "seed/aod_toa/gate"
+        ),
         code=code_hash("railradio.nr.bounds", data=("tdl.json",)) + CODE_NR_TRACK,
     log:
         "results/logs/nr/bounds_{real}.log",

@@ -146,11 +146,15 @@ def snapshot_ls(rrh_xy: NDArray, aod: NDArray, toa: NDArray, dh_m: float, cfg: T
 
 
 def run_ekf(rrh_xy, aod, toa, dt_s: float, dh_m: float,
-            cfg: TrackerConfig, s0: NDArray, p0: NDArray, n_epochs: int | None = None) -> dict[str, NDArray]:
+            cfg: TrackerConfig, s0: NDArray, p0: NDArray, n_epochs: int | None = None,
+            reacquire=None, reacquire_after: int = 10) -> dict[str, NDArray]:
     """Run the EKF over epochs; epoch n has measurements from RRHs ``rrh_xy[n]`` [m_n, 2]
     (possibly none: prediction only). ``rrh_xy`` may instead be a callable
     ``select(n, x_pred) -> (rrh_xy, aod, toa)`` choosing the measurements from the
     predicted state (then ``aod``/``toa`` are ignored and ``n_epochs`` is required).
+    With the gate on, ``reacquire(n) -> (position [2], covariance [2, 2]) | None`` re-seeds
+    the position after ``reacquire_after`` consecutive epochs whose measurements were all
+    rejected (track loss: a gate alone never lets a lost filter back) [ours].
 
     Returns
     -------
@@ -172,6 +176,8 @@ def run_ekf(rrh_xy, aod, toa, dt_s: float, dh_m: float,
     nis = np.full(n, np.nan)
     used = np.zeros(n, dtype=np.int64)
     gate = chi2.ppf(cfg.gate_prob, per) if cfg.gate else np.inf
+    misses = 0
+    reacquired = np.zeros(n, dtype=bool)
     for k in range(n):
         if k > 0:
             ekf.predict()
@@ -197,9 +203,21 @@ def run_ekf(rrh_xy, aod, toa, dt_s: float, dh_m: float,
                            residual=res)
                 nis[k] = float(ekf.y @ np.linalg.solve(ekf.S, ekf.y))
                 used[k] = int(keep.sum())
+                misses = 0
+            else:
+                misses += 1
+                if reacquire is not None and misses >= reacquire_after:
+                    fix = reacquire(k)
+                    if fix is not None:
+                        ekf.x[:2] = fix[0]
+                        ekf.P[:2, :] = 0.0
+                        ekf.P[:, :2] = 0.0
+                        ekf.P[:2, :2] = fix[1]
+                        reacquired[k] = True
+                        misses = 0
         states[k] = ekf.x
         covs[k] = ekf.P
-    return {"state": states, "cov": covs, "nis": nis, "n_used": used}
+    return {"state": states, "cov": covs, "nis": nis, "n_used": used, "reacquired": reacquired}
 
 
 def select_measurements(cand_rrh: NDArray, cand_ok: NDArray, cand_strength: NDArray, rrh_x: NDArray,
@@ -241,7 +259,22 @@ def track(ds, rrh_x: NDArray, rrh_y: float, dh_m: float, dt_s: float, cfg: Track
     s0 = np.array([p_fix[0], p_fix[1], 0.0, 0.0, 0.0, 0.0])
     p0 = np.diag([cov[0, 0], cov[1, 1], 1.0, 1.0, 1.0, 1.0])
     p0[0, 1] = p0[1, 0] = cov[0, 1]
-    out = run_ekf(lambda k, s: pick(k + k0, float(s[0])), None, None, dt_s, dh_m, cfg, s0, p0, n_epochs=n - k0)
+    def snapshot_fix(k: int, x_pred: float):
+        xy, a_k, t_k = pick(k, x_pred)
+        if xy.shape[0] == 0:
+            return None
+        rho = np.sqrt(max((SPEED_OF_LIGHT_M_S * t_k[0]) ** 2 - dh_m**2, 1.0))
+        guess = np.array([xy[0, 0] + rho * np.cos(a_k[0]), xy[0, 1] + rho * np.sin(a_k[0])])
+        return snapshot_ls(xy, a_k, t_k, dh_m, cfg, guess)
+
+    state_now = {"x": s0[0]}
+
+    def select(k: int, s):
+        state_now["x"] = float(s[0])
+        return pick(k + k0, float(s[0]))
+
+    out = run_ekf(select, None, None, dt_s, dh_m, cfg, s0, p0, n_epochs=n - k0,
+                  reacquire=lambda k: snapshot_fix(k + k0, state_now["x"]) if cfg.gate else None)
     state = np.full((n, 6), np.nan)
     state[k0:] = out["state"]
     nis = np.full(n, np.nan)
@@ -257,7 +290,9 @@ def track(ds, rrh_x: NDArray, rrh_y: float, dh_m: float, dt_s: float, cfg: Track
             rho = np.sqrt(max((SPEED_OF_LIGHT_M_S * t_k[0]) ** 2 - dh_m**2, 1.0))
             guess = np.array([xy[0, 0] + rho * np.cos(a_k[0]), xy[0, 1] + rho * np.sin(a_k[0])])
             snap[k], _ = snapshot_ls(xy, a_k, t_k, dh_m, cfg, guess)
-    return {"state": state, "nis": nis, "n_used": used, "snapshot": snap, "k0": k0}
+    reac = np.zeros(n, dtype=bool)
+    reac[k0:] = out["reacquired"]
+    return {"state": state, "nis": nis, "n_used": used, "snapshot": snap, "k0": k0, "reacquired": reac}
 
 
 def measurement_errors(ds, strength: str = "peak", n_use: int = 3, flat: bool = True) -> tuple[NDArray, NDArray]:
@@ -292,16 +327,21 @@ def calibrate(ds, variant: str, rrh_x: NDArray, rrh_y: float, dh_m: float, dt_s:
     s_toa = max(float(mad(e_rng)) / SPEED_OF_LIGHT_M_S, 1.0 / (np.sqrt(12) * fs_hz))
     per = sum(VARIANTS[variant])
     best, best_cost = None, np.inf
+    most_used, most_used_cfg = -1, None
     for q in q_grid:
         cfg = TrackerConfig(variant=variant, q=float(q), sigma_aod_rad=s_aod, sigma_toa_s=s_toa, gate=gate)
         out = track(ds, rrh_x, rrh_y, dh_m, dt_s, cfg, strength=strength)
         used = out["n_used"] > 0
-        if not used.any():
+        if used.sum() > most_used:
+            most_used, most_used_cfg = int(used.sum()), cfg
+        if used.sum() < 10:  # too few accepted updates to judge the NIS
             continue
         nnis = out["nis"][used] / (per * out["n_used"][used])
         cost = abs(np.log(np.mean(nnis)))
         if cost < best_cost:
             best, best_cost = cfg, cost
-    if best is None:
-        raise ValueError("calibration run has no measurements to calibrate on")
+    if best is None:  # the tracker loses the train whatever q: keep the q it used most
+        if most_used_cfg is None:
+            raise ValueError("q_grid must not be empty")
+        return most_used_cfg
     return best

@@ -18,10 +18,12 @@ ds = read_shards(smk.input)
 out = {}
 for rx in ds["receiver"].values:
     dsr = ds.sel(receiver=rx)
-    for variant in VARIANTS:  # calibrated without the gate; the gated runs use the same values
-        cfg = calibrate(dsr, variant, dep.x_m, dep.offset_m, dep.h_bs_m - dep.h_ut_m,
-                        scn.trajectory.dt_s, np.asarray(smk.params.tracker["q_grid"]), False,
-                        smk.params.selection[str(rx)])
-        out[f"{rx}/{variant}"] = {"q": cfg.q, "sigma_aod_rad": cfg.sigma_aod_rad, "sigma_toa_s": cfg.sigma_toa_s}
-        log.info("%s %s: %s", rx, variant, out[f"{rx}/{variant}"])
+    for variant in VARIANTS:
+        for gate in (False, True):  # each tracker calibrated as it will run
+            name = f"{rx}/{variant}/{'gate' if gate else 'nogate'}"
+            cfg = calibrate(dsr, variant, dep.x_m, dep.offset_m, dep.h_bs_m - dep.h_ut_m,
+                            scn.trajectory.dt_s, np.asarray(smk.params.tracker["q_grid"]), gate,
+                            smk.params.selection[str(rx)])
+            out[name] = {"q": cfg.q, "sigma_aod_rad": cfg.sigma_aod_rad, "sigma_toa_s": cfg.sigma_toa_s}
+            log.info("%s: %s", name, out[name])
 write_json(smk.output[0], out)

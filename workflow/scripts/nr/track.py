@@ -31,7 +31,7 @@ for i, rx in enumerate(receivers):
     meas_aod[i], meas_rng[i] = measurement_errors(dsr, smk.params.selection[str(rx)], flat=False)
     for j, variant in enumerate(variants):
         for g, gate in enumerate((False, True)):
-            c = cal[f"{rx}/{variant}"]
+            c = cal[f"{rx}/{variant}/{'gate' if gate else 'nogate'}"]
             cfg = TrackerConfig(variant=variant, q=c["q"], sigma_aod_rad=c["sigma_aod_rad"],
                                 sigma_toa_s=c["sigma_toa_s"], gate=gate,
                                 gate_prob=smk.params.tracker["gate_prob"])
