@@ -14,10 +14,10 @@ import platform
 import time
 
 import numpy as np
+from _report import emit
 
 from railradio.constants import SPEED_OF_LIGHT_M_S
 from railradio.fusion import CellGeometry, PointParams, simulate_point, tdoa_on_track, tdoa_on_track_rootfind
-from railradio.io import write_json
 
 
 def best_of(fn, repeat: int) -> float:
@@ -65,10 +65,7 @@ def main() -> None:
         "monte_carlo_driver_trials_per_s": point.n_positions * point.n_trials / t_mc,
         "paper_scale_point_s": 1000 * 10_000 / (point.n_positions * point.n_trials / t_mc),
     }
-    for k, v in report.items():
-        print(f"{k:40s} {v:.4g}" if isinstance(v, float) else f"{k:40s} {v}")
-    if args.out:
-        write_json(args.out, report)
+    emit(report, args.out)
 
 
 if __name__ == "__main__":

@@ -15,10 +15,10 @@ import dataclasses
 import time
 
 import numpy as np
+from _report import emit
 import scipy.fft as sfft
 import yaml
 
-from railradio.io import write_json
 from railradio.nr.link import ShadowingMap, link_budget
 from railradio.nr.numerology import Numerology
 from railradio.nr.receiver import Correlator, Synthesizer
@@ -94,10 +94,7 @@ def main() -> None:
         "naive_correlation_ms_per_epoch": 1e3 * times["naive_correlation"] / n,
         "paper_scale_epochs": 3 * scn.trajectory.n_epochs,
     }
-    for k, val in report.items():
-        print(f"{k:40s} {val:.4g}" if isinstance(val, float) else f"{k:40s} {val}")
-    if args.out:
-        write_json(args.out, report)
+    emit(report, args.out)
 
 
 if __name__ == "__main__":

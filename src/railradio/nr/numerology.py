@@ -13,7 +13,6 @@ subcarrier inside that band).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import cached_property
 
 import numpy as np
 from numpy.typing import NDArray
@@ -61,12 +60,6 @@ class Numerology:
         k = np.fft.fftfreq(self.n_fft, 1.0 / self.n_fft).astype(np.int64)
         return k
 
-    @property
-    def active_mask(self) -> NDArray[np.bool_]:
-        """Which FFT bins carry an active subcarrier (-300 <= k <= 299)."""
-        k = self.subcarriers
-        return (k >= -N_ACTIVE // 2) & (k < N_ACTIVE // 2)
-
     def cp_length(self, symbol: NDArray[np.int64] | int) -> NDArray[np.int64]:
         """CP length [samples] of symbol index l (counted from a subframe start)."""
         sym = np.asarray(symbol)
@@ -86,10 +79,6 @@ class Numerology:
     def symbol_length(self, symbol: NDArray[np.int64] | int) -> NDArray[np.int64]:
         """CP + useful length [samples] of symbol l."""
         return self.cp_length(symbol) + self.n_fft
-
-    @cached_property
-    def samples_per_subframe(self) -> int:
-        return SAMPLES_PER_SUBFRAME // self.decimation
 
 
 def ssb_first_symbols(pattern: str = "seed", n_blocks: int = 64) -> NDArray[np.int64]:

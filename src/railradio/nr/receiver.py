@@ -280,12 +280,6 @@ class Synthesizer:
         return z, sp["s_min"]
 
 
-def synthesize(cfg: ReceiverConfig, links: Links, profile: TdlProfile, pool: NDArray[np.complex64],
-               rng: np.random.Generator, t0_s: float = 0.0, noise: bool = True) -> tuple[NDArray[np.complex64], int]:
-    """One-off convenience wrapper of :class:`Synthesizer` (full channel for every RRH)."""
-    return Synthesizer(cfg, profile, pool)(links, rng, t0_s, noise)
-
-
 @dataclass
 class BlockCorrelation:
     """Per-candidate, per-block correlation statistics of one burst.

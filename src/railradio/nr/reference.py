@@ -17,7 +17,7 @@ from numpy.typing import NDArray
 
 from railradio.nr.channel import TdlProfile, sos_eval
 from railradio.nr.numerology import N_FFT, Numerology
-from railradio.nr.receiver import Links, ReceiverConfig, Synthesizer
+from railradio.nr.receiver import Links, ReceiverConfig
 from railradio.nr.ssb import burst_grid, reference_waveform
 
 
@@ -68,8 +68,3 @@ def reference_correlation(cfg: ReceiverConfig, z: NDArray, s_min: int, n_id1: in
         seg[: part.size] = part
         out[i] = np.abs(sfft.ifft(sfft.fft(seg) * bf)[: cfg.lags_full])
     return out
-
-
-def synthesizer_symbols(syn: Synthesizer) -> NDArray[np.int64]:
-    """The symbol span of a synthesizer's last burst (to build the matching reference)."""
-    return syn._span["symbols"]
