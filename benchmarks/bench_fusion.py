@@ -9,7 +9,6 @@ whole Monte Carlo driver (TDOA, AOA, two fusions per trial).
 from __future__ import annotations
 
 import argparse
-import json
 import platform
 import time
 

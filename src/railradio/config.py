@@ -91,7 +91,6 @@ def validate_config(cfg: MutableMapping[str, Any], schema: dict[str, Any]) -> Mu
         lines = []
         for err in errors:
             node = err.schema if isinstance(err.schema, dict) else {}
-            key_schema = node  # the offending value's own schema node
             desc = _description_at(schema, err.absolute_path)
             if err.validator in ("required", "additionalProperties"):
                 what = err.message
@@ -99,7 +98,7 @@ def validate_config(cfg: MutableMapping[str, Any], schema: dict[str, Any]) -> Mu
                 what = f"{err.instance!r} is not allowed ({err.message})"
             lines.append(
                 f"config key '{_key_path(err.absolute_path)}': {what}. "
-                f"Allowed: {describe_allowed(key_schema)}." + (f" [{desc}]" if desc else "")
+                f"Allowed: {describe_allowed(node)}." + (f" [{desc}]" if desc else "")
             )
         raise ConfigError("invalid configuration:\n  " + "\n  ".join(lines))
     return cfg

@@ -3,7 +3,6 @@ detection on noise only against theory."""
 import numpy as np
 import pytest
 
-from railradio.constants import SPEED_OF_LIGHT_M_S
 from railradio.nr.channel import TdlProfile, tdl_profile
 from railradio.nr.numerology import SAMPLE_RATE_HZ
 from railradio.nr.receiver import Correlator, Links, ReceiverConfig, Synthesizer

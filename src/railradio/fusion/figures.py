@@ -8,7 +8,7 @@ import xarray as xr
 
 from railradio import plotting
 from railradio.constants import SPEED_OF_LIGHT_M_S
-from railradio.fusion.montecarlo import ESTIMATOR_LABELS, SWEEP_PARAMETER  # noqa: F401
+from railradio.fusion.montecarlo import ESTIMATOR_LABELS
 
 SWEEP_AXES = {
     "d_m": ("BS distance from the track $d$ [m]", 1.0),

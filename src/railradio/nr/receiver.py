@@ -203,12 +203,10 @@ class Synthesizer:
         if key not in self._overlays:
             sp = self._span
             num = self.cfg.num
-            ones = np.ones((sp["symbols"].size, num.n_fft), dtype=np.complex64)
             marked, _ = burst_grid(num, sp["symbols"], self.cfg.ssb_first, *key,
                                    np.full((1, N_FFT), np.nan + 0j, dtype=np.complex64),
                                    np.zeros(sp["symbols"].size, dtype=np.int64))
             rows, bins = np.nonzero(~np.isnan(marked.real) & (sp["block_of"][:, None] >= 0))
-            del ones
             self._overlays[key] = (rows, bins, marked[rows, bins])
         return self._overlays[key]
 
@@ -230,7 +228,7 @@ class Synthesizer:
         Returns ``(z, s_min)``: samples from the CP start of symbol ``s_min`` (negative:
         before the burst's first subframe).
         """
-        cfg, num, prof = self.cfg, self.cfg.num, self.profile
+        num, prof = self.cfg.num, self.profile
         n = num.n_fft
         fs = num.sample_rate_hz
         sp = self.span(float(np.max(links.tau_s)) if links.n else 0.0)

@@ -232,12 +232,12 @@ def select_measurements(cand_rrh: NDArray, cand_ok: NDArray, cand_strength: NDAr
 
 
 def track(ds, rrh_x: NDArray, rrh_y: float, dh_m: float, dt_s: float, cfg: TrackerConfig,
-          strength: str = "peak", n_use: int = 3) -> dict[str, NDArray]:
+          strength: str = "peak", n_use: int = 3, snapshot: bool = True) -> dict[str, NDArray]:
     """Track one realization from a :func:`railradio.nr.simulate.simulate_epochs` dataset.
 
     The first epoch with measurements gives the initial state (snapshot LS position, at
     rest: the seed's trajectory starts from standstill) and P0 (its covariance; speed and
-    acceleration standard deviations 1 m/s and 1 m/s² [ours]). Also returns the snapshot
+    acceleration standard deviations 1 m/s and 1 m/s² [ours]). Also returns (``snapshot``) the snapshot
     LS fix of every epoch (no tracking) as a baseline.
     """
     rrh = ds["rrh"].values
@@ -284,7 +284,7 @@ def track(ds, rrh_x: NDArray, rrh_y: float, dh_m: float, dt_s: float, cfg: Track
     # snapshot LS baseline: no tracking; each fix starts from the strongest cell's own
     # AOD/TOA closed form x_k + ρ cos θ (ρ the horizontal range)
     snap = np.full((n, 2), np.nan)
-    for k in range(n):
+    for k in range(n if snapshot else 0):
         xy, a_k, t_k = pick(k, float(rrh_x[rrh[k, 0]]))  # the stored candidates are the nearest
         if xy.shape[0] >= 1:
             rho = np.sqrt(max((SPEED_OF_LIGHT_M_S * t_k[0]) ** 2 - dh_m**2, 1.0))
@@ -330,7 +330,7 @@ def calibrate(ds, variant: str, rrh_x: NDArray, rrh_y: float, dh_m: float, dt_s:
     most_used, most_used_cfg = -1, None
     for q in q_grid:
         cfg = TrackerConfig(variant=variant, q=float(q), sigma_aod_rad=s_aod, sigma_toa_s=s_toa, gate=gate)
-        out = track(ds, rrh_x, rrh_y, dh_m, dt_s, cfg, strength=strength)
+        out = track(ds, rrh_x, rrh_y, dh_m, dt_s, cfg, strength=strength, snapshot=False)
         used = out["n_used"] > 0
         if used.sum() > most_used:
             most_used, most_used_cfg = int(used.sum()), cfg

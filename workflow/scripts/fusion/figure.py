@@ -1,5 +1,6 @@
 """Adapter: one fusion sweep -> its RMSE figure (PDF + PNG)."""
-from railradio.fusion.figures import SWEEP_PARAMETER, plot_sweep
+from railradio.fusion.figures import plot_sweep
+from railradio.fusion.montecarlo import SWEEP_PARAMETER
 from railradio.io import read_dataset
 from railradio.workflow import setup_script
 

@@ -36,7 +36,7 @@ for i, rx in enumerate(receivers):
                                 sigma_toa_s=c["sigma_toa_s"], gate=gate,
                                 gate_prob=smk.params.tracker["gate_prob"])
             out = track(dsr, dep.x_m, dep.offset_m, dep.h_bs_m - dep.h_ut_m, scn.trajectory.dt_s, cfg,
-                        strength=smk.params.selection[str(rx)])
+                        strength=smk.params.selection[str(rx)], snapshot=(g == 0))
             err[i, j, g] = np.hypot(out["state"][:, 0] - x_true, out["state"][:, 1])
             if g == 0:
                 snap[i, j] = np.hypot(out["snapshot"][:, 0] - x_true, out["snapshot"][:, 1])
