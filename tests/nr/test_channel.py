@@ -90,27 +90,3 @@ def test_rice_first_tap_k_factor():
     b = np.sqrt(2 * k)  # scipy rice shape for unit-scale Rayleigh part
     scale = np.sqrt(p.powers[0] / 2)
     assert stats.kstest(np.abs(tap1) / scale, "rice", args=(b,)).pvalue > KS_ALPHA
-
-
-def test_recursive_sum_of_sinusoids_matches_direct_evaluation():
-    from railradio.nr.channel import sos_eval, sos_eval_recursive, sos_params
-
-    rng = np.random.default_rng(12)
-    alpha, phi = sos_params(rng, 3, 16)
-    # symbol-centre times of a burst: two distinct steps (normal and long CP)
-    steps = np.where(np.arange(500) % 112 == 0, 1224, 1096) / 245.76e6
-    t = 0.37 + np.cumsum(steps)
-    a = sos_eval(np.array([0.5, 0.3, 0.2]), 13e3, t, alpha, phi)
-    b = sos_eval_recursive(np.array([0.5, 0.3, 0.2]), 13e3, t, alpha, phi)
-    np.testing.assert_allclose(b, a, atol=2e-5)  # sos_eval works in float32 phases
-
-
-def test_local_mean_matches_a_direct_loop():
-    from railradio.nr.receiver import local_mean
-
-    rng = np.random.default_rng(13)
-    r = rng.random((2, 3, 50)).astype(np.float32)
-    got = local_mean(r, 5, 2)
-    for k in range(50):
-        idx = [i for i in range(k - 7, k - 2) if 0 <= i < 50] + [i for i in range(k + 3, k + 8) if 0 <= i < 50]
-        np.testing.assert_allclose(got[..., k], r[..., idx].mean(axis=-1), rtol=1e-5)

@@ -125,23 +125,6 @@ def sos_eval(powers: NDArray, doppler_hz: float, times_s: NDArray, alpha: NDArra
     return np.sqrt(powers / alpha.shape[1])[None, :] * s
 
 
-def sos_eval_recursive(powers: NDArray, doppler_hz: float, times_s: NDArray, alpha: NDArray,
-                       phi: NDArray) -> NDArray[np.complex128]:
-    """:func:`sos_eval` by phasor recursion over increasing ``times_s`` (exact up to
-    rounding: e^{j2πf t_{s+1}} = e^{j2πf t_s} e^{j2πf (t_{s+1} - t_s)}), for many close
-    times; identical to :func:`sos_eval` to ~1e-12 over a burst (tested)."""
-    powers = np.asarray(powers, dtype=float)
-    t = np.asarray(times_s, dtype=float)
-    f = (doppler_hz * np.cos(alpha)).ravel()  # [L*M]
-    steps = np.empty((t.size, f.size), dtype=complex)
-    steps[0] = np.exp(1j * (2 * np.pi * f * t[0] + phi.ravel()))
-    dts, inv = np.unique(np.round(np.diff(t), 15), return_inverse=True)
-    rot = np.exp(2j * np.pi * np.outer(dts, f))  # one row per distinct step
-    steps[1:] = rot[inv]
-    z = np.cumprod(steps, axis=0).reshape(t.size, *alpha.shape)
-    return np.sqrt(powers / alpha.shape[1])[None, :] * z.sum(axis=-1)
-
-
 def sos_taps(rng: np.random.Generator, powers: NDArray, doppler_hz: float, times_s: NDArray,
              n_sinusoids: int = 32) -> NDArray[np.complex128]:
     """Rayleigh tap gains by a sum of sinusoids (Clarke's model, random arrival angles).

@@ -31,7 +31,8 @@ import numpy as np
 import scipy.fft as sfft
 from numpy.typing import NDArray
 
-from railradio.nr.channel import TdlProfile, sos_eval_recursive, sos_params
+from railradio.nr import kernels
+from railradio.nr.channel import TdlProfile, sos_params
 from railradio.nr.numerology import N_FFT, SUBCARRIER_SPACING_HZ, Numerology, ssb_first_symbols
 from railradio.nr.ssb import band_bins, burst_grid, reference_waveform
 
@@ -176,12 +177,9 @@ class Synthesizer:
         cps = num.cp_length(symbols)
         starts = num.symbol_start(symbols) - num.symbol_start(symbols[0])
         total = int(starts[-1] + n + cps[-1])
-        # flat read-out: symbol s occupies n + cp_s samples read cyclically from its IFFT
-        # output y_s (0..n-1 then 0..cp_s-1); the CP and the placement offset are folded
-        # into the subcarrier phase ramp, so the gather index is fixed
-        row = np.repeat(np.arange(symbols.size), n + cps)
-        m = np.arange(total) - np.repeat(starts, n + cps)
-        flat = row * n + (m % n)
+        # read-out (kernels.place): symbol s occupies n + cp_s samples read cyclically from
+        # its IFFT output y_s (0..n-1 then 0..cp_s-1); the CP and the placement offset are
+        # folded into the subcarrier phase ramp
         # SS-block symbol -> block index
         block_of = np.full(symbols.size, -1, dtype=np.int64)
         first_pos = {int(sv): i for i, sv in enumerate(symbols)}
@@ -192,13 +190,17 @@ class Synthesizer:
         cp0 = int(num.cp_length(1))
         long_rows = np.flatnonzero(cps != cp0)
         long_ramp = np.exp(-2j * np.pi * np.outer(cps[long_rows] - cp0, np.fft.fftfreq(n, 1.0 / n)) / n).astype(np.complex64)
-        self._span = dict(n_pre=n_pre, symbols=symbols, cps=cps, starts=starts, total=total,
-                          flat=flat, cp0=cp0, long_rows=long_rows, long_ramp=long_ramp, block_of=block_of, s_min=int(symbols[0]))
+        long_of = np.full(symbols.size, -1, dtype=np.int64)
+        long_of[long_rows] = np.arange(long_rows.size)
+        self._span = dict(n_pre=n_pre, symbols=symbols, cps=np.ascontiguousarray(cps, dtype=np.int64),
+                          starts=np.ascontiguousarray(starts, dtype=np.int64), total=total,
+                          cp0=cp0, long_of=long_of, long_ramp=long_ramp, block_of=block_of, s_min=int(symbols[0]))
         self._overlays.clear()
         return self._span
 
-    def overlay(self, n_id1: int, n_id2: int) -> tuple[NDArray, NDArray, NDArray]:
-        """(rows, bins, values) that the cell's SS blocks write over the pool data."""
+    def overlay(self, n_id1: int, n_id2: int) -> tuple[NDArray[np.bool_], NDArray[np.complex64]]:
+        """(mask, values) [symbols, n]: where and what the cell's SS blocks write over the
+        pool data (dense, cached per cell)."""
         key = (int(n_id1), int(n_id2))
         if key not in self._overlays:
             sp = self._span
@@ -206,8 +208,9 @@ class Synthesizer:
             marked, _ = burst_grid(num, sp["symbols"], self.cfg.ssb_first, *key,
                                    np.full((1, N_FFT), np.nan + 0j, dtype=np.complex64),
                                    np.zeros(sp["symbols"].size, dtype=np.int64))
-            rows, bins = np.nonzero(~np.isnan(marked.real) & (sp["block_of"][:, None] >= 0))
-            self._overlays[key] = (rows, bins, marked[rows, bins])
+            mask = ~np.isnan(marked.real) & (sp["block_of"][:, None] >= 0)
+            vals = np.where(mask, marked, 0).astype(np.complex64)
+            self._overlays[key] = (np.ascontiguousarray(mask), vals)
         return self._overlays[key]
 
     def draws(self, links: Links, rng: np.random.Generator) -> list[dict]:
@@ -235,43 +238,39 @@ class Synthesizer:
         symbols, total = sp["symbols"], sp["total"]
         z = np.zeros(total, dtype=np.complex64)
         t_sym = (num.symbol_start(symbols) + sp["cps"] + n / 2) / fs + t0_s
-        chunk = 256
-        n_chunks = -(-total // chunk)
         if draws is None:
             draws = self.draws(links, rng)
+        x = np.empty((symbols.size, n), dtype=np.complex64)
+        no_h = np.ones((1, 1), dtype=np.complex64)
+        amp_l = np.sqrt(prof.powers / self.n_sinusoids)
         for r in range(links.n):
-            grid = self.pool_band[draws[r]["pool_idx"]]
-            rows, bins, vals = self.overlay(links.n_id1[r], links.n_id2[r])
-            grid[rows, bins] = vals
-            g_sym = np.where(sp["block_of"] >= 0, links.beam_amp[r][np.maximum(sp["block_of"], 0)],
-                             links.data_amp[r]) * links.amp[r]
             # delay τ0 = (n_c - ε)/F_s: placement at n_c, the rest (and the CP start) as a
             # per-symbol phase ramp: sample m of symbol s is x(t_m - τ0) at m - cp_s + n_c
             n_c = int(np.ceil(links.tau_s[r] * fs - 1e-9))
+            if n_c >= total:
+                continue
+            mask, vals = self.overlay(links.n_id1[r], links.n_id2[r])
+            g_sym = np.where(sp["block_of"] >= 0, links.beam_amp[r][np.maximum(sp["block_of"], 0)],
+                             links.data_amp[r]) * (links.amp[r] * n)  # × n: unnormalized IFFT
             frac = links.tau_s[r] * fs - n_c  # in (-1, 0]
             ramp = np.exp(-2j * np.pi * (frac + sp["cp0"]) * self.k / n).astype(np.complex64)  # [n]
             full = d2d_m is None or d2d_m[r] <= self.full_channel_range_m
             if full and prof.powers.size:
-                taps = sos_eval_recursive(prof.powers, links.doppler_hz, t_sym, draws[r]["alpha"], draws[r]["phi"])
+                f_lm = links.doppler_hz * np.cos(draws[r]["alpha"])
+                taps = kernels.sos_taps(amp_l, f_lm, draws[r]["phi"], t_sym)
                 taps *= np.exp(-1j * (2 * np.pi * links.f_los_hz[r] * t_sym + links.phase0[r]))[:, None]
-                h = (np.sqrt(prof.los_power) + taps.astype(np.complex64) @ self.basis) * ramp[None, :]
-                x = grid * h
-                x *= g_sym[:, None].astype(np.complex64)
+                h = taps.astype(np.complex64) @ self.basis
+                h += np.float32(np.sqrt(prof.los_power))
+                kernels.fill_grid(x, self.pool_band, draws[r]["pool_idx"], mask, vals, h, True,
+                                  ramp, g_sym.astype(np.float32), sp["long_of"], sp["long_ramp"])
             else:  # far interferer: one tap with the profile's total power, LOS Doppler
-                x = grid * (ramp[None, :] * g_sym[:, None].astype(np.complex64))
-            if n_c >= total:
-                continue
-            x[sp["long_rows"]] *= sp["long_ramp"]  # the long-CP symbols' extra CP samples
-            y = sfft.ifft(x, axis=1, workers=1)
-            y *= n
-            wave = y.reshape(-1)[sp["flat"][: total - n_c]]
-            # LOS phase e^{j(2π f t + φ0)} at receive times, as coarse × fine phasors
+                kernels.fill_grid(x, self.pool_band, draws[r]["pool_idx"], mask, vals, no_h, False,
+                                  ramp, g_sym.astype(np.float32), sp["long_of"], sp["long_ramp"])
+            y = sfft.ifft(x, axis=1, workers=1, overwrite_x=True)
+            # LOS phase e^{j(2π f t + φ0)} at receive times, applied while placing
             t_first = (num.symbol_start(sp["s_min"]) + n_c) / fs + t0_s
-            w = 2 * np.pi * links.f_los_hz[r]
-            coarse = np.exp(1j * (w * (t_first + np.arange(n_chunks) * chunk / fs) + links.phase0[r])).astype(np.complex64)
-            fine = np.exp(1j * w * np.arange(chunk) / fs).astype(np.complex64)
-            phasor = (coarse[:, None] * fine[None, :]).reshape(-1)[: total - n_c]
-            z[n_c:] += wave * phasor
+            kernels.place(z, y, sp["starts"], sp["cps"], n_c, 2 * np.pi * links.f_los_hz[r],
+                          t_first, links.phase0[r], 1.0 / fs)
         if noise:
             var = links.noise_psd_w_hz * fs * links.n_chains
             z += (np.sqrt(var / 2) * (rng.standard_normal(total) + 1j * rng.standard_normal(total))).astype(np.complex64)
@@ -297,27 +296,6 @@ class BlockCorrelation:
 
 
 DETECTORS = ("seed", "cfar", "cacfar")
-
-
-def local_mean(r: NDArray, window: int, guard: int) -> NDArray[np.float64]:
-    """Cell-averaging noise floor: mean of r over ``window`` lags on each side of every
-    lag, skipping ``guard`` lags next to it (fewer at the ends); r [..., K]."""
-    k = r.shape[-1]
-    c = np.concatenate([np.zeros(r.shape[:-1] + (1,), dtype=np.float32),
-                        np.cumsum(r, axis=-1, dtype=np.float32)], axis=-1)  # C[j] = Σ_{i<j} r[i]
-    pad = guard + window + 1
-    cp = np.concatenate([np.repeat(c[..., :1], pad, axis=-1), c,
-                         np.repeat(c[..., -1:], pad, axis=-1)], axis=-1)  # cp[j + pad] = C[clip(j)]
-
-    def at(shift: int) -> NDArray:  # C[clip(idx + shift)] for idx = 0..k-1
-        return cp[..., pad + shift: pad + shift + k]
-
-    left = at(-guard) - at(-guard - window)
-    right = at(guard + 1 + window) - at(guard + 1)
-    idx = np.arange(k)
-    n = (np.clip(idx - guard, 0, k) - np.clip(idx - guard - window, 0, k)
-         + np.clip(idx + guard + 1 + window, 0, k) - np.clip(idx + guard + 1, 0, k))
-    return (left + right) / np.maximum(n, 1)
 
 
 def cfar_threshold(window_s: float, pfa: float, n_sc: int = 127) -> float:
@@ -365,7 +343,8 @@ class Correlator:
         d = cfg.decimation
         # e^{j2π f δ/N} for the full-rate offsets δ = -1 ... +1 (decimated units, step 1/D)
         self.offsets = np.arange(-d, d + 1) / d
-        self.offset_phasors = np.exp(2j * np.pi * np.outer(self.freqs, self.offsets) / self.n_win).astype(np.complex64)
+        self.offset_phasors_t = np.ascontiguousarray(np.exp(
+            2j * np.pi * np.outer(self.offsets, self.freqs) / self.n_win).astype(np.complex64))  # [J, N]
         self.freq_int = np.round(self.freqs).astype(np.int64)
         self.roots = np.exp(2j * np.pi * np.arange(self.n_win) / self.n_win).astype(np.complex64)
         self.cfar_factor = cfar_threshold(cfg.lags_full / Numerology(1).sample_rate_hz, pfa) / np.sqrt(np.pi / 2)
@@ -381,33 +360,42 @@ class Correlator:
     def _at_offsets(self, p: NDArray[np.complex64], k0: NDArray[np.int64]) -> NDArray[np.float64]:
         """|c(k0 + δ)| for δ in ``self.offsets`` from cross-spectra p [n, N] (band-limited
         evaluation: c(λ) = (1/N) Σ_f p[f] e^{j2π f λ/N})."""
-        shift = self.roots[np.outer(k0, self.freq_int) % self.n_win]  # e^{j2π f k0/N}
-        return np.abs((p * shift) @ self.offset_phasors) / self.n_win
+        return kernels.at_offsets(np.ascontiguousarray(p), np.asarray(k0, dtype=np.int64),
+                                  self.freq_int, self.roots, self.offset_phasors_t)
 
-    def correlate(self, z: NDArray[np.complex64], s_min: int, n_id1: NDArray, n_id2: NDArray,
-                  keep_corr: bool = False) -> BlockCorrelation:
-        cfg, num = self.cfg, self.cfg.num
-        d = cfg.decimation
-        v = num.symbol_start(cfg.ssb_first) - num.symbol_start(s_min)  # [B]
+    def window_spectra(self, z: NDArray[np.complex64], s_min: int) -> NDArray[np.complex64]:
+        """FFT of the received burst over each SS block's window (v_i ... v_i + N - 1),
+        [n_blocks, N]; receivers with the same window length can share it."""
+        num = self.cfg.num
+        v = num.symbol_start(self.cfg.ssb_first) - num.symbol_start(s_min)  # [B]
         idx = v[:, None] + np.arange(self.n_win)[None, :]
         zw = np.zeros((len(v), self.n_win), dtype=np.complex64)
         ok = idx < z.size
         zw[ok] = z[idx[ok]]
-        zf = sfft.fft(zw, axis=1, workers=1)  # [B, N]
+        return sfft.fft(zw, axis=1, workers=1, overwrite_x=True)
+
+    def correlate(self, z: NDArray[np.complex64], s_min: int, n_id1: NDArray, n_id2: NDArray,
+                  keep_corr: bool = False, zf: NDArray[np.complex64] | None = None) -> BlockCorrelation:
+        """Per-block correlation, detection, AOD and TOA of the candidate cells (seed eq. 4–9).
+
+        ``zf``: the burst's :meth:`window_spectra`, when already computed for ``z``.
+        """
+        cfg = self.cfg
+        d = cfg.decimation
+        if zf is None:
+            zf = self.window_spectra(z, s_min)  # [B, N]
         n_c = len(n_id1)
+        n_b = zf.shape[0]
         bspec = np.stack([self.spectrum(a, b) for a, b in zip(n_id1, n_id2, strict=True)])  # [C, N]
         p = zf[None, :, :] * bspec[:, None, :]  # [C, B, N]
-        r = np.abs(sfft.ifft(p, axis=2, workers=1)[:, :, : cfg.lags])  # [C, B, K_d]
-        mu = r.mean(axis=2)
-        sigma = r.std(axis=2)
-        k_lo = r.argmax(axis=2)
-        eta = r.max(axis=2).astype(float)
+        xc = sfft.ifft(p, axis=2, workers=1).reshape(n_c * n_b, self.n_win)
+        r, mu, sigma, eta, k_lo = kernels.magnitude_stats(xc, cfg.lags)  # one pass over |r|
+        r = r.reshape(n_c, n_b, cfg.lags)
+        mu, sigma = mu.reshape(n_c, n_b), sigma.reshape(n_c, n_b)
+        eta, k_lo = eta.reshape(n_c, n_b), k_lo.reshape(n_c, n_b)
         if self.detector == "cacfar":  # [ours] local noise floor per lag
-            floor = local_mean(r, self.ca_window, self.ca_guard)
-            ratio = r / np.maximum(floor, 1e-30)
-            k_lo = ratio.argmax(axis=2)
-            eta = np.take_along_axis(r, k_lo[..., None], axis=2)[..., 0].astype(float)
-            floor_at = np.take_along_axis(floor, k_lo[..., None], axis=2)[..., 0]
+            k_lo, eta, floor_at = (a.reshape(n_c, n_b) for a in kernels.local_mean_argmax(
+                r.reshape(n_c * n_b, cfg.lags), self.ca_window, self.ca_guard))
             # both tests: the seed's μ + kσ over the window and the local CFAR test
             threshold = np.maximum(floor_at * self.cfar_factor, mu + cfg.detect_k_sigma * sigma)
             pre = threshold * 0.8

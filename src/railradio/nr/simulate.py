@@ -107,9 +107,12 @@ def simulate_epochs(scn: Scenario, epochs: np.ndarray, seed: int, key: tuple[int
         out["d3d_m"][i] = lb.d3d_m[pos]
         out["aod_true_rad"][i] = lb.aod_rad[pos]
         out["rx_power_dbm"][i] = lb.rx_power_dbm[pos]
+        spectra = {}  # window FFTs shared by receivers with the same window length
         for j, cor in enumerate(cors):
+            if cor.n_win not in spectra:
+                spectra[cor.n_win] = cor.window_spectra(z, s_min)
             res = cor.correlate(z, s_min, lb.links.n_id1[pos], lb.links.n_id2[pos],
-                                keep_corr=(j == 0 and int(e) in keep_corr_epochs))
+                                keep_corr=(j == 0 and int(e) in keep_corr_epochs), zf=spectra[cor.n_win])
             est["aod_hat_rad"][j, i] = res.aod_rad
             est["toa_hat_s"][j, i] = res.toa_samples / SAMPLE_RATE_HZ
             est["peak"][j, i] = res.peak_comb

@@ -1,0 +1,208 @@
+"""Compiled inner loops of the nr synthesizer and correlator (numba).
+
+Each kernel fuses what would otherwise be several full passes of NumPy temporaries over a
+burst-sized array; the NumPy formulation each one replaces is stated in its docstring and
+checked against it in ``tests/nr/test_kernels.py``. No kernel changes the model.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+_TWO_PI = 2.0 * np.pi
+
+
+@njit(cache=True, nogil=True)
+def sos_taps(amp_l: np.ndarray, f_lm_hz: np.ndarray, phi_lm: np.ndarray,
+             t_s: np.ndarray) -> np.ndarray:
+    """Sum-of-sinusoids tap gains a_l(t_s) = amp_l Σ_m e^{j(2π f_lm t_s + φ_lm)}, [S, L].
+
+    Phasor recursion over increasing times in complex128 (the rotation recomputed when the
+    time step changes by more than 1 ps), re-anchored exactly every 32 steps; equals
+    ``amp_l[None, :] * railradio.nr.channel.sos_eval(...)`` sums to ~1e-13.
+    """
+    n_t = t_s.size
+    n_l, n_m = f_lm_hz.shape
+    w = (_TWO_PI * f_lm_hz).ravel()
+    phi = phi_lm.ravel()
+    ph = np.empty(w.size, dtype=np.complex128)
+    rot = np.empty(w.size, dtype=np.complex128)
+    out = np.empty((n_t, n_l), dtype=np.complex128)
+    prev_dt = np.nan
+    for s in range(n_t):
+        if s % 32 == 0:
+            for i in range(w.size):
+                ph[i] = np.exp(1j * (w[i] * t_s[s] + phi[i]))
+        else:
+            dt = t_s[s] - t_s[s - 1]
+            if not abs(dt - prev_dt) <= 1e-12:  # a new step (not time rounding, ~1e-13 s)
+                for i in range(w.size):
+                    rot[i] = np.exp(1j * w[i] * dt)
+                prev_dt = dt
+            for i in range(w.size):
+                ph[i] = ph[i] * rot[i]
+        for l in range(n_l):
+            acc = 0j
+            for m in range(n_m):
+                acc += ph[l * n_m + m]
+            out[s, l] = amp_l[l] * acc
+    return out
+
+
+@njit(cache=True, nogil=True)
+def fill_grid(x: np.ndarray, pool: np.ndarray, pool_idx: np.ndarray, ov_mask: np.ndarray,
+              ov_val: np.ndarray, h: np.ndarray, has_h: bool, ramp: np.ndarray,
+              g_row: np.ndarray, long_of: np.ndarray, long_ramp: np.ndarray) -> None:
+    """x[s, k] = src[s, k] · h[s, k] · ramp[k] · g_row[s] · long_ramp[long_of[s], k], in place.
+
+    src[s, k] is the SS-block overlay value where ``ov_mask`` is set, else the data-pool
+    symbol ``pool[pool_idx[s], k]``; ``h`` is ignored unless ``has_h`` (flat channel);
+    ``long_of[s] < 0`` means no long-CP ramp for that row. NumPy form:
+    ``grid = pool[pool_idx]; grid[mask] = val; x = grid * h * ramp * g[:, None]; x[long] *= long_ramp``.
+    """
+    n_s, n = x.shape
+    f = np.empty(n, dtype=np.complex64)
+    for s in range(n_s):
+        p = pool_idx[s]
+        lr = long_of[s]
+        gs = g_row[s]
+        for k in range(n):
+            f[k] = ramp[k] * gs
+        if has_h:
+            for k in range(n):
+                f[k] *= h[s, k]
+        if lr >= 0:
+            for k in range(n):
+                f[k] *= long_ramp[lr, k]
+        for k in range(n):
+            v = ov_val[s, k] if ov_mask[s, k] else pool[p, k]
+            x[s, k] = v * f[k]
+
+
+@njit(cache=True, nogil=True)
+def place(z: np.ndarray, y: np.ndarray, starts: np.ndarray, cps: np.ndarray, n_c: int,
+          w_rad_s: float, t_first_s: float, phase0_rad: float, dt_s: float) -> None:
+    """Add the CP-OFDM symbols y [S, n] (IFFT outputs) to z from sample n_c on, times the
+    LOS phasor e^{j(w t + φ0)} at receive times t = t_first + m dt.
+
+    Symbol i occupies samples starts[i] .. starts[i] + n + cps[i] - 1 (relative to n_c),
+    read cyclically from y[i] (0..n-1, then the cyclic extension 0..cps[i]-1: the CP is
+    folded into the subcarrier phase ramp); samples past the end of z are dropped. The
+    phasor is exact at each symbol start times a per-sample factor within the symbol.
+    """
+    n_s, n = y.shape
+    total = z.size
+    max_len = n + int(cps.max())
+    fine = np.empty(max_len, dtype=np.complex64)
+    for j in range(max_len):
+        fine[j] = np.exp(1j * w_rad_s * j * dt_s)
+    for i in range(n_s):
+        m0 = starts[i]
+        if n_c + m0 >= total:
+            break
+        length = min(n + cps[i], total - n_c - m0)
+        coarse = np.complex64(np.exp(1j * (w_rad_s * (t_first_s + m0 * dt_s) + phase0_rad)))
+        base = n_c + m0
+        top = min(length, n)
+        for j in range(top):
+            z[base + j] += y[i, j] * (coarse * fine[j])
+        for j in range(n, length):
+            z[base + j] += y[i, j - n] * (coarse * fine[j])
+
+
+@njit(cache=True, nogil=True)
+def magnitude_stats(c: np.ndarray, k: int) -> tuple:
+    """|c[..., :k]| and its per-row mean, standard deviation (ddof 0), max and argmax, in
+    one pass over rows of c [R, N] (complex64): (r [R, k] float32, mu, sigma, eta, k_max)."""
+    n_r = c.shape[0]
+    r = np.empty((n_r, k), dtype=np.float32)
+    mu = np.empty(n_r)
+    sigma = np.empty(n_r)
+    eta = np.empty(n_r)
+    arg = np.empty(n_r, dtype=np.int64)
+    for i in range(n_r):
+        s1 = 0.0
+        s2 = 0.0
+        best = -1.0
+        bi = 0
+        for j in range(k):
+            v = c[i, j]
+            a = np.sqrt(v.real * v.real + v.imag * v.imag)
+            r[i, j] = a
+            a64 = np.float64(np.float32(a))
+            s1 += a64
+            s2 += a64 * a64
+            if a64 > best:
+                best = a64
+                bi = j
+        m = s1 / k
+        mu[i] = m
+        sigma[i] = np.sqrt(max(s2 / k - m * m, 0.0))
+        eta[i] = best
+        arg[i] = bi
+    return r, mu, sigma, eta, arg
+
+
+@njit(cache=True, nogil=True)
+def local_mean_argmax(r: np.ndarray, window: int, guard: int) -> tuple:
+    """Cell-averaging CFAR per row of r [R, K]: the floor at each lag (mean of r over
+    ``window`` lags on each side beyond ``guard``, fewer at the ends — the same as
+    ``railradio.nr.receiver.local_mean``) and the lag maximizing r/floor.
+
+    Returns (k_best [R] int64, eta = r at k_best [R], floor at k_best [R]).
+    """
+    n_r, k = r.shape
+    c = np.empty(k + 1)
+    k_best = np.empty(n_r, dtype=np.int64)
+    eta = np.empty(n_r)
+    floor_at = np.empty(n_r)
+    for i in range(n_r):
+        c[0] = 0.0
+        for j in range(k):
+            c[j + 1] = c[j] + r[i, j]
+        best = -1.0
+        bj = 0
+        bf = 1.0
+        for j in range(k):
+            a0 = min(max(j - guard - window, 0), k)
+            a1 = min(max(j - guard, 0), k)
+            b0 = min(max(j + guard + 1, 0), k)
+            b1 = min(max(j + guard + 1 + window, 0), k)
+            cnt = (a1 - a0) + (b1 - b0)
+            fl = ((c[a1] - c[a0]) + (c[b1] - c[b0])) / max(cnt, 1)
+            ratio = r[i, j] / max(fl, 1e-30)
+            if ratio > best:
+                best = ratio
+                bj = j
+                bf = fl
+        k_best[i] = bj
+        eta[i] = r[i, bj]
+        floor_at[i] = bf
+    return k_best, eta, floor_at
+
+
+@njit(cache=True, nogil=True, fastmath=True)
+def at_offsets(p: np.ndarray, k0: np.ndarray, freq_int: np.ndarray, roots: np.ndarray,
+               offset_phasors_t: np.ndarray) -> np.ndarray:
+    """Band-limited |c(k0 + δ)| = |(1/N) Σ_f p[f] e^{j2π f (k0 + δ)/N}| for each row of
+    the cross-spectra p [R, N] and the offsets δ_j encoded in offset_phasors_t [J, N]
+    (e^{j2π f δ_j/N}); ``roots[q] = e^{j2π q/N}``. Single-precision sums (relative error
+    ~1e-6). Returns [R, J]."""
+    n_r, n = p.shape
+    n_j = offset_phasors_t.shape[0]
+    out = np.empty((n_r, n_j))
+    base = np.empty(n, dtype=np.complex64)
+    for i in range(n_r):
+        kk = k0[i]
+        for f in range(n):
+            base[f] = p[i, f] * roots[(freq_int[f] * kk) % n]
+        for j in range(n_j):
+            re = np.float32(0.0)
+            im = np.float32(0.0)
+            for f in range(n):
+                v = base[f] * offset_phasors_t[j, f]
+                re += v.real
+                im += v.imag
+            out[i, j] = np.sqrt(np.float64(re) ** 2 + np.float64(im) ** 2) / n
+    return out
