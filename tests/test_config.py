@@ -20,9 +20,9 @@ def test_paper_and_ci_configs_are_valid():
     cfg = _paper()
     with open(ROOT / "config/ci.yaml") as fh:
         ci = yaml.safe_load(fh)
-    for k, v in ci.items():
-        cfg[k].update(v) if isinstance(v, dict) else cfg.__setitem__(k, v)
-    validate_config(cfg, SCHEMA)
+    from railradio.config import deep_merge
+
+    validate_config(deep_merge(cfg, ci), SCHEMA)  # Snakemake merges --configfile recursively
 
 
 def test_defaults_filled():
@@ -59,3 +59,17 @@ def test_unknown_key_rejected():
     cfg["fusion"]["n_trail"] = 3
     with pytest.raises(ConfigError, match="n_trail"):
         validate_config(cfg, SCHEMA)
+
+
+def test_deep_merge_and_prefixed_messages():
+    from railradio.config import deep_merge
+
+    base = {"a": {"b": 1, "c": [1, 2]}, "d": 2}
+    merged = deep_merge(base, {"a": {"b": 5}, "e": 3})
+    assert merged == {"a": {"b": 5, "c": [1, 2]}, "d": 2, "e": 3}
+    assert base == {"a": {"b": 1, "c": [1, 2]}, "d": 2}  # untouched
+    nr = deep_merge(_paper()["nr"], {"traffic": {"data_beam": "sideways"}})
+    with pytest.raises(ConfigError) as exc:
+        validate_config(nr, SCHEMA["properties"]["nr"], root="nr.sensitivity.cases.x")
+    assert "nr.sensitivity.cases.x.traffic.data_beam" in str(exc.value)
+    assert "'train'" in str(exc.value)

@@ -103,7 +103,9 @@ def test_slurm_profile_dry_run_resolves(tmp_path):
     ("override", "key"),
     [("fusion:\n  reference:\n    sigma_aoa_rad: -0.01\n", "fusion.reference.sigma_aoa_rad"),
      ("fusion:\n  sweeps:\n    d_m: []\n", "fusion.sweeps.d_m"),
-     ("fusion:\n  n_trials: lots\n", "fusion.n_trials")],
+     ("fusion:\n  n_trials: lots\n", "fusion.n_trials"),
+     ("nr:\n  sensitivity:\n    cases:\n      loud:\n        radio: {tx_power_dbm: 900}\n",
+      "nr.sensitivity.cases.loud.radio.tx_power_dbm")],
 )
 def test_bad_config_stops_before_any_job(tmp_path, override, key):
     wd = _copy_workflow(tmp_path)
@@ -147,10 +149,13 @@ def test_identical_at_j1_and_j2(ci_run_j2, tmp_path):
 def test_intermediates_are_self_explaining(ci_run_j2):
     paths = sorted((ci_run_j2 / "results/fusion").rglob("*.nc"))
     assert len(paths) == 4 + 4 + 4 + 1 + 3
-    nr_paths = sorted((ci_run_j2 / "results/nr").rglob("*.nc"))
+    nr_paths = sorted(p for p in (ci_run_j2 / "results/nr").rglob("*.nc") if "cases" not in p.parts)
     # trajectory, samples, 2 calibration + 2 evaluation shards, 1 track, 1 bounds
     assert len(nr_paths) == 1 + 1 + 2 + 2 + 1 + 1
-    paths += nr_paths
+    case_paths = sorted((ci_run_j2 / "results/nr/cases").rglob("*.nc"))
+    # 3 sensitivity cases: 2 calibration + 1 evaluation shard, 1 track each
+    assert len(case_paths) == 3 * (2 + 1 + 1)
+    paths += nr_paths + case_paths
     for p in paths:
         with xr.open_dataset(p) as ds:
             for name, var in {**ds.data_vars, **ds.coords}.items():
@@ -159,7 +164,7 @@ def test_intermediates_are_self_explaining(ci_run_j2):
                 assert attr in ds.attrs, (p, attr)
     for name in ("fusion_rmse_vs_distance", "fusion_rmse_vs_tdoa_error", "fusion_rmse_vs_aoa_error",
                  "nr_trajectory", "nr_burst_correlation", "nr_measurement_error_cdf",
-                 "nr_position_error_cdf", "nr_position_error_vs_time"):
+                 "nr_position_error_cdf", "nr_position_error_vs_time", "nr_sensitivity"):
         assert (ci_run_j2 / f"results/figures/{name}.pdf").stat().st_size > 1000
     tex = (ci_run_j2 / "results/paper/numbers.tex").read_text()
     assert r"\@namedef{kn@fusion.d1500.rmse_fused_m}" in tex

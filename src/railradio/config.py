@@ -7,8 +7,9 @@ the bad value and the allowed range, before any job runs.
 
 from __future__ import annotations
 
+import copy
 import os
-from collections.abc import MutableMapping
+from collections.abc import Mapping, MutableMapping
 from typing import Any
 
 import jsonschema
@@ -56,6 +57,12 @@ def describe_allowed(schema: dict[str, Any]) -> str:
     return "; ".join(parts) if parts else "see the schema"
 
 
+def _prefixed(root: str, path: Any) -> str:
+    if not root:
+        return _key_path(path)
+    return root + ("." + _key_path(path) if len(path) else "")
+
+
 def _description_at(schema: dict[str, Any], path: Any) -> str:
     """The description of the deepest schema node on ``path`` that has one."""
     node, desc = schema, schema.get("description", "")
@@ -75,8 +82,23 @@ def _fill_defaults(cfg: MutableMapping[str, Any], schema: dict[str, Any]) -> Non
             _fill_defaults(cfg[name], sub)
 
 
-def validate_config(cfg: MutableMapping[str, Any], schema: dict[str, Any]) -> MutableMapping[str, Any]:
+def deep_merge(base: Mapping[str, Any], override: Mapping[str, Any]) -> dict[str, Any]:
+    """A copy of ``base`` with ``override`` merged in (nested mappings merged key by key)."""
+    out = copy.deepcopy(dict(base))
+    for k, v in override.items():
+        if isinstance(v, Mapping) and isinstance(out.get(k), Mapping):
+            out[k] = deep_merge(out[k], v)
+        else:
+            out[k] = copy.deepcopy(v)
+    return out
+
+
+def validate_config(cfg: MutableMapping[str, Any], schema: dict[str, Any],
+                    root: str = "") -> MutableMapping[str, Any]:
     """Fill schema defaults into ``cfg`` in place and validate it.
+
+    ``root`` prefixes the key paths in messages (for a sub-config such as a sensitivity
+    case validated against one section's schema).
 
     Raises
     ------
@@ -97,7 +119,7 @@ def validate_config(cfg: MutableMapping[str, Any], schema: dict[str, Any]) -> Mu
             else:
                 what = f"{err.instance!r} is not allowed ({err.message})"
             lines.append(
-                f"config key '{_key_path(err.absolute_path)}': {what}. "
+                f"config key '{_prefixed(root, err.absolute_path)}': {what}. "
                 f"Allowed: {describe_allowed(node)}." + (f" [{desc}]" if desc else "")
             )
         raise ConfigError("invalid configuration:\n  " + "\n  ".join(lines))

@@ -26,3 +26,46 @@ def test_epoch_results_independent_of_sharding():
 def test_shards_cover_the_track_once():
     got = np.concatenate([shard_epochs(5775, 12, s) for s in range(12)])
     np.testing.assert_array_equal(got, np.arange(5775))
+
+
+def test_data_beam_policies_and_geometry_bounded_window():
+    import dataclasses
+
+    import pytest
+
+    from railradio.constants import SPEED_OF_LIGHT_M_S
+    from railradio.nr.link import ShadowingMap, link_budget
+    from railradio.nr.numerology import SAMPLE_RATE_HZ
+    from railradio.nr.receiver import Synthesizer
+    from railradio.nr.ssb import qpsk_pool
+
+    scn = _scenario()
+    dep = scn.deployment
+    lb = link_budget(5100.0, 80.0, dep, scn.radio, scn.rrh_array, scn.train_array,
+                     ShadowingMap(1, (0,), dep, scn.radio))
+    pool = qpsk_pool(np.random.default_rng(0), 16)
+    out = {}
+    for policy in ("train", "random", "none"):
+        syn = Synthesizer(scn.receiver, scn.profile, pool, scn.n_sinusoids, scn.full_channel_range_m, policy)
+        draws = syn.draws(lb.links, np.random.default_rng(1))
+        out[policy] = syn(lb.links, None, 10.0, noise=False, draws=draws)[0]
+        sp = syn.span(float(lb.links.tau_s.max()))
+    # sample ranges of symbols without an SS block, well after the largest delay
+    n = scn.receiver.num.n_fft
+    quiet = [(s0, s0 + n) for s0, b in zip(sp["starts"][sp["n_pre"] + 20:], sp["block_of"][sp["n_pre"] + 20:])
+             if b < 0][:5]
+    p = {k: sum(np.sum(np.abs(z[a:b]) ** 2) for a, b in quiet) for k, z in out.items()}
+    # data toward the train are the strongest; with data beamed elsewhere they fall; with no
+    # data only other symbols' delayed spill remains
+    assert p["train"] > 3 * p["random"] > 0
+    assert p["none"] < 1e-3 * p["train"]
+    with pytest.raises(ValueError, match="data_beam"):
+        Synthesizer(scn.receiver, scn.profile, pool, data_beam="elsewhere")
+    # geometry-bounded search window: K covers delays up to the range
+    with open(ROOT / "config/config.yaml") as fh:
+        c = yaml.safe_load(fh)["nr"]
+    c["receiver"]["search_range_m"] = 2000.0
+    scn2 = scenario_from_config(c)
+    k = int(np.ceil(2000.0 / SPEED_OF_LIGHT_M_S * SAMPLE_RATE_HZ))
+    assert scn2.receiver.lags_full == k and all(v[1].lags_full == k for v in scn2.variants)
+    assert dataclasses.replace(scn2.receiver, search_lags=None).lags_full == 6576

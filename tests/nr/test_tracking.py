@@ -143,3 +143,25 @@ def test_pcrb_settles_below_the_snapshot_bound():
     out = pcrb_m(xy, x, DH, [np.full(3, 1e-9)] * n, 0.01, 0.1, 0.1, np.eye(6) * 100)
     assert out[0] < 10 and np.all(np.diff(out[5:]) < 1e-3)  # non-increasing once informed
     assert out[-1] < out[0]
+
+
+def test_pcrb_true_motion_bound_orders_and_resets():
+    """q = 0 (constant acceleration) bounds below any q > 0; an unknown acceleration jump
+    raises the bound right after it; a negative q is rejected."""
+    from railradio.nr.bounds import pcrb_m
+    from railradio.nr.geometry import Trajectory
+
+    n = 300
+    xy = [RRH] * n
+    x = 50.0 + 0.1 * np.arange(n)
+    args = (xy, x, DH, [np.full(3, 1e-9)] * n, 0.01, 0.1)
+    p0 = np.eye(6) * 100
+    white = pcrb_m(*args, 1.0, p0)
+    const = pcrb_m(*args, 0.0, p0)
+    jump = pcrb_m(*args, 0.0, p0, reset_epochs=[150])
+    assert np.all(const <= white + 1e-12) and const[-1] < 0.5 * white[-1]
+    np.testing.assert_array_equal(jump[:150], const[:150])
+    assert np.all(jump[151:] >= const[151:] - 1e-12) and jump[160] > const[160]
+    with pytest.raises(ValueError, match="q"):
+        pcrb_m(*args, -1.0, p0)
+    np.testing.assert_array_equal(Trajectory(((20.0, 0.5), (2.75, 0.0), (3.0, 1.0)), 0.1).change_epochs(), [200, 228])

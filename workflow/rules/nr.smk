@@ -1,6 +1,7 @@
 # Study `nr`: 5G NR SS-burst positioning of a high-speed train (seed 000, STUDY.md §2).
 # Chain: trajectory -> per-shard channel + burst + per-cell estimates (NetCDF) ->
 # calibration run (noise levels, q) -> EKF tracking per realization -> figures + numbers.
+from railradio.config import deep_merge, load_schema, validate_config
 from railradio.nr.simulate import scenario_from_config
 
 NR = config["nr"]
@@ -12,11 +13,44 @@ NR_EPOCHS = (
 )
 NR_REALS = [f"r{i}" for i in range(NR["realizations"])]
 NR_CAL_SHARDS = 2
-NR_SIM_KEYS = ["trajectory", "deployment", "radio", "antenna", "channel", "receiver", "receiver_variants"]
-NR_SIM = {k: NR[k] for k in NR_SIM_KEYS if k in NR}
-NR_SELECTION = {"seed": NR["receiver"]["selection"]} | {
-    name: v["selection"] for name, v in NR.get("receiver_variants", {}).items()
+NR_SIM_KEYS = [
+    "trajectory",
+    "deployment",
+    "radio",
+    "antenna",
+    "channel",
+    "receiver",
+    "receiver_variants",
+    "traffic",
+]
+
+
+def nr_sim(c):
+    return {k: c[k] for k in NR_SIM_KEYS if k in c}
+
+
+def nr_selection(c):
+    return {"seed": c["receiver"]["selection"]} | {
+        name: v["selection"] for name, v in c.get("receiver_variants", {}).items()
+    }
+
+
+NR_SIM = nr_sim(NR)
+NR_SELECTION = nr_selection(NR)
+
+# Sensitivity cases: the nr config with a case's override merged in, validated like the
+# nr section itself (a bad value names nr.sensitivity.cases.<case>.<key>).
+NR_SENS = NR.get("sensitivity") or {"epochs": 0, "n_shards": 1, "cases": {}}
+_NR_SCHEMA = load_schema(Path(workflow.basedir) / "workflow/schemas/config.schema.yaml")
+NR_CASES = {
+    case: validate_config(
+        deep_merge({k: v for k, v in NR.items() if k != "sensitivity"}, override),
+        _NR_SCHEMA["properties"]["nr"],
+        root=f"nr.sensitivity.cases.{case}",
+    )
+    for case, override in NR_SENS["cases"].items()
 }
+NR_CASE_EPOCHS = min(NR_SENS["epochs"], NR_SCN.trajectory.n_epochs)
 CODE_NR_SIM = (
     code_hash(
         "railradio.nr",
@@ -38,11 +72,15 @@ register_figures(
     ],
 )
 KEY_NUMBER_FRAGMENTS.append("results/nr/key_numbers.json")
+if NR_CASES:
+    register_figures("nr_sensitivity", ["nr_sensitivity"])
+    KEY_NUMBER_FRAGMENTS.append("results/nr/cases/key_numbers.json")
 
 
 wildcard_constraints:
     real=r"r\d+|cal",
     shard=r"\d+",
+    case=r"[a-z][a-z0-9_]*",
 
 
 rule nr_trajectory:
@@ -204,3 +242,119 @@ rule nr_key_numbers:
         "../envs/railradio.yaml"
     script:
         "../scripts/nr/key_numbers.py"
+
+
+# ---- sensitivity cases (STUDY.md §2; paired with realization r0 on the first epochs) ----
+
+
+rule nr_case_shard:
+    """One shard of a sensitivity case: realization r0's bursts under the case's config."""
+    output:
+        "results/nr/cases/{case}/estimates/{real}/s{shard}.nc",
+    params:
+        sim=lambda w: nr_sim(NR_CASES[w.case]),
+        seed=config["seed"],
+        n_epochs=lambda w: NR["calibration"]["epochs"] if w.real == "cal" else NR_CASE_EPOCHS,
+        n_shards=lambda w: NR_CAL_SHARDS if w.real == "cal" else NR_SENS["n_shards"],
+        code=CODE_NR_SIM,
+    log:
+        "results/logs/nr/cases/{case}_shard_{real}_s{shard}.log",
+    benchmark:
+        "results/benchmarks/nr/cases/{case}_shard_{real}_s{shard}.tsv"
+    wildcard_constraints:
+        real="r0|cal",
+    resources:
+        mem_mb=3000,
+        runtime=60,
+    conda:
+        "../envs/railradio.yaml"
+    script:
+        "../scripts/nr/shard.py"
+
+
+rule nr_case_calibrate:
+    """Calibration of a sensitivity case (its own calibration run, the main run's key)."""
+    input:
+        lambda w: expand(
+            "results/nr/cases/{case}/estimates/cal/s{shard}.nc",
+            case=w.case,
+            shard=range(NR_CAL_SHARDS),
+        ),
+    output:
+        "results/nr/cases/{case}/calibration.json",
+    params:
+        sim=lambda w: nr_sim(NR_CASES[w.case]),
+        tracker=lambda w: NR_CASES[w.case]["tracker"],
+        selection=lambda w: nr_selection(NR_CASES[w.case]),
+        code=CODE_NR_TRACK,
+    log:
+        "results/logs/nr/cases/{case}_calibrate.log",
+    conda:
+        "../envs/railradio.yaml"
+    script:
+        "../scripts/nr/calibrate.py"
+
+
+rule nr_case_track:
+    """EKF tracks of a sensitivity case."""
+    input:
+        shards=lambda w: expand(
+            "results/nr/cases/{case}/estimates/r0/s{shard}.nc",
+            case=w.case,
+            shard=range(NR_SENS["n_shards"]),
+        ),
+        calibration="results/nr/cases/{case}/calibration.json",
+    output:
+        "results/nr/cases/{case}/track.nc",
+    params:
+        sim=lambda w: nr_sim(NR_CASES[w.case]),
+        tracker=lambda w: NR_CASES[w.case]["tracker"],
+        selection=lambda w: nr_selection(NR_CASES[w.case]),
+        code=CODE_NR_TRACK,
+    log:
+        "results/logs/nr/cases/{case}_track.log",
+    conda:
+        "../envs/railradio.yaml"
+    script:
+        "../scripts/nr/track.py"
+
+
+rule nr_case_key_numbers:
+    """Key numbers sens.nr.<case>.* beside the main run's r0 on the same epochs (base)."""
+    input:
+        base="results/nr/track/r0.nc",
+        cases=expand("results/nr/cases/{case}/track.nc", case=list(NR_CASES)),
+    output:
+        "results/nr/cases/key_numbers.json",
+    params:
+        cases=list(NR_CASES),
+        n_epochs=NR_CASE_EPOCHS,
+        code=code_hash("railradio.nr.keys", "railradio.keynumbers"),
+    log:
+        "results/logs/nr/cases/key_numbers.log",
+    conda:
+        "../envs/railradio.yaml"
+    script:
+        "../scripts/nr/case_key_numbers.py"
+
+
+rule nr_case_figure:
+    """Sensitivity cases beside the base run (measurement and tracking errors)."""
+    input:
+        numbers="results/nr/cases/key_numbers.json",
+    output:
+        pdf=report(
+            "results/figures/nr_sensitivity.pdf",
+            caption="../report/nr_sensitivity.rst",
+            category="nr",
+        ),
+        png="results/figures/nr_sensitivity.png",
+    params:
+        cases=["base"] + list(NR_CASES),
+        code=code_hash("railradio.nr.figures") + CODE_PLOT,
+    log:
+        "results/logs/nr/cases/figure.log",
+    conda:
+        "../envs/railradio.yaml"
+    script:
+        "../scripts/nr/case_figure.py"

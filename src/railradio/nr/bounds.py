@@ -9,7 +9,9 @@
 * The snapshot position error bound (PEB) of an epoch from its three best RRHs:
   J = Σ_j u_j u_jᵀ/σ_r,j² + u⊥_j u⊥_jᵀ/(ρ_j² σ_θ²).
 * The posterior CRB of the tracker (Tichavský et al. 1998):
-  J_{k+1} = (Q + F J_k⁻¹ Fᵀ)⁻¹ + Hᵀ W⁻¹ H at the true state.
+  J_{k+1} = (Q + F J_k⁻¹ Fᵀ)⁻¹ + Hᵀ W⁻¹ H at the true state — for the white-jerk model
+  the tracker assumes (q calibrated), and for the true motion (constant acceleration
+  within phases, an unknown jump at each known change: a genie-aided bound) [ours].
 """
 
 from __future__ import annotations
@@ -58,15 +60,28 @@ def peb_m(rrh_xy: NDArray, x_m: float, dh_m: float, sigma_r_m: NDArray, sigma_th
 
 
 def pcrb_m(rrh_xy_seq: list[NDArray], x_true: NDArray, dh_m: float, sigma_toa_s_seq: list[NDArray],
-           sigma_theta_rad: float, dt_s: float, q: float, p0: NDArray) -> NDArray[np.float64]:
-    """Posterior CRB of the 2-D position [m] along the track (Tichavský et al. 1998)."""
+           sigma_theta_rad: float, dt_s: float, q: float, p0: NDArray,
+           reset_epochs: NDArray | None = None, reset_acc_sigma: float = 10.0) -> NDArray[np.float64]:
+    """Posterior CRB of the 2-D position [m] along the track (Tichavský et al. 1998).
+
+    ``q`` [m² s⁻⁵] is the white-jerk intensity of the motion model (0: constant
+    acceleration). ``reset_epochs``: epochs at which the acceleration jumps by an unknown
+    amount (prior σ ``reset_acc_sigma`` [m/s²] per axis), added to the step's process noise.
+    With q = 0 and the true trajectory's phase changes this is the bound of a genie that
+    knows when the acceleration changes — a lower bound for any tracker of this
+    piecewise-constant-acceleration trajectory [ours].
+    """
+    if q < 0:
+        raise ValueError(f"q must be >= 0, got {q!r}")
     f = transition(dt_s)
     qm = process_noise(dt_s, q)
+    q_reset = np.diag([0.0, 0.0, 0.0, 0.0, reset_acc_sigma**2, reset_acc_sigma**2])
+    resets = set() if reset_epochs is None else {int(e) for e in reset_epochs}
     j = np.linalg.inv(p0)
     out = np.empty(len(rrh_xy_seq))
     for k, (xy, s_toa) in enumerate(zip(rrh_xy_seq, sigma_toa_s_seq, strict=True)):
         if k > 0:
-            j = np.linalg.inv(qm + f @ np.linalg.inv(j) @ f.T)
+            j = np.linalg.inv(qm + (q_reset if k in resets else 0.0) + f @ np.linalg.inv(j) @ f.T)
         if xy.shape[0]:
             s = np.array([x_true[k], 0.0, 0, 0, 0, 0])
             h = jacobian(s, xy, dh_m, "aod_toa")

@@ -97,7 +97,10 @@ def plot_error_vs_time(track: xr.Dataset, pdf: str, png: str, bounds: xr.Dataset
             ax.plot(track["t"], track["pos_err"].sel(receiver=rx, variant="aod_toa", gate=g), linewidth=0.6,
                     linestyle=style, label=f"EKF AOD+TOA ({rx}{', gated' if g else ''})", color=f"C{2 * i + g}")
     if bounds is not None:
-        ax.plot(bounds["t"], bounds["pcrb"], label="PCRB (tracker bound)", **plotting.BOUND_STYLE)
+        ax.plot(bounds["t"], bounds["pcrb"], label="PCRB (white-jerk model)", **plotting.BOUND_STYLE)
+        if "pcrb_true_motion" in bounds:
+            ax.plot(bounds["t"], bounds["pcrb_true_motion"], color="black", linestyle=":", linewidth=1.0,
+                    label="PCRB (true motion, genie)")
         ax.plot(bounds["t"], bounds["peb"], color="grey", linewidth=0.6, label="snapshot PEB (integer-sample TOA)")
     ax.axhline(INTEGER_SAMPLE_FLOOR_M, color="grey", linestyle=":", linewidth=1.0, label="integer-sample σ (0.35 m)")
     ax.set_yscale("log")
@@ -105,4 +108,25 @@ def plot_error_vs_time(track: xr.Dataset, pdf: str, png: str, bounds: xr.Dataset
     ax.set_xlabel("time [s]")
     ax.set_ylabel("2-D position error [m]")
     ax.legend(fontsize=6, loc="upper center", ncol=2)
+    plotting.save(fig, pdf, png)
+
+
+def plot_sensitivity(numbers: dict, cases: list[str], pdf: str, png: str) -> None:
+    """Sensitivity cases beside the base run: TOA range error p95 and gated EKF mean error
+    per receiver (key numbers ``sens.nr.<case>.<receiver>.*``)."""
+    rxs = sorted({k.split(".")[3] for k in numbers if k.startswith("sens.nr.")}, key=lambda r: r != "seed")
+    panels = (("meas.toa_err_m.p95", "TOA range error p95 [m]"),
+              ("track.aod_toa_gated.err_m.mean", "gated EKF AOD+TOA mean error [m]"))
+    fig, axes = plotting.figure(ncols=2, figsize=(6.8, 3.0))
+    width = 0.8 / max(len(rxs), 1)
+    x = np.arange(len(cases))
+    for ax, (metric, label) in zip(axes, panels, strict=True):
+        for i, rx in enumerate(rxs):
+            vals = [numbers.get(f"sens.nr.{c}.{rx}.{metric}", {}).get("value") for c in cases]
+            ax.bar(x + (i - (len(rxs) - 1) / 2) * width, [np.nan if v is None else v for v in vals],
+                   width, label=f"{rx} receiver")
+        ax.set_yscale("log")
+        ax.set_xticks(x, [c.replace("_", "\n") for c in cases], fontsize=7)
+        ax.set_ylabel(label)
+    axes[0].legend(fontsize=7)
     plotting.save(fig, pdf, png)

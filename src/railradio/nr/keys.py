@@ -40,10 +40,43 @@ def _per_real(tracks: list[xr.Dataset], rx: str, fn) -> tuple[float, float | Non
     return pooled, float(np.std(each, ddof=1) / np.sqrt(len(tracks)))
 
 
+def _metric_fns(rx: str) -> dict:
+    """Each key of :data:`SPECS` as a function of a list of track datasets (receiver ``rx``)."""
+
+    def err(ts, variant, gate=0):
+        return np.concatenate([t["pos_err"].sel(receiver=rx, variant=variant, gate=gate).values[t["t"].values >= SKIP_S]
+                               for t in ts])
+
+    def meas(ts, name):
+        return np.concatenate([t[name].sel(receiver=rx).values.ravel() for t in ts])
+
+    return {
+        "meas.aod_err_deg.p95": lambda ts: float(np.nanpercentile(np.abs(np.degrees(meas(ts, "aod_err"))), 95)),
+        "meas.toa_err_m.p95": lambda ts: float(np.nanpercentile(np.abs(meas(ts, "range_err")), 95)),
+        "meas.detection_rate": lambda ts: float(np.mean(np.isfinite(meas(ts, "range_err")))),
+        "meas.toa_err_m.frac_lt_5m": lambda ts: float(np.mean(np.abs(meas(ts, "range_err")) < 5.0)),
+        "track.aod_toa.err_m.mean": lambda ts: float(np.nanmean(err(ts, "aod_toa"))),
+        "track.aod_toa.err_m.p95": lambda ts: float(np.nanpercentile(err(ts, "aod_toa"), 95)),
+        "track.aod_toa.err_m.p99": lambda ts: float(np.nanpercentile(err(ts, "aod_toa"), 99)),
+        "track.aod_toa.frac_submeter": lambda ts: float(np.mean(err(ts, "aod_toa") < 1.0)),
+        "track.toa.err_m.mean": lambda ts: float(np.nanmean(err(ts, "toa"))),
+        "track.aod.err_m.mean": lambda ts: float(np.nanmean(err(ts, "aod"))),
+        "track.aod_toa.err_m.median": lambda ts: float(np.nanmedian(err(ts, "aod_toa"))),
+        "track.aod_toa_gated.err_m.mean": lambda ts: float(np.nanmean(err(ts, "aod_toa", 1))),
+        "track.aod_toa_gated.err_m.p95": lambda ts: float(np.nanpercentile(err(ts, "aod_toa", 1), 95)),
+        "track.aod_toa_gated.err_m.p99": lambda ts: float(np.nanpercentile(err(ts, "aod_toa", 1), 99)),
+        "track.aod_toa_gated.frac_submeter": lambda ts: float(np.mean(err(ts, "aod_toa", 1) < 1.0)),
+        "snapshot.aod_toa.err_m.median": lambda ts: float(np.nanmedian(np.concatenate(
+            [t["snap_err"].sel(receiver=rx, variant="aod_toa").values for t in ts]))),
+    }
+
+
 BOUND_SPECS = {
     "nr.bound.toa_crb_m.median": ("toa_crb", np.median, "median TOA range CRB of the best RRH (interference-limited)"),
     "nr.bound.peb_m.median": ("peb", np.median, "median snapshot position bound (integer-sample TOA floor included)"),
-    "nr.bound.pcrb_m.mean": ("pcrb", np.mean, "mean posterior CRB of the tracked position"),
+    "nr.bound.pcrb_m.mean": ("pcrb", np.mean, "mean posterior CRB of the tracked position (white-jerk model, calibrated q)"),
+    "nr.bound.pcrb_true_motion_m.mean": ("pcrb_true_motion", np.mean,
+                                         "mean posterior CRB for the true piecewise-constant-acceleration motion (genie knows the change instants)"),
 }
 
 
@@ -60,37 +93,44 @@ def key_numbers(tracks: list[xr.Dataset], bounds: list[xr.Dataset] | None = None
         "median power of the strongest RRH over the sum of all others in range").entry(float(np.median(sir)))
     for rx in [str(r) for r in tracks[0]["receiver"].values]:
         prefix = "nr." if rx == "seed" else f"nr.{rx}."
-
-        def err(ts, variant, gate=0):
-            return np.concatenate([t["pos_err"].sel(receiver=rx, variant=variant, gate=gate).values[t["t"].values >= SKIP_S]
-                                   for t in ts])
-
-        def meas(ts, name):
-            return np.concatenate([t[name].sel(receiver=rx).values.ravel() for t in ts])
-
-        fns = {
-            "meas.aod_err_deg.p95": lambda ts: float(np.nanpercentile(np.abs(np.degrees(meas(ts, "aod_err"))), 95)),
-            "meas.toa_err_m.p95": lambda ts: float(np.nanpercentile(np.abs(meas(ts, "range_err")), 95)),
-            "meas.detection_rate": lambda ts: float(np.mean(np.isfinite(meas(ts, "range_err")))),
-            "meas.toa_err_m.frac_lt_5m": lambda ts: float(np.mean(np.abs(meas(ts, "range_err")) < 5.0)),
-            "track.aod_toa.err_m.mean": lambda ts: float(np.nanmean(err(ts, "aod_toa"))),
-            "track.aod_toa.err_m.p95": lambda ts: float(np.nanpercentile(err(ts, "aod_toa"), 95)),
-            "track.aod_toa.err_m.p99": lambda ts: float(np.nanpercentile(err(ts, "aod_toa"), 99)),
-            "track.aod_toa.frac_submeter": lambda ts: float(np.mean(err(ts, "aod_toa") < 1.0)),
-            "track.toa.err_m.mean": lambda ts: float(np.nanmean(err(ts, "toa"))),
-            "track.aod.err_m.mean": lambda ts: float(np.nanmean(err(ts, "aod"))),
-            "track.aod_toa.err_m.median": lambda ts: float(np.nanmedian(err(ts, "aod_toa"))),
-            "track.aod_toa_gated.err_m.mean": lambda ts: float(np.nanmean(err(ts, "aod_toa", 1))),
-            "track.aod_toa_gated.err_m.p95": lambda ts: float(np.nanpercentile(err(ts, "aod_toa", 1), 95)),
-            "track.aod_toa_gated.err_m.p99": lambda ts: float(np.nanpercentile(err(ts, "aod_toa", 1), 99)),
-            "track.aod_toa_gated.frac_submeter": lambda ts: float(np.mean(err(ts, "aod_toa", 1) < 1.0)),
-            "snapshot.aod_toa.err_m.median": lambda ts: float(np.nanmedian(np.concatenate(
-                [t["snap_err"].sel(receiver=rx, variant="aod_toa").values for t in ts]))),
-        }
+        fns = _metric_fns(rx)
         for key, (unit, desc, src, rel) in SPECS.items():
             name = prefix + key
             if rx != "seed":
                 src, rel, desc = None, None, f"{desc} ({rx} receiver)"
             value, se = _per_real(tracks, rx, fns[key])
             out[name] = KeySpec(name, unit, desc, src, rel).entry(value if np.isfinite(value) else None, se)
+    return out
+
+
+SENSITIVITY_METRICS = (
+    "meas.detection_rate",
+    "meas.toa_err_m.frac_lt_5m",
+    "meas.toa_err_m.p95",
+    "meas.aod_err_deg.p95",
+    "track.aod_toa.err_m.mean",
+    "track.aod_toa_gated.err_m.mean",
+    "track.aod_toa_gated.err_m.p95",
+)
+
+
+def sensitivity_key_numbers(base: xr.Dataset, cases: dict[str, xr.Dataset],
+                            n_epochs: int) -> dict[str, Any]:
+    """Key numbers ``sens.nr.<case>.<receiver>.<metric>`` of the sensitivity cases and of
+    ``base`` (the main run's realization r0 on the same first ``n_epochs`` epochs, with the
+    main calibration): one realization each, paired (same bursts' random draws), so no
+    Monte Carlo error is attached."""
+    out: dict[str, Any] = {}
+    runs = {"base": base.isel(epoch=slice(0, n_epochs))} | dict(cases)
+    for case, ds in runs.items():
+        if ds.sizes["epoch"] != n_epochs:
+            raise ValueError(f"case {case!r} has {ds.sizes['epoch']} epochs, expected n_epochs={n_epochs}")
+        for rx in [str(r) for r in ds["receiver"].values]:
+            fns = _metric_fns(rx)
+            for metric in SENSITIVITY_METRICS:
+                unit, desc = SPECS[metric][:2]
+                name = f"sens.nr.{case}.{rx}.{metric}"
+                value = fns[metric]([ds])
+                out[name] = KeySpec(name, unit, f"{desc} ({rx} receiver, sensitivity case {case}, "
+                                    f"first {n_epochs} epochs of r0)").entry(value if np.isfinite(value) else None)
     return out

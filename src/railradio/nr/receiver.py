@@ -142,16 +142,31 @@ class Links:
         return int(self.tau_s.size)
 
 
+DATA_BEAMS = ("train", "random", "none")
+
+
 class Synthesizer:
-    """Builds received bursts for one receiver configuration (caches per-cell grids)."""
+    """Builds received bursts for one receiver configuration (caches per-cell grids).
+
+    ``data_beam``: where each RRH beams the full-buffer data of the symbols without an SS
+    block — ``"train"`` (toward the train: the train is the served user, STUDY.md §2.1),
+    ``"random"`` (a uniformly drawn SS-beam direction per symbol: other users along the
+    track) or ``"none"`` (no data at all, in any symbol: PSS, SSS and PBCH only) [ours].
+    """
 
     def __init__(self, cfg: ReceiverConfig, profile: TdlProfile, pool: NDArray[np.complex64],
-                 n_sinusoids: int = 16, full_channel_range_m: float = np.inf):
+                 n_sinusoids: int = 16, full_channel_range_m: float = np.inf,
+                 data_beam: str = "train"):
+        if data_beam not in DATA_BEAMS:
+            raise ValueError(f"data_beam must be one of {DATA_BEAMS}, got {data_beam!r}")
+        self.data_beam = data_beam
         self.cfg, self.profile = cfg, profile
         self.n_sinusoids = n_sinusoids
         self.full_channel_range_m = full_channel_range_m
         num = cfg.num
         self.pool_band = np.ascontiguousarray(pool[:, band_bins(num)])  # [P, n]
+        if data_beam == "none":
+            self.pool_band = np.zeros_like(self.pool_band)
         n = num.n_fft
         self.k = np.fft.fftfreq(n, 1.0 / n)
         self.f_k = self.k * SUBCARRIER_SPACING_HZ
@@ -221,6 +236,8 @@ class Synthesizer:
             idx = rng.integers(0, self.pool_band.shape[0], size=sp["symbols"].size)
             alpha, phi = sos_params(rng, self.profile.powers.size, self.n_sinusoids)
             out.append({"pool_idx": idx, "alpha": alpha, "phi": phi})
+            if self.data_beam == "random":
+                out[-1]["data_beam"] = rng.integers(0, self.cfg.n_blocks, size=sp["symbols"].size)
         return out
 
     def __call__(self, links: Links, rng: np.random.Generator, t0_s: float = 0.0,
@@ -250,8 +267,12 @@ class Synthesizer:
             if n_c >= total:
                 continue
             mask, vals = self.overlay(links.n_id1[r], links.n_id2[r])
+            if self.data_beam == "random":
+                data_amp = links.beam_amp[r][draws[r]["data_beam"]]
+            else:  # "none": the data are zero anyway (zero pool)
+                data_amp = links.data_amp[r]
             g_sym = np.where(sp["block_of"] >= 0, links.beam_amp[r][np.maximum(sp["block_of"], 0)],
-                             links.data_amp[r]) * (links.amp[r] * n)  # × n: unnormalized IFFT
+                             data_amp) * (links.amp[r] * n)  # × n: unnormalized IFFT
             frac = links.tau_s[r] * fs - n_c  # in (-1, 0]
             ramp = np.exp(-2j * np.pi * (frac + sp["cp0"]) * self.k / n).astype(np.complex64)  # [n]
             full = d2d_m is None or d2d_m[r] <= self.full_channel_range_m

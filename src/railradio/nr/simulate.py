@@ -49,6 +49,8 @@ class Scenario:
     n_sinusoids: int = 16
     pool_size: int = 256
     shadowing: bool = True
+    data_beam: str = "train"
+    """Beam of the data symbols: train | random | none (:class:`Synthesizer`)."""
 
     @cached_property
     def profile(self):
@@ -83,7 +85,8 @@ def simulate_epochs(scn: Scenario, epochs: np.ndarray, seed: int, key: tuple[int
     x, v, a = scn.trajectory.state(t)
     shadow = ShadowingMap(seed, key + (KEY_SHADOWING,), dep, radio)
     pool = qpsk_pool(make_rng(seed, key + (KEY_POOL,)), scn.pool_size)
-    syn = Synthesizer(scn.receiver, scn.profile, pool, scn.n_sinusoids, scn.full_channel_range_m)
+    syn = Synthesizer(scn.receiver, scn.profile, pool, scn.n_sinusoids, scn.full_channel_range_m,
+                      scn.data_beam)
     receivers = [("seed", scn.receiver, scn.detector)] + list(scn.variants)
     for _, rc, _ in receivers:
         if rc.decimation != scn.receiver.decimation or rc.ssb_pattern != scn.receiver.ssb_pattern:
@@ -163,6 +166,9 @@ def scenario_from_config(c: dict) -> Scenario:
     from railradio.nr.antenna import RrhArray, TrainArray
 
     rx = c["receiver"]
+    # [ours] search window bounded by the geometry: lags covering delays up to range / c
+    search_lags = (None if rx.get("search_range_m") is None
+                   else int(np.ceil(rx["search_range_m"] / SPEED_OF_LIGHT_M_S * SAMPLE_RATE_HZ)))
     return Scenario(
         trajectory=Trajectory(tuple(tuple(map(float, p)) for p in c["trajectory"]["phases"]),
                               float(c["trajectory"]["dt_s"])),
@@ -172,16 +178,19 @@ def scenario_from_config(c: dict) -> Scenario:
         train_array=TrainArray(n_elements=int(c["antenna"]["train_elements"])),
         receiver=ReceiverConfig(decimation=int(rx["decimation"]), ssb_pattern=rx["ssb_pattern"],
                                 n_blocks=int(c["antenna"]["n_beams"]), toa_blocks=rx["toa_blocks"],
-                                subsample=bool(rx["subsample"]), template=rx["template"]),
+                                subsample=bool(rx["subsample"]), template=rx["template"],
+                                search_lags=search_lags),
         tdl=c["channel"]["tdl"], delay_spread_s=float(c["channel"]["delay_spread_s"]),
         detector=rx["detector"], pfa=float(rx["pfa"]), n_candidates=int(rx["n_candidates"]),
         variants=tuple(
             (name, ReceiverConfig(decimation=int(rx["decimation"]), ssb_pattern=rx["ssb_pattern"],
                                   n_blocks=int(c["antenna"]["n_beams"]), toa_blocks=v["toa_blocks"],
-                                  subsample=bool(v["subsample"]), template=v["template"]), v["detector"])
+                                  subsample=bool(v["subsample"]), template=v["template"],
+                                  search_lags=search_lags), v["detector"])
             for name, v in c.get("receiver_variants", {}).items()),
         full_channel_range_m=float(c["channel"]["full_channel_range_m"]),
         n_sinusoids=int(c["channel"]["n_sinusoids"]),
+        data_beam=c.get("traffic", {}).get("data_beam", "train"),
     )
 
 

@@ -57,4 +57,4 @@ res = xr.Dataset(
             "epoch": ("epoch", ds["epoch"].values, {"units": "1", "long_name": "epoch index"}),
             "slot": ("slot", [0, 1, 2], {"units": "1", "long_name": "measured RRH rank by strength"})})
 write_dataset(res, smk.output[0], {"sim": dict(smk.params.sim), "tracker": dict(smk.params.tracker), "calibration": cal},
-              None, title=f"nr tracking, realization {smk.wildcards.real}")
+              None, title=f"nr tracking, {dict(smk.wildcards)}")
