@@ -1,0 +1,9 @@
+"""Study `handover`: position-power joint handover decision against A3 and distance
+triggers (seed 004, STUDY.md §5).  The model is OUR reconstruction of the seed's lost
+equations (``handover_reconstruction.md``); every uncertain choice is a config switch."""
+
+from railradio.handover.params import A3, Execution, Joint, Radio, Scenario, Train, scenario_from_config
+from railradio.handover.policies import POLICIES, Policy, make_policy, register, run_policy
+
+__all__ = ["A3", "POLICIES", "Execution", "Joint", "Policy", "Radio", "Scenario", "Train",
+           "make_policy", "register", "run_policy", "scenario_from_config"]

@@ -1,0 +1,116 @@
+"""Parameter selection of the joint decision: the cost of (m, α) (reconstruction eq. 13–15,
+seed Fig. 4).
+
+J(m, A) = E[C/N] + E[F(A)], C the convergence price (index of the first node whose measured
+gap at its trigger is below the convergence threshold; N + 1 if none), F the fluctuation
+level std(X_1…X_N)/(PR − PL) clipped to 1.  Weights: the one-parameter geometric family
+α_k ∝ α(1 − α)^(k−1) over m ∈ 1…6, α ∈ 0.01…0.99 [ours: the seed's literal per-element
+grid is 99^m points]; as a check a full per-element grid (step 0.05) for m ≤ 3.
+
+The cost runs use their own random stream (``stream="cost"``), never the evaluation runs.
+"""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import xarray as xr
+
+from railradio.handover.model import build_context, draw_block
+from railradio.handover.params import Scenario
+from railradio.handover.policies import head_band, joint_nodes
+from railradio.handover.train import kinematics
+
+METHODS = ("regression", "mean")
+
+
+def geometric_weight_table(m: int, alphas: np.ndarray) -> np.ndarray:
+    """[A, m] geometric weights α(1 − α)^(k−1), one row per α (normalized in the WSLR)."""
+    alphas = np.asarray(alphas, dtype=float)
+    if np.any((alphas <= 0) | (alphas >= 1)):
+        raise ValueError("alphas must be in (0, 1)")
+    return alphas[:, None] * (1.0 - alphas[:, None]) ** np.arange(m)[None, :]
+
+
+def full_weight_table(m: int, step: float) -> np.ndarray:
+    """[A, m] every per-element weight vector with elements step, 2·step, … < 1."""
+    if not 0 < step < 1:
+        raise ValueError(f"step must be in (0, 1), got {step!r}")
+    vals = np.arange(1, int(round(1 / step))) * step
+    return np.array(list(itertools.product(vals, repeat=m)))
+
+
+def _block_costs(ctx, band, weights: np.ndarray, method: str, chunk: int = 1024) -> np.ndarray:
+    """Per-run cost C/N + F for each weight vector: [A, B]."""
+    out = []
+    for s in range(0, weights.shape[0], chunk):
+        res = joint_nodes(ctx, band, weights[s:s + chunk], method)
+        out.append(res["conv_price"] / ctx.n_nodes + res["fluct"])
+    return np.concatenate(out, axis=0)
+
+
+def cost_grid(scn: Scenario, speed_kmh: float, seed: int, n_blocks: int, runs_per_block: int,
+              m_values: list[int], alphas: np.ndarray, full_grid_max_m: int = 3,
+              full_grid_step: float = 0.05) -> xr.Dataset:
+    """The cost J over (method, m, α), its Monte Carlo standard error, and the full-grid check."""
+    if n_blocks < 1 or runs_per_block < 1:
+        raise ValueError("n_blocks and runs_per_block must be >= 1")
+    alphas = np.asarray(alphas, dtype=float)
+    kin = kinematics(scn, speed_kmh)
+    n_m = len(m_values)
+    per_run = {meth: [[] for _ in m_values] for meth in METHODS}
+    full_m = [m for m in m_values if m <= full_grid_max_m]
+    full_runs = {m: [] for m in full_m}
+    for blk in range(n_blocks):
+        draws = draw_block(seed, speed_kmh, blk, runs_per_block, kin, scn.train.n_nodes, stream="cost")
+        ctx = build_context(scn, kin, draws)
+        band = head_band(ctx)
+        for meth in METHODS:
+            for j, m in enumerate(m_values):
+                per_run[meth][j].append(_block_costs(ctx, band, geometric_weight_table(m, alphas), meth))
+        for m in full_m:
+            full_runs[m].append(_block_costs(ctx, band, full_weight_table(m, full_grid_step), scn.joint.wslr))
+    cost = np.zeros((len(METHODS), n_m, alphas.size))
+    cost_se = np.zeros_like(cost)
+    for a, meth in enumerate(METHODS):
+        for j in range(n_m):
+            c = np.concatenate(per_run[meth][j], axis=1)  # [A, R]
+            cost[a, j] = c.mean(axis=1)
+            cost_se[a, j] = c.std(axis=1, ddof=1) / np.sqrt(c.shape[1])
+    full_min = np.full(n_m, np.nan)
+    for j, m in enumerate(m_values):
+        if m in full_runs:
+            full_min[j] = np.concatenate(full_runs[m], axis=1).mean(axis=1).min()
+    best = cost.reshape(len(METHODS), -1).argmin(axis=1)
+    best_m = np.array([m_values[i // alphas.size] for i in best])
+    best_alpha = np.array([alphas[i % alphas.size] for i in best])
+    ds = xr.Dataset(
+        {
+            "cost": (("wslr", "m", "alpha"), cost,
+                     {"units": "1", "long_name": "cost J = E[C/N] + E[F] (geometric weights)"}),
+            "cost_se": (("wslr", "m", "alpha"), cost_se,
+                        {"units": "1", "long_name": "Monte Carlo standard error of J"}),
+            "cost_min_full_grid": (("m",), full_min,
+                                   {"units": "1", "long_name": "min J over the full per-element weight grid "
+                                                               "(config WSLR method; NaN: not computed)"}),
+            "best_m": (("wslr",), best_m, {"units": "1", "long_name": "argmin m of J"}),
+            "best_alpha": (("wslr",), best_alpha, {"units": "1", "long_name": "argmin alpha of J"}),
+        },
+        coords={
+            "wslr": ("wslr", list(METHODS), {"units": "1", "long_name": "WSLR reading"}),
+            "m": ("m", np.asarray(m_values), {"units": "1", "long_name": "number of joint nodes m"}),
+            "alpha": ("alpha", alphas, {"units": "1", "long_name": "geometric weight parameter alpha"}),
+        },
+    )
+    ds["speed_kmh"] = xr.Variable((), float(speed_kmh), {"units": "km/h", "long_name": "train speed"})
+    ds["n_runs"] = xr.Variable((), n_blocks * runs_per_block, {"units": "1", "long_name": "crossings"})
+    ds["full_grid_step"] = xr.Variable((), full_grid_step, {"units": "1",
+                                                            "long_name": "step of the full weight grid"})
+    ds.attrs["config_wslr"] = scn.joint.wslr
+    return ds
+
+
+def best_weights(ds: xr.Dataset, method: str) -> tuple[int, float]:
+    """(m*, α*) of a cost dataset for a WSLR method."""
+    return int(ds["best_m"].sel(wslr=method)), float(ds["best_alpha"].sel(wslr=method))

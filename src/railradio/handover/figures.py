@@ -1,0 +1,146 @@
+"""Figures of the handover study (seed Fig. 4–8) and the sensitivity figure.
+
+Rates carry 95 % Wilson intervals with the clustered effective sample size; means carry
+±2 cluster-robust standard errors.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import xarray as xr
+
+from railradio import plotting
+
+LABELS = {"joint": "joint decision (ours, reconstructed)", "a3": "A3 event", "distance": "distance trigger"}
+MARKERS = {"joint": "o", "a3": "s", "distance": "^"}
+DELAY_REQUIREMENT_MS = 45.0
+"""Handover delay requirement of the Chinese railway radio standard quoted by the seed."""
+SUCCESS_REQUIREMENT = 0.995
+"""Success-rate requirement quoted by the seed (interruption ≤ 0.5 %)."""
+SEED_BEST_M = 3
+
+
+def plot_cost_vs_m(cost: xr.Dataset, pdf_path, png_path=None) -> None:
+    """Minimum cost over α per m for both WSLR readings (seed Fig. 4)."""
+    fig, ax = plotting.figure()
+    m = cost["m"].values
+    for meth, marker in zip(cost["wslr"].values, ("o", "s"), strict=False):
+        c = cost["cost"].sel(wslr=meth)
+        ia = c.argmin("alpha")
+        y = c.min("alpha").values
+        se = cost["cost_se"].sel(wslr=meth).isel(alpha=ia).values
+        ax.errorbar(m, y, yerr=2 * se, marker=marker, capsize=2, markerfacecolor="none",
+                    label=f"WSLR as {meth}")
+    if "cost_min_full_grid" in cost and np.any(np.isfinite(cost["cost_min_full_grid"].values)):
+        ax.plot(m, cost["cost_min_full_grid"].values, "x", color="black",
+                label=f"full weight grid ({cost.attrs.get('config_wslr', '')})")
+    ax.axvline(SEED_BEST_M, **plotting.BOUND_STYLE, label=f"source: m = {SEED_BEST_M}")
+    ax.set_xlabel("number of joint nodes $m$")
+    ax.set_ylabel(r"min$_\alpha$ cost $J = E[C/N] + E[F]$")
+    ax.set_title(f"{float(cost['speed_kmh']):g} km/h, {int(cost['n_runs'])} crossings", fontsize="small")
+    ax.legend()
+    plotting.save(fig, pdf_path, png_path)
+
+
+def _rate_plot(ax, summary, name, transform=None, log=False):
+    v = summary["speed_kmh"].values
+    for pol in summary["policy"].values:
+        p = summary[name].sel(policy=pol).values
+        lo = summary[f"{name}_lo"].sel(policy=pol).values
+        hi = summary[f"{name}_hi"].sel(policy=pol).values
+        if transform is not None:
+            p, lo, hi = transform(p), transform(hi), transform(lo)
+        err = np.vstack([p - lo, hi - p])
+        shown = p > 0 if log else np.ones_like(p, dtype=bool)
+        ax.errorbar(v[shown], p[shown], yerr=err[:, shown], marker=MARKERS.get(str(pol), "o"), capsize=2,
+                    markerfacecolor="none", label=LABELS.get(str(pol), str(pol)))
+        if log and np.any(~shown):  # zero observed: draw the upper bound only
+            ax.plot(v[~shown], hi[~shown], marker="v", linestyle="none", color=ax.lines[-1].get_color())
+
+
+def plot_pingpong_vs_speed(summary: xr.Dataset, pdf_path, png_path=None) -> None:
+    """Ping-pong rate against speed (seed Fig. 5); ▽ = upper 95 % bound where none was seen."""
+    fig, ax = plotting.figure()
+    _rate_plot(ax, summary, "pingpong", log=True)
+    plotting.log_axis(ax, "y")
+    ax.set_xlabel("train speed [km/h]")
+    ax.set_ylabel("ping-pong rate")
+    ax.legend()
+    plotting.save(fig, pdf_path, png_path)
+
+
+def plot_interruption_vs_speed(summary: xr.Dataset, pdf_path, png_path=None) -> None:
+    """Interruption rate 1 − success against speed with the 99.5 % success line (seed Fig. 8)."""
+    fig, ax = plotting.figure()
+    _rate_plot(ax, summary, "success", transform=lambda p: 1.0 - p, log=True)
+    ax.axhline(1 - SUCCESS_REQUIREMENT, **plotting.BOUND_STYLE, label="requirement: success ≥ 99.5 %")
+    plotting.log_axis(ax, "y")
+    ax.set_xlabel("train speed [km/h]")
+    ax.set_ylabel("interruption rate (1 − success)")
+    ax.legend()
+    plotting.save(fig, pdf_path, png_path)
+
+
+def _mean_plot(summary, name, ylabel, pdf_path, png_path, hline=None, hlabel=None):
+    fig, ax = plotting.figure()
+    v = summary["speed_kmh"].values
+    for pol in summary["policy"].values:
+        y = summary[name].sel(policy=pol).values
+        se = summary[f"{name}_se"].sel(policy=pol).values
+        ax.errorbar(v, y, yerr=2 * se, marker=MARKERS.get(str(pol), "o"), capsize=2, markerfacecolor="none",
+                    label=LABELS.get(str(pol), str(pol)))
+    if hline is not None:
+        ax.axhline(hline, **plotting.BOUND_STYLE, label=hlabel)
+    ax.set_xlabel("train speed [km/h]")
+    ax.set_ylabel(ylabel)
+    ax.legend()
+    plotting.save(fig, pdf_path, png_path)
+
+
+def plot_delay_vs_speed(summary: xr.Dataset, pdf_path, png_path=None) -> None:
+    """Mean handover delay against speed with the 45 ms requirement (seed Fig. 7)."""
+    _mean_plot(summary, "delay_ms", "mean handover delay [ms]", pdf_path, png_path,
+               DELAY_REQUIREMENT_MS, "requirement: 45 ms")
+
+
+def plot_rsrp_gap_vs_speed(summary: xr.Dataset, pdf_path, png_path=None) -> None:
+    """Mean |RSRP-GAP| at completion against speed (seed Fig. 6)."""
+    _mean_plot(summary, "rsrp_gap_db", "mean |RSRP-GAP| at completion [dB]", pdf_path, png_path)
+
+
+def plot_sensitivity(sens: xr.Dataset, pdf_path, png_path=None) -> None:
+    """Interruption and ping-pong rate of every sensitivity variant (95 % intervals)."""
+    variants = [str(v) for v in sens["variant"].values]
+    fig, axes = plotting.figure(ncols=2, figsize=(9.0, 0.28 * len(variants) + 1.6), sharey=True)
+    y = np.arange(len(variants))
+    for j, pol in enumerate(sens["policy"].values):
+        aff = sens["affected"].sel(policy=pol).values.astype(bool)
+        dy = (j - 1) * 0.22
+        for ax, name, tr in ((axes[0], "success", lambda p: 1 - p), (axes[1], "pingpong", None)):
+            p = sens[name].sel(policy=pol).values
+            lo = sens[f"{name}_lo"].sel(policy=pol).values
+            hi = sens[f"{name}_hi"].sel(policy=pol).values
+            if tr is not None:
+                p, lo, hi = tr(p), tr(hi), tr(lo)
+            ax.errorbar(p[aff], y[aff] + dy, xerr=np.vstack([p - lo, hi - p])[:, aff], linestyle="none",
+                        marker=MARKERS.get(str(pol), "o"), markerfacecolor="none", capsize=2,
+                        label=LABELS.get(str(pol), str(pol)))
+    axes[0].set_yticks(y, [v if v != "reference" else "reference" for v in variants], fontsize="small")
+    axes[0].invert_yaxis()
+    axes[0].set_xlabel("interruption rate (1 − success)")
+    axes[1].set_xlabel("ping-pong rate")
+    axes[0].axvline(1 - SUCCESS_REQUIREMENT, **plotting.BOUND_STYLE)
+    axes[0].legend(fontsize="x-small")
+    axes[0].set_title(f"{float(sens['speed_kmh']):g} km/h", fontsize="small")
+    plotting.save(fig, pdf_path, png_path)
+
+
+FIGURES = {
+    "handover_cost_vs_m": ("cost", plot_cost_vs_m),
+    "handover_pingpong_vs_speed": ("summary", plot_pingpong_vs_speed),
+    "handover_rsrp_gap_vs_speed": ("summary", plot_rsrp_gap_vs_speed),
+    "handover_delay_vs_speed": ("summary", plot_delay_vs_speed),
+    "handover_interruption_vs_speed": ("summary", plot_interruption_vs_speed),
+    "handover_sensitivity": ("sensitivity", plot_sensitivity),
+}
+"""Figure name -> (input dataset, plotting function)."""

@@ -1,0 +1,127 @@
+"""Key numbers of the handover study (STUDY.md §5, §7), ours beside the seed's claims."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+from railradio.keynumbers import KeySpec
+
+POLICIES = ("joint", "a3", "distance")
+
+
+def _spec(name, unit, desc, src=None, rel=None, digits=3):
+    return KeySpec(name, unit, desc, src, rel, digits)
+
+
+SPECS = {s.name: s for s in [
+    _spec("handover.best_m", "1", "number of joint nodes m minimizing the cost (config WSLR reading)", 3, "="),
+    _spec("handover.best_alpha", "1", "geometric weight parameter alpha at the cost minimum"),
+    _spec("handover.cost.min", "1", "minimum cost J = E[C/N] + E[F]", digits=3),
+    _spec("handover.cost.m3_minus_best", "1", "cost at m = 3 (best alpha) minus the minimum cost"),
+    _spec("handover.cost.full_grid_gain", "1",
+          "min cost over the geometric family minus over the full per-element grid, m <= 3"),
+    _spec("handover.joint.success.v350", "1", "joint decision: handover success rate at 350 km/h",
+          0.9975, "≥", digits=4),
+    _spec("handover.joint.success.min_v300_380", "1",
+          "joint decision: lowest success rate over 300-380 km/h", 0.9975, "≥", digits=4),
+    _spec("handover.a3.success.v350", "1", "A3: handover success rate at 350 km/h", 0.995, "<", digits=4),
+    _spec("handover.distance.success.v350", "1", "distance trigger: success rate at 350 km/h", digits=4),
+    _spec("handover.a3.delay_ms.v250", "ms", "A3: mean handover delay at 250 km/h", 45.0, ">"),
+    _spec("handover.joint.delay_ms.v350", "ms", "joint decision: mean handover delay at 350 km/h "
+          "(source: meets the 45 ms requirement)", 45.0, "≤"),
+    _spec("handover.distance.delay_ms.v350", "ms", "distance trigger: mean handover delay at 350 km/h"),
+    _spec("handover.joint.pingpong.v350", "1", "joint decision: ping-pong rate at 350 km/h (0 by construction)"),
+    _spec("handover.a3.pingpong.v350", "1", "A3: ping-pong rate at 350 km/h"),
+    _spec("handover.distance.pingpong.v350", "1", "distance trigger: ping-pong rate at 350 km/h"),
+    _spec("handover.claim.joint_pingpong_lowest_frac", "1",
+          "share of speeds where the joint ping-pong rate is the lowest of the three", 1.0, "="),
+    _spec("handover.claim.joint_gap_lowest_frac", "1",
+          "share of speeds where the joint mean |RSRP-GAP| is the lowest of the three", 1.0, "="),
+    _spec("handover.joint.rsrp_gap_db.v350", "dB", "joint decision: mean |RSRP-GAP| at completion, 350 km/h"),
+    _spec("handover.a3.rsrp_gap_db.v350", "dB", "A3: mean |RSRP-GAP| at completion, 350 km/h"),
+    _spec("handover.distance.rsrp_gap_db.v350", "dB", "distance trigger: mean |RSRP-GAP| at completion, 350 km/h"),
+    _spec("handover.joint.success.v100", "1", "joint decision: success rate at 100 km/h", digits=4),
+    _spec("handover.a3.success.v100", "1", "A3: success rate at 100 km/h", digits=4),
+    _spec("handover.gaph_db", "dB", "handover threshold GapH(sigma0)"),
+    _spec("handover.sigma0_db", "dB", "std of the filtered gap-measurement error sigma0"),
+    _spec("handover.n_handovers_per_speed", "1", "node handovers simulated per speed point", digits=6),
+]}
+
+
+def _pick(summary: xr.Dataset, policy: str, name: str, speed: float):
+    da = summary[name].sel(policy=policy, speed_kmh=speed)
+    return float(da)
+
+
+def sens_specs(sens: xr.Dataset) -> dict[str, KeySpec]:
+    """Specs of the sensitivity keys handover.sens.<variant>.<policy>.<metric>."""
+    out = {}
+    for var in sens["variant"].values:
+        sw = str(sens["switch"].sel(variant=var).values)
+        val = str(sens["value"].sel(variant=var).values)
+        what = "reference" if var == "reference" else f"{sw} = {val}"
+        for pol in sens["policy"].values:
+            if not bool(sens["affected"].sel(variant=var, policy=pol)):
+                continue
+            for metric, unit, digits in (("success", "1", 4), ("pingpong", "1", 3), ("delay_ms", "ms", 3)):
+                if metric == "pingpong" and pol == "joint":
+                    continue
+                name = f"handover.sens.{var}.{pol}.{metric}"
+                out[name] = KeySpec(name, unit, f"sensitivity at {float(sens['speed_kmh']):g} km/h, "
+                                                f"{what}: {pol} {metric}", digits=digits)
+    return out
+
+
+def key_numbers(summary: xr.Dataset, cost: xr.Dataset, sens: xr.Dataset, gaph_db: float,
+                sigma0_db: float, wslr: str) -> dict[str, Any]:
+    """All handover.* key numbers (mc_stderr from the clustered standard errors)."""
+    out: dict[str, Any] = {}
+
+    def put(name, value, se=None):
+        out[name] = SPECS[name].entry(value, se)
+
+    best_m = int(cost["best_m"].sel(wslr=wslr))
+    best_a = float(cost["best_alpha"].sel(wslr=wslr))
+    c = cost["cost"].sel(wslr=wslr)
+    put("handover.best_m", best_m, 0.0)
+    put("handover.best_alpha", best_a)
+    put("handover.cost.min", float(c.min()), float(cost["cost_se"].sel(wslr=wslr, m=best_m, alpha=best_a)))
+    if 3 in cost["m"].values:
+        put("handover.cost.m3_minus_best", float(c.sel(m=3).min() - c.min()))
+    full = cost["cost_min_full_grid"].values
+    geo_small = c.sel(m=[m for m in cost["m"].values if not np.isnan(full[list(cost["m"].values).index(m)])])
+    if geo_small.size:
+        put("handover.cost.full_grid_gain", float(geo_small.min() - np.nanmin(full)))
+    speeds = [float(s) for s in summary["speed_kmh"].values]
+    for pol in POLICIES:
+        for metric in ("success", "delay_ms", "pingpong", "rsrp_gap_db"):
+            for v in (100.0, 250.0, 350.0):
+                name = f"handover.{pol}.{metric}.v{v:g}"
+                if name in SPECS and v in speeds:
+                    put(name, _pick(summary, pol, metric, v), _pick(summary, pol, f"{metric}_se", v))
+    hs = [s for s in speeds if 300 <= s <= 380]
+    if hs:
+        vals = [_pick(summary, "joint", "success", s) for s in hs]
+        i = int(np.argmin(vals))
+        put("handover.joint.success.min_v300_380", vals[i], _pick(summary, "joint", "success_se", hs[i]))
+    pp = summary["pingpong"].sel(policy=list(POLICIES)).values
+    put("handover.claim.joint_pingpong_lowest_frac", float(np.mean(pp[0] <= pp[1:].min(axis=0))))
+    gap = summary["rsrp_gap_db"].sel(policy=list(POLICIES)).values
+    put("handover.claim.joint_gap_lowest_frac", float(np.mean(gap[0] < gap[1:].min(axis=0))))
+    put("handover.gaph_db", gaph_db)
+    put("handover.sigma0_db", sigma0_db)
+    put("handover.n_handovers_per_speed", float(summary["n_handovers"].min()))
+    specs = sens_specs(sens)
+    for name, spec in specs.items():
+        _, _, var, pol, metric = name.split(".")
+        val = float(sens[metric].sel(variant=var, policy=pol))
+        se = float(sens[f"{metric}_se"].sel(variant=var, policy=pol))
+        out[name] = spec.entry(val, se)
+    for meth in cost["wslr"].values:
+        name = f"handover.cost.best_m.{meth}"
+        out[name] = KeySpec(name, "1", f"cost-minimizing m with the WSLR read as {meth}").entry(
+            int(cost["best_m"].sel(wslr=meth)), 0.0)
+    return out

@@ -1,0 +1,200 @@
+"""One block of crossings: the random draws, the radio and position arrays every policy
+reads, and the execution model (reconstruction eq. 1–3, 8).
+
+Arrays are [B, N, 2, K]: runs (train crossings), nodes, links (0 serving, 1 target),
+samples every T_m.  Every random number of a block comes from :func:`draw_block`, so the
+vectorized engine and the per-step reference (:mod:`railradio.handover.reference`)
+consume identical draws.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from railradio.handover.params import Scenario
+from railradio.handover.radio import (
+    l3_coefficient_at,
+    l3_filter,
+    mean_rsrp_dbm,
+    shadowing_fields,
+    sinr_db,
+)
+from railradio.handover.train import Kinematics, gnss_error_m
+from railradio.rng import make_rng, spawn_key, stable_id
+
+STREAMS = {"sweep": (0, 1), "cost": (2, 3)}
+"""Spawn-key stream IDs (field, noise) of the evaluation runs and of the separate cost-grid
+runs (the weights are never selected on the runs they are evaluated on)."""
+
+
+@dataclass(frozen=True)
+class Draws:
+    """Standard normals of one block of B crossings."""
+
+    field_white: np.ndarray  # [B, 2, G]   shadowing field of both links along the track
+    meas_white: np.ndarray   # [B, N, 2, K] measurement error per node, link, sample
+    gnss_white: np.ndarray   # [B, K]       GNSS/INS error process
+
+    @property
+    def n_runs(self) -> int:
+        return self.field_white.shape[0]
+
+
+def block_keys(speed_kmh: float, block: int, stream: str = "sweep") -> tuple[tuple[int, ...], tuple[int, ...]]:
+    """Spawn keys (field, noise) of one block.
+
+    The shadowing field is keyed by the block only: every speed crosses the same fields
+    (common random numbers across the sweep); measurement and GNSS noise by speed and block.
+    """
+    if stream not in STREAMS:
+        raise ValueError(f"stream must be one of {sorted(STREAMS)}, got {stream!r}")
+    if not isinstance(block, (int, np.integer)) or block < 0:
+        raise ValueError(f"block must be a non-negative integer, got {block!r}")
+    s_field, s_noise = STREAMS[stream]
+    return (spawn_key("handover", s_field, int(block)),
+            spawn_key("handover", s_noise, stable_id(float(speed_kmh)), int(block)))
+
+
+def draw_block(seed: int, speed_kmh: float, block: int, n_runs: int, kin: Kinematics, n_nodes: int,
+               stream: str = "sweep") -> Draws:
+    """The draws of block ``block`` (``n_runs`` crossings) at ``speed_kmh``."""
+    if n_runs < 1:
+        raise ValueError(f"n_runs must be >= 1, got {n_runs!r}")
+    key_field, key_noise = block_keys(speed_kmh, block, stream)
+    rf = make_rng(seed, key_field)
+    rn = make_rng(seed, key_noise)
+    # float32 normals: twice as fast to draw; errors in dB need no more precision
+    field_white = rf.standard_normal((n_runs, 2, kin.grid.n), dtype=np.float32)
+    meas_white = rn.standard_normal((n_runs, n_nodes, 2, kin.n_samples), dtype=np.float32)
+    gnss_white = rn.standard_normal((n_runs, kin.n_samples), dtype=np.float32)
+    return Draws(field_white, meas_white, gnss_white)
+
+
+@dataclass
+class BlockContext:
+    """Everything the policies of one block read (built once, shared by all policies)."""
+
+    scn: Scenario
+    kin: Kinematics
+    zeta_db: np.ndarray       # [B, 2, G] shadowing on the grid (positive = extra loss)
+    meas_dbm: np.ndarray      # [B, N, 2, K] raw measurements M
+    filt_dbm: np.ndarray      # [B, N, 2, K] L3-filtered F
+    gnss_err_m: np.ndarray    # [B, K]
+    l3_a: float
+    _cache: dict = field(default_factory=dict)
+
+    @property
+    def n_runs(self) -> int:
+        return self.zeta_db.shape[0]
+
+    @property
+    def n_nodes(self) -> int:
+        return self.meas_dbm.shape[1]
+
+    @property
+    def xhat_head_m(self) -> np.ndarray:
+        """Estimated head position [m], [B, K]."""
+        return self.kin.x_head_m[None, :] + self.gnss_err_m
+
+    def true_rsrp_dbm(self, run: np.ndarray, x_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Local-mean received power of both links at positions x of runs ``run`` [dBm]."""
+        p_s, p_t = mean_rsrp_dbm(x_m, self.scn.radio)
+        i = self.kin.grid.index(x_m)
+        return p_s - self.zeta_db[run, 0, i], p_t - self.zeta_db[run, 1, i]
+
+    def first_passage(self, level_m: np.ndarray) -> np.ndarray:
+        """First sample k at which the estimated head position reaches ``level_m``.
+
+        level_m: [..., B] (any leading axes); returns int [..., B], K − 1 if never.  The
+        first k with x̂[k] ≥ level is the first with cummax(x̂)[k] ≥ level: one binary search
+        per query on the row-offset, flattened running maximum.
+        """
+        if "flat" not in self._cache:
+            cm = np.maximum.accumulate(self.xhat_head_m, axis=1)
+            off = 2.0 * float(np.max(np.abs(cm))) + 1e4
+            rows = np.arange(self.n_runs)
+            self._cache["flat"] = (cm + off * rows[:, None]).ravel()
+            self._cache["off"] = off
+        flat, off = self._cache["flat"], self._cache["off"]
+        k_n = self.kin.n_samples
+        rows = np.arange(self.n_runs)
+        level = np.asarray(level_m, dtype=float)
+        off_level = np.clip(level, -off / 4, off / 4) + off * rows
+        idx = np.searchsorted(flat, off_level, side="left") - rows * k_n
+        return np.clip(idx, 0, k_n - 1)
+
+
+def build_context(scn: Scenario, kin: Kinematics, draws: Draws) -> BlockContext:
+    """Shadowing, measurements, L3 filter and the position input of one block."""
+    rd = scn.radio
+    n_nodes = scn.train.n_nodes
+    if draws.meas_white.shape[1:] != (n_nodes, 2, kin.n_samples):
+        raise ValueError(f"draws do not match the scenario: meas_white {draws.meas_white.shape}, "
+                         f"expected [B, {n_nodes}, 2, {kin.n_samples}]")
+    zeta = shadowing_fields(draws.field_white, kin.grid, rd)               # [B, 2, G]
+    idx = kin.grid.index(kin.x_nodes_m)                                   # [N, K]
+    p_s, p_t = mean_rsrp_dbm(kin.x_nodes_m, rd)                           # [N, K]
+    mean = np.stack([p_s, p_t], axis=1)                                   # [N, 2, K]
+    # M = P_tx - L(d) - zeta + eps (eq. 1-2), built in place: [B, N, 2, K]
+    meas = np.ascontiguousarray(zeta[:, :, idx].transpose(0, 2, 1, 3))
+    np.subtract(mean[None], meas, out=meas)
+    meas += rd.meas_sigma_db * draws.meas_white.astype(float)
+    a = l3_coefficient_at(rd.l3_k, rd.meas_period_s, rd.l3_reference_period_s)
+    filt = l3_filter(meas, a)
+    return BlockContext(scn, kin, zeta, meas, filt, gnss_error_m(draws.gnss_white, scn), a)
+
+
+# --- execution (reconstruction eq. 3 and 8) --------------------------------------------
+
+@dataclass
+class Execution:
+    """Outcome of executing the handover commands of a set of node crossings."""
+
+    attempts: np.ndarray       # int, attempts made
+    success: np.ndarray        # bool
+    completion_x_m: np.ndarray  # He of the successful (or last) attempt [m]
+    delay_s: np.ndarray        # command to completion, NaN if failed
+    gap_db: np.ndarray         # true RSRP_s − RSRP_t at completion_x_m [dB]
+
+
+def execute(ctx: BlockContext, run: np.ndarray, hb_m: np.ndarray, retry_allowed) -> Execution:
+    """Execute handovers commanded at true positions ``hb_m`` (flat arrays, one per crossing).
+
+    Attempt a succeeds iff SINR_serving(Hb_a) ≥ Q_out and SINR_target(He_a) ≥ Q_in, with
+    He_a = Hb_a + v·T0 [seed eq. 2]; a failed attempt is followed by another at
+    Hb_{a+1} = He_a + v·TZ when ``retry_allowed(a, serving_ok, hb_next_m)`` (bool array)
+    says so.  Delay of a success at attempt a: a·T0 + (a−1)·TZ.
+    """
+    sc = ctx.scn
+    rd, ex = sc.radio, sc.execution
+    v = ctx.kin.speed_m_s
+    n = hb_m.shape[0]
+    attempts = np.zeros(n, dtype=np.int64)
+    success = np.zeros(n, dtype=bool)
+    he_final = np.full(n, np.nan)
+    done = np.zeros(n, dtype=bool)
+    hb = hb_m.astype(float).copy()
+    max_a = max(ex.max_attempts, 2)
+    for a in range(1, max_a + 1):
+        act = ~done
+        if not act.any():
+            break
+        he = hb + v * ex.t0_s
+        r_s_b, r_t_b = ctx.true_rsrp_dbm(run, hb)
+        r_s_e, r_t_e = ctx.true_rsrp_dbm(run, he)
+        s_ok = sinr_db(r_s_b, r_t_b, rd) >= rd.q_out_db
+        t_ok = sinr_db(r_t_e, r_s_e, rd) >= rd.q_in_db
+        ok = act & s_ok & t_ok
+        hb_next = he + v * ex.tz_s
+        retry = act & ~ok & (a < max_a) & retry_allowed(a, s_ok, hb_next)
+        stop = act & (ok | ~retry)
+        attempts[stop] = a
+        success[ok] = True
+        he_final[stop] = he[stop]
+        done |= stop
+        hb = np.where(retry, hb_next, hb)
+    delay = np.where(success, attempts * ex.t0_s + (attempts - 1) * ex.tz_s, np.nan)
+    r_s, r_t = ctx.true_rsrp_dbm(run, he_final)
+    return Execution(attempts, success, he_final, delay, r_s - r_t)

@@ -1,0 +1,299 @@
+"""Parameters of the handover study (STUDY.md §5, ``handover_reconstruction.md``).
+
+The seed (Zhang, Li, Xie 2022) lost every equation and its Table 1; the model is OUR
+reconstruction.  Every value lives in the ``handover`` section of the config; this module
+turns that section into frozen dataclasses with SI units and checks every value, raising
+:class:`ValueError` naming the parameter.  Tags in the docstrings: [seed], [3GPP], [ours].
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, field, replace
+from typing import Any
+
+KMH = 1.0 / 3.6
+"""m/s per km/h."""
+
+
+def _check(name: str, value: float, lo: float | None = None, hi: float | None = None,
+           lo_open: bool = False, hi_open: bool = False) -> None:
+    if not isinstance(value, (int, float)) or isinstance(value, bool) or not math.isfinite(value):
+        raise ValueError(f"{name} must be a finite number, got {value!r}")
+    if lo is not None and (value <= lo if lo_open else value < lo):
+        raise ValueError(f"{name} must be {'>' if lo_open else '>='} {lo}, got {value!r}")
+    if hi is not None and (value >= hi if hi_open else value > hi):
+        raise ValueError(f"{name} must be {'<' if hi_open else '<='} {hi}, got {value!r}")
+
+
+def _choice(name: str, value: str, allowed: tuple[str, ...]) -> None:
+    if value not in allowed:
+        raise ValueError(f"{name} must be one of {allowed}, got {value!r}")
+
+
+@dataclass(frozen=True)
+class Radio:
+    """Two cells along a straight track and their radio links (reconstruction eq. 1–2).
+
+    spacing_m
+        eNB/RRH spacing L_BS [m] [seed: 1.5–2.0 km]; serving at x_s = 0, target at L_BS.
+    offset_m
+        RRH distance from the track h [m] [ours].
+    carrier_hz, tx_power_dbm, bandwidth_hz, noise_figure_db
+        1.8 GHz, 46 dBm, 10 MHz, 7 dB [ours]; thermal noise −174 dBm/Hz.
+    ref_distance_m
+        d0 of the log-distance law; L(d0) is the free-space loss at d0 [ours].
+    pathloss_exponent
+        n [seed: 2–6, mountain scenario; 3.5 ours].
+    shadow_sigma_db, shadow_corr_m
+        σ of the shadowing ζ and its decorrelation distance (AR(1) in distance) [ours].
+    shadow_cross_corr
+        correlation of the two links' shadowing [ours: 0].
+    shadow_grid_m
+        spacing of the grid the shadowing field is drawn on; a position takes the nearest
+        grid value (numerics only).
+    meas_sigma_db
+        residual fading of one RSRP measurement σ_m [ours].
+    meas_period_s
+        measurement period T_m [ours: 40 ms].
+    l3_k
+        TS 36.331 filterCoefficient k (a = 1/2^(k/4) at 200 ms) [3GPP].
+    l3_reference_period_s
+        the sample period k refers to (TS 36.331 §5.5.3.2: 200 ms) [3GPP].
+    load_factor
+        η, the other cell's load (interference weight) [ours].
+    q_out_db, q_in_db
+        SINR thresholds of the serving link at the command and the target at access [ours].
+    """
+
+    spacing_m: float = 1500.0
+    offset_m: float = 30.0
+    carrier_hz: float = 1.8e9
+    tx_power_dbm: float = 46.0
+    bandwidth_hz: float = 1.0e7
+    noise_figure_db: float = 7.0
+    ref_distance_m: float = 100.0
+    pathloss_exponent: float = 3.5
+    shadow_sigma_db: float = 6.0
+    shadow_corr_m: float = 50.0
+    shadow_cross_corr: float = 0.0
+    shadow_grid_m: float = 0.5
+    meas_sigma_db: float = 1.5
+    meas_period_s: float = 0.04
+    l3_k: int = 4
+    l3_reference_period_s: float = 0.2
+    load_factor: float = 0.5
+    q_out_db: float = -8.0
+    q_in_db: float = -6.0
+
+    def __post_init__(self) -> None:
+        _check("spacing_m", self.spacing_m, 10.0, 1e5)
+        _check("offset_m", self.offset_m, 0.0, 1e3)
+        _check("carrier_hz", self.carrier_hz, 1e6, 1e12)
+        _check("tx_power_dbm", self.tx_power_dbm, -50.0, 100.0)
+        _check("bandwidth_hz", self.bandwidth_hz, 0.0, 1e10, lo_open=True)
+        _check("noise_figure_db", self.noise_figure_db, 0.0, 30.0)
+        _check("ref_distance_m", self.ref_distance_m, 0.0, 1e4, lo_open=True)
+        _check("pathloss_exponent", self.pathloss_exponent, 1.0, 8.0)
+        _check("shadow_sigma_db", self.shadow_sigma_db, 0.0, 20.0)
+        _check("shadow_corr_m", self.shadow_corr_m, 0.0, 1e4, lo_open=True)
+        _check("shadow_cross_corr", self.shadow_cross_corr, -1.0, 1.0)
+        _check("shadow_grid_m", self.shadow_grid_m, 0.0, 10.0, lo_open=True)
+        _check("meas_sigma_db", self.meas_sigma_db, 0.0, 20.0)
+        _check("meas_period_s", self.meas_period_s, 0.0, 1.0, lo_open=True)
+        if not isinstance(self.l3_k, int) or isinstance(self.l3_k, bool) or not 0 <= self.l3_k <= 19:
+            raise ValueError(f"l3_k must be an integer in 0..19 (TS 36.331), got {self.l3_k!r}")
+        _check("l3_reference_period_s", self.l3_reference_period_s, 0.0, 10.0, lo_open=True)
+        _check("load_factor", self.load_factor, 0.0, 1.0)
+        _check("q_out_db", self.q_out_db, -30.0, 30.0)
+        _check("q_in_db", self.q_in_db, -30.0, 30.0)
+
+    @property
+    def x_serving_m(self) -> float:
+        return 0.0
+
+    @property
+    def x_target_m(self) -> float:
+        return self.spacing_m
+
+    @property
+    def overlap_centre_m(self) -> float:
+        """Xc = x_s + L_BS/2."""
+        return 0.5 * self.spacing_m
+
+
+@dataclass(frozen=True)
+class Train:
+    """The train and its position input.
+
+    n_nodes, node_spacing_m
+        N roof relay-AP nodes, node 1 at the head [ours: 8 × 25 m].
+    gnss_sigma_m, gnss_bound_m, gnss_corr_s
+        GNSS/INS along-track error: first-order Gauss–Markov with correlation time
+        gnss_corr_s, std gnss_sigma_m, truncated (clipped) at ±gnss_bound_m [seed: < 5 m;
+        σ 2 m and 1 s ours].
+    prep_zone_m
+        preparation starts within this distance of the overlap centre [seed: 500 m].
+    """
+
+    n_nodes: int = 8
+    node_spacing_m: float = 25.0
+    gnss_sigma_m: float = 2.0
+    gnss_bound_m: float = 5.0
+    gnss_corr_s: float = 1.0
+    prep_zone_m: float = 500.0
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.n_nodes, int) or isinstance(self.n_nodes, bool) or not 1 <= self.n_nodes <= 64:
+            raise ValueError(f"n_nodes must be an integer in 1..64, got {self.n_nodes!r}")
+        _check("node_spacing_m", self.node_spacing_m, 0.0, 500.0)
+        _check("gnss_sigma_m", self.gnss_sigma_m, 0.0, 100.0)
+        _check("gnss_bound_m", self.gnss_bound_m, 0.0, 1000.0)
+        _check("gnss_corr_s", self.gnss_corr_s, 0.0, 1e4, lo_open=True)
+        _check("prep_zone_m", self.prep_zone_m, 0.0, 1e5, lo_open=True)
+
+
+@dataclass(frozen=True)
+class Execution:
+    """Handover execution (reconstruction eq. 3 and 8).
+
+    t0_s
+        fixed execution delay T0: He = Hb + v·T0 [seed eq. 2]; 30 ms = RRC processing
+        15 ms (TS 36.331 §11.2) + random access 10 ms + path switch 5 ms [ours].
+    tz_s
+        interval before a second attempt TZ [seed: 50 ms].
+    max_attempts
+        attempts of the A3 and distance policies while the serving link holds [ours].
+    pingpong_window_s
+        a return to the previous cell within this time of completion is a ping-pong [ours].
+    """
+
+    t0_s: float = 0.030
+    tz_s: float = 0.050
+    max_attempts: int = 10
+    pingpong_window_s: float = 1.0
+
+    def __post_init__(self) -> None:
+        _check("t0_s", self.t0_s, 0.0, 1.0)
+        _check("tz_s", self.tz_s, 0.0, 1.0)
+        if not isinstance(self.max_attempts, int) or not 1 <= self.max_attempts <= 100:
+            raise ValueError(f"max_attempts must be an integer in 1..100, got {self.max_attempts!r}")
+        _check("pingpong_window_s", self.pingpong_window_s, 0.0, 60.0)
+
+
+@dataclass(frozen=True)
+class Joint:
+    """The position-power joint decision (reconstruction eq. 5–15).
+
+    gaph_gamma_db, gaph_kappa, gaph_variant, gaph_floor_db
+        GapH = Γ + κσ0 (``widen``) or max(Γ − κσ0, floor) (``narrow``) [ours].
+    band_fit
+        ``offset_exponent``: fit â and n̂ to the measured gaps; ``offset``: fit â with n known.
+    exponent_bounds
+        n̂ is clipped to this range [seed: n in 2–6].
+    min_fit_samples
+        gap measurements in the zone before the band is defined [ours].
+    measurements
+        ``l3``: the policy uses L3-filtered RSRP (as σ0 assumes); ``raw``: single samples.
+    wslr
+        ``regression``: weighted linear regression over the m predecessors; ``mean``:
+        their weighted mean [ours, both readings of the seed's WSLR].
+    m, alpha
+        number of joint nodes and the geometric weight parameter; ``None`` = the cost
+        grid's argmin (the seed's procedure).
+    dead_zone_db
+        ε: |ĉ| ≤ ε gives no position correction [ours].
+    retry_rule
+        the second attempt must be ``executed`` (seed eq. 9) or ``completed`` before PR.
+    convergence_db
+        a node has converged if its measured gap at the trigger is below this [seed: 3 dB].
+    """
+
+    gaph_gamma_db: float = 6.0
+    gaph_kappa: float = 1.0
+    gaph_variant: str = "widen"
+    gaph_floor_db: float = 1.0
+    band_fit: str = "offset_exponent"
+    exponent_bounds: tuple[float, float] = (2.0, 6.0)
+    min_fit_samples: int = 5
+    measurements: str = "l3"
+    wslr: str = "regression"
+    m: int | None = None
+    alpha: float | None = None
+    dead_zone_db: float = 0.5
+    retry_rule: str = "executed"
+    convergence_db: float = 3.0
+
+    def __post_init__(self) -> None:
+        _check("gaph_gamma_db", self.gaph_gamma_db, 0.0, 50.0, lo_open=True)
+        _check("gaph_kappa", self.gaph_kappa, 0.0, 10.0)
+        _choice("gaph_variant", self.gaph_variant, ("widen", "narrow"))
+        _check("gaph_floor_db", self.gaph_floor_db, 0.0, 50.0, lo_open=True)
+        _choice("band_fit", self.band_fit, ("offset_exponent", "offset"))
+        lo, hi = self.exponent_bounds
+        _check("exponent_bounds[0]", lo, 1.0, 8.0)
+        _check("exponent_bounds[1]", hi, lo, 8.0)
+        if not isinstance(self.min_fit_samples, int) or self.min_fit_samples < 2:
+            raise ValueError(f"min_fit_samples must be an integer >= 2, got {self.min_fit_samples!r}")
+        _choice("measurements", self.measurements, ("l3", "raw"))
+        _choice("wslr", self.wslr, ("regression", "mean"))
+        if self.m is not None and (not isinstance(self.m, int) or not 1 <= self.m <= 16):
+            raise ValueError(f"m must be null or an integer in 1..16, got {self.m!r}")
+        if self.alpha is not None:
+            _check("alpha", self.alpha, 0.0, 1.0, lo_open=True, hi_open=True)
+        _check("dead_zone_db", self.dead_zone_db, 0.0, 20.0)
+        _choice("retry_rule", self.retry_rule, ("executed", "completed"))
+        _check("convergence_db", self.convergence_db, 0.0, 50.0, lo_open=True)
+
+
+@dataclass(frozen=True)
+class A3:
+    """The A3 event baseline (TS 36.331 §5.5.4.4) [3GPP]: hysteresis, TTT, offsets."""
+
+    hysteresis_db: float = 3.0
+    ttt_s: float = 0.16
+    offset_db: float = 0.0
+
+    def __post_init__(self) -> None:
+        _check("hysteresis_db", self.hysteresis_db, 0.0, 15.0)
+        _check("ttt_s", self.ttt_s, 0.0, 5.12)
+        _check("offset_db", self.offset_db, -15.0, 15.0)
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """Everything one simulation needs except the speed and the random draws."""
+
+    radio: Radio = field(default_factory=Radio)
+    train: Train = field(default_factory=Train)
+    execution: Execution = field(default_factory=Execution)
+    joint: Joint = field(default_factory=Joint)
+    a3: A3 = field(default_factory=A3)
+
+    def with_weights(self, m: int, alpha: float) -> Scenario:
+        """The same scenario with the joint policy's (m, α) set."""
+        return replace(self, joint=replace(self.joint, m=int(m), alpha=float(alpha)))
+
+    def to_dict(self) -> dict[str, Any]:
+        return asdict(self)
+
+
+SIM_SECTIONS = ("radio", "train", "execution", "joint", "a3")
+
+
+def scenario_from_config(cfg: dict[str, Any]) -> Scenario:
+    """:class:`Scenario` from the config's ``handover`` section (or a subset of it)."""
+    def sub(cls, name):
+        values = dict(cfg.get(name, {}))
+        if name == "joint" and "exponent_bounds" in values:
+            values["exponent_bounds"] = tuple(float(v) for v in values["exponent_bounds"])
+        return cls(**values)
+
+    return Scenario(radio=sub(Radio, "radio"), train=sub(Train, "train"),
+                    execution=sub(Execution, "execution"), joint=sub(Joint, "joint"), a3=sub(A3, "a3"))
+
+
+def check_speed(speed_kmh: float) -> float:
+    """Speed in m/s from km/h; ValueError unless 1 ≤ v ≤ 1000 km/h."""
+    _check("speed_kmh", speed_kmh, 1.0, 1000.0)
+    return float(speed_kmh) * KMH

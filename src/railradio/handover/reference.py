@@ -1,0 +1,312 @@
+"""A plain per-step loop implementation of the whole handover model.
+
+Written independently of the vectorized engine (scalar ``math``, one run, one node, one
+sample at a time, explicit state machines; WSLR by ``numpy.polyfit``), it consumes the
+same :class:`~railradio.handover.model.Draws` and must give the same outcomes: the test
+reference of :mod:`railradio.handover.policies` and the baseline of ``make bench``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from railradio.constants import SPEED_OF_LIGHT_M_S
+from railradio.handover.model import Draws
+from railradio.handover.params import Scenario
+from railradio.handover.train import Kinematics
+
+
+class _Run:
+    """One train crossing, computed sample by sample."""
+
+    def __init__(self, scn: Scenario, kin: Kinematics, draws: Draws, b: int) -> None:
+        self.scn, self.kin = scn, kin
+        rd, tr = scn.radio, scn.train
+        self.v = kin.speed_m_s
+        self.tm = rd.meas_period_s
+        self.k_n = kin.n_samples
+        g = kin.grid
+        self.g_x0, self.g_dx, self.g_n = g.x_min_m, g.step_m, g.n
+        # shadowing fields: AR(1) step by step
+        rho = math.exp(-g.step_m / rd.shadow_corr_m)
+        sig = rd.shadow_sigma_db
+        innov = sig * math.sqrt(1.0 - rho * rho)
+        fields = []
+        for j in range(2):
+            w = draws.field_white[b, j]
+            z = [0.0] * g.n
+            z[0] = sig * float(w[0])
+            for n in range(1, g.n):
+                z[n] = rho * z[n - 1] + innov * float(w[n])
+            fields.append(z)
+        c = rd.shadow_cross_corr
+        if c != 0.0:
+            fields[1] = [c * a + math.sqrt(1 - c * c) * t for a, t in zip(fields[0], fields[1], strict=True)]
+        self.zeta = fields
+        # GNSS/INS error
+        e = [0.0] * self.k_n
+        if tr.gnss_sigma_m > 0:
+            phi = math.exp(-self.tm / tr.gnss_corr_s)
+            gi = tr.gnss_sigma_m * math.sqrt(1 - phi * phi)
+            prev = tr.gnss_sigma_m * float(draws.gnss_white[b, 0])
+            e[0] = prev
+            for k in range(1, self.k_n):
+                prev = phi * prev + gi * float(draws.gnss_white[b, k])
+                e[k] = prev
+            e = [min(max(x, -tr.gnss_bound_m), tr.gnss_bound_m) for x in e]
+        self.err = e
+        l0 = 20 * math.log10(4 * math.pi * rd.ref_distance_m * rd.carrier_hz / SPEED_OF_LIGHT_M_S)
+        self.l0 = l0
+        self.noise_mw = 10 ** ((-174 + 10 * math.log10(rd.bandwidth_hz) + rd.noise_figure_db) / 10)
+        # measurements and L3 filter per node
+        a = 1 - (1 - 1 / 2 ** (rd.l3_k / 4)) ** (self.tm / rd.l3_reference_period_s)
+        self.meas, self.filt = [], []
+        for i in range(tr.n_nodes):
+            m_i, f_i = [[], []], [[], []]
+            for k in range(self.k_n):
+                x = self.x_true(i, k)
+                for j in range(2):
+                    mm = self.mean_rsrp(j, x) - self.field(j, x) \
+                        + rd.meas_sigma_db * float(draws.meas_white[b, i, j, k])
+                    m_i[j].append(mm)
+                    f_i[j].append(mm if k == 0 else (1 - a) * f_i[j][-1] + a * mm)
+            self.meas.append(m_i)
+            self.filt.append(f_i)
+
+    # --- geometry and radio -----------------------------------------------------------
+    def x_true(self, i: int, k: int) -> float:
+        return self.v * (k * self.tm) - i * self.scn.train.node_spacing_m
+
+    def x_hat(self, i: int, k: int) -> float:
+        return self.v * (k * self.tm) + self.err[k] - i * self.scn.train.node_spacing_m
+
+    def field(self, j: int, x: float) -> float:
+        n = round((x - self.g_x0) / self.g_dx)
+        return self.zeta[j][min(max(n, 0), self.g_n - 1)]
+
+    def mean_rsrp(self, j: int, x: float) -> float:
+        rd = self.scn.radio
+        xj = 0.0 if j == 0 else rd.spacing_m
+        d = math.hypot(x - xj, rd.offset_m)
+        return rd.tx_power_dbm - (self.l0 + 10 * rd.pathloss_exponent * math.log10(d / rd.ref_distance_m))
+
+    def true_rsrp(self, j: int, x: float) -> float:
+        return self.mean_rsrp(j, x) - self.field(j, x)
+
+    def sinr(self, wanted: int, x: float) -> float:
+        rd = self.scn.radio
+        other = 1 - wanted
+        i_mw = rd.load_factor * 10 ** (self.true_rsrp(other, x) / 10) + self.noise_mw
+        return self.true_rsrp(wanted, x) - 10 * math.log10(i_mw)
+
+    # --- execution ----------------------------------------------------------------------
+    def execute(self, hb: float, retry_ok) -> tuple[int, bool, float]:
+        """(attempts, success, completion position) from a first command at hb."""
+        ex, rd = self.scn.execution, self.scn.radio
+        max_a = max(ex.max_attempts, 2)
+        a = 1
+        while True:
+            he = hb + self.v * ex.t0_s
+            s_ok = self.sinr(0, hb) >= rd.q_out_db
+            t_ok = self.sinr(1, he) >= rd.q_in_db
+            if s_ok and t_ok:
+                return a, True, he
+            hb_next = he + self.v * ex.tz_s
+            if a < max_a and retry_ok(a, s_ok, hb_next):
+                a += 1
+                hb = hb_next
+                continue
+            return a, False, he
+
+
+def _outcome(run: _Run, i: int, k_cmd: int, retry_ok, returns) -> dict:
+    ex = run.scn.execution
+    hb = run.x_true(i, k_cmd)
+    attempts, ok, he = run.execute(hb, retry_ok)
+    delay = attempts * ex.t0_s + (attempts - 1) * ex.tz_s if ok else math.nan
+    t_done = k_cmd * run.tm + (delay if ok else 0.0)
+    pp = False
+    if ok:
+        k = math.ceil(t_done / run.tm - 1e-9)
+        pp = returns(i, k, t_done)
+    gap = run.true_rsrp(0, he) - run.true_rsrp(1, he)
+    return {"k": k_cmd, "command_x_m": hb, "attempts": attempts, "success": ok, "delay_s": delay,
+            "pingpong": pp, "completion_x_m": he, "rsrp_gap_db": gap}
+
+
+def _a3(run: _Run) -> list[dict]:
+    sc = run.scn
+    hys, off = sc.a3.hysteresis_db, sc.a3.offset_db
+    n_ttt = math.ceil(sc.a3.ttt_s / run.tm - 1e-9) + 1
+    ex = sc.execution
+    out = []
+    for i in range(sc.train.n_nodes):
+        f = run.filt[i]
+        count, k_cmd = 0, run.k_n - 1
+        for k in range(run.k_n):
+            count = count + 1 if f[1][k] - hys > f[0][k] + off else 0  # A3-1, Mn = target
+            if count >= n_ttt:
+                k_cmd = k
+                break
+
+        def returns(i, k0, t_done, f=f):
+            count = 0
+            for k in range(k0, run.k_n):
+                if k * run.tm - t_done > ex.pingpong_window_s:
+                    return False
+                count = count + 1 if f[0][k] - hys > f[1][k] + off else 0  # back to the source
+                if count >= n_ttt:
+                    return True
+            return False
+
+        out.append(_outcome(run, i, k_cmd, lambda a, s_ok, hb: s_ok and a < ex.max_attempts, returns))
+    return out
+
+
+def _distance(run: _Run) -> list[dict]:
+    sc = run.scn
+    xc = 0.5 * sc.radio.spacing_m
+    ex = sc.execution
+    out = []
+    for i in range(sc.train.n_nodes):
+        k_cmd = run.k_n - 1
+        for k in range(run.k_n):
+            if run.x_hat(i, k) >= xc:
+                k_cmd = k
+                break
+
+        def returns(i, k0, t_done):
+            for k in range(k0, run.k_n):
+                if k * run.tm - t_done > ex.pingpong_window_s:
+                    return False
+                if run.x_hat(i, k) < xc:
+                    return True
+            return False
+
+        out.append(_outcome(run, i, k_cmd, lambda a, s_ok, hb: s_ok and a < ex.max_attempts, returns))
+    return out
+
+
+def _joint(run: _Run) -> list[dict]:
+    sc = run.scn
+    rd, jt, ex, tr = sc.radio, sc.joint, sc.execution, sc.train
+    L, xc, v = rd.spacing_m, 0.5 * rd.spacing_m, run.v
+    a_l3 = 1 - (1 - 1 / 2 ** (rd.l3_k / 4)) ** (run.tm / rd.l3_reference_period_s)
+    if jt.measurements == "raw":
+        sigma0 = math.sqrt(2) * rd.meas_sigma_db
+    else:
+        sigma0 = math.sqrt(2) * rd.meas_sigma_db * math.sqrt(a_l3 / (2 - a_l3))
+    gaph = jt.gaph_gamma_db + jt.gaph_kappa * sigma0 if jt.gaph_variant == "widen" \
+        else max(jt.gaph_gamma_db - jt.gaph_kappa * sigma0, jt.gaph_floor_db)
+    src = run.filt if jt.measurements == "l3" else run.meas
+
+    def gap(i, k):
+        return src[i][0][k] - src[i][1][k]
+
+    def reg(x):
+        x = min(max(x, 0.01), L - 0.01)
+        return math.log10((L - x) / x)
+
+    def band(a_hat, n_hat):
+        q = 10 ** (gaph / (10 * n_hat))
+        r = 10 ** (-a_hat / (10 * n_hat))
+        pl_e, pr_e = L / (1 + q * r), L * q / (q + r)
+        return pl_e - v * ex.t0_s, pr_e - v * ex.t0_s
+
+    # head: running least squares in the zone, trigger at x_hat >= Xm
+    s1 = sr = srr = sg = srg = 0.0
+    k_head, fit = run.k_n - 1, None
+    for k in range(run.k_n):
+        xh = run.x_hat(0, k)
+        if abs(xh - xc) <= tr.prep_zone_m:
+            r, g = reg(xh), gap(0, k)
+            s1 += 1
+            sr += r
+            srr += r * r
+            sg += g
+            srg += r * g
+        if jt.band_fit == "offset":
+            n_hat = rd.pathloss_exponent
+        else:
+            den = s1 * srr - sr * sr
+            slope = (s1 * srg - sr * sg) / den if den > 1e-12 * max(s1 * srr, 1e-300) \
+                else 10 * rd.pathloss_exponent
+            n_hat = min(max(slope / 10, jt.exponent_bounds[0]), jt.exponent_bounds[1])
+        a_hat = (sg - 10 * n_hat * sr) / s1 if s1 > 0 else 0.0
+        pl, pr = band(a_hat, n_hat)
+        xm = 0.5 * (pl + pr)
+        fit = (a_hat, n_hat, pl, pr, xm)
+        if s1 >= jt.min_fit_samples and xh >= xm:
+            k_head = k
+            break
+    a_hat, n_hat, pl, pr, xm = fit
+
+    def model(x):
+        return a_hat + 10 * n_hat * reg(x)
+
+    def inv(g):
+        return L / (1 + 10 ** ((g - a_hat) / (10 * n_hat)))
+
+    pr_retry = pr - v * (ex.t0_s + ex.tz_s)
+    w_all = [jt.alpha * (1 - jt.alpha) ** k for k in range(jt.m)]
+    devs, ks, xs = [], [], []
+    for i in range(tr.n_nodes):
+        if i == 0:
+            x_i, k_i = xm, k_head
+        else:
+            p = min(jt.m, i)
+            d = [devs[i - 1 - k] for k in range(p)]
+            w = [w_all[k] / sum(w_all[:p]) for k in range(p)]
+            if jt.wslr == "mean" or p < 2:
+                c = sum(wk * dk for wk, dk in zip(w, d, strict=True))
+            else:
+                pos = [float(i - 1 - k) for k in range(p)]
+                slope, icpt = np.polyfit(pos, d, 1, w=np.sqrt(w))
+                c = slope * i + icpt
+            if abs(c) <= jt.dead_zone_db:
+                x_i = xm
+            elif c > gaph:
+                x_i = pr_retry
+            elif c < -gaph:
+                x_i = pl
+            else:
+                x_i = inv(model(xm) - c)
+            x_i = min(max(x_i, pl), max(pr_retry, pl))
+            k_i = run.k_n - 1
+            for k in range(run.k_n):
+                if run.x_hat(i, k) >= x_i:
+                    k_i = k
+                    break
+            k_i = max(k_i, ks[i - 1])
+        ks.append(k_i)
+        xs.append(x_i)
+        devs.append(gap(i, k_i) - model(run.x_hat(i, k_i)))
+    out = []
+    for i in range(tr.n_nodes):
+        x_cmd_hat = run.x_hat(i, ks[i])
+        back = v * ex.t0_s if jt.retry_rule == "completed" else 0.0
+
+        def retry_ok(a, s_ok, hb, x_cmd_hat=x_cmd_hat):
+            return a < 2 and x_cmd_hat + v * (ex.t0_s + ex.tz_s) * a + back <= pr
+
+        out.append(_outcome(run, i, ks[i], retry_ok, lambda i, k0, t: False))
+    return out
+
+
+REFERENCE_POLICIES = {"joint": _joint, "a3": _a3, "distance": _distance}
+
+
+def simulate_reference(scn: Scenario, kin: Kinematics, draws: Draws, policies: tuple[str, ...]) -> dict:
+    """Outcomes per policy as arrays [B, N] (keys as :func:`railradio.handover.policies.run_policy`)."""
+    res = {p: [] for p in policies}
+    for b in range(draws.n_runs):
+        run = _Run(scn, kin, draws, b)
+        for p in policies:
+            res[p].append(REFERENCE_POLICIES[p](run))
+    out = {}
+    for p in policies:
+        out[p] = {key: np.array([[node[key] for node in r] for r in res[p]])
+                  for key in res[p][0][0]}
+    return out

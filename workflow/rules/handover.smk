@@ -1,0 +1,203 @@
+# Study `handover`: position-power joint handover decision vs A3 and distance triggers
+# (seed 004, STUDY.md §5; our reconstruction of the lost equations).
+# Chain: cost grid of (m, alpha) on its own runs -> shards of crossings per (speed, batch)
+# with the selected weights -> summary per policy and speed -> figures + key numbers;
+# one-at-a-time sensitivity variants on the reference speed's runs -> their summary.
+from railradio.handover.engine import speed_label
+from railradio.handover.params import SIM_SECTIONS
+from railradio.handover.sensitivity import variants as handover_variants
+
+HO = config["handover"]
+HO_SIM = {k: HO[k] for k in SIM_SECTIONS}
+HO_SWEEP = HO["sweep"]
+HO_SENS = HO["sensitivity"]
+HO_SPEEDS = [speed_label(v) for v in HO_SWEEP["speeds_kmh"]]
+HO_BATCHES = range(HO_SWEEP["n_batches"])
+HO_VARIANTS = handover_variants(HO_SENS)
+HO_FIGURES = {
+    "handover_cost_vs_m": "results/handover/cost.nc",
+    "handover_pingpong_vs_speed": "results/handover/summary.nc",
+    "handover_rsrp_gap_vs_speed": "results/handover/summary.nc",
+    "handover_delay_vs_speed": "results/handover/summary.nc",
+    "handover_interruption_vs_speed": "results/handover/summary.nc",
+    "handover_sensitivity": "results/handover/sensitivity.nc",
+}
+CODE_HO_SIM = (
+    code_hash("railradio.handover", exclude=("figures.py", "keys.py", "summary.py", "stats.py", "reference.py"))
+    + CODE_SHARED
+)
+CODE_HO_SUMMARY = code_hash("railradio.handover.summary", "railradio.handover.stats")
+
+register_figures("handover", list(HO_FIGURES))
+KEY_NUMBER_FRAGMENTS.append("results/handover/key_numbers.json")
+
+
+wildcard_constraints:
+    ho_speed=r"\d+(\.\d+)?",
+    batch=r"\d+",
+    variant=r"[A-Za-z0-9_]+",
+
+
+rule handover_cost:
+    """Cost J(m, alpha) of the joint decision on its own runs (seed Fig. 4)."""
+    output:
+        "results/handover/cost.nc",
+    params:
+        sim=HO_SIM,
+        cost=HO["cost"],
+        runs_per_block=HO_SWEEP["runs_per_block"],
+        seed=config["seed"],
+        code=CODE_HO_SIM,
+    log:
+        "results/logs/handover/cost.log",
+    benchmark:
+        "results/benchmarks/handover/cost.tsv"
+    resources:
+        mem_mb=2000,
+        runtime=20,
+    conda:
+        "../envs/railradio.yaml"
+    script:
+        "../scripts/handover/cost.py"
+
+
+rule handover_shard:
+    """Crossings of one (speed, batch) shard: per-handover outcomes of every policy."""
+    input:
+        cost="results/handover/cost.nc",
+    output:
+        "results/handover/shards/v{ho_speed}/b{batch}.nc",
+    params:
+        sim=HO_SIM,
+        variant={},
+        policies=HO["policies"],
+        speed_kmh=lambda w: float(w.ho_speed),
+        n_blocks=HO_SWEEP["n_blocks"],
+        n_batches=HO_SWEEP["n_batches"],
+        runs_per_block=HO_SWEEP["runs_per_block"],
+        seed=config["seed"],
+        code=CODE_HO_SIM,
+    log:
+        "results/logs/handover/shard_v{ho_speed}_b{batch}.log",
+    benchmark:
+        "results/benchmarks/handover/shard_v{ho_speed}_b{batch}.tsv"
+    resources:
+        mem_mb=1500,
+        runtime=20,
+    conda:
+        "../envs/railradio.yaml"
+    script:
+        "../scripts/handover/shard.py"
+
+
+rule handover_summary:
+    """Rates (Wilson intervals) and means per policy and speed."""
+    input:
+        expand("results/handover/shards/v{ho_speed}/b{batch}.nc", ho_speed=HO_SPEEDS, batch=HO_BATCHES),
+    output:
+        "results/handover/summary.nc",
+    params:
+        dim="speed_kmh",
+        groups=[v for v in HO_SPEEDS for _ in HO_BATCHES],
+        policies=HO["policies"],
+        code=CODE_HO_SUMMARY,
+    log:
+        "results/logs/handover/summary.log",
+    resources:
+        mem_mb=3000,
+    conda:
+        "../envs/railradio.yaml"
+    script:
+        "../scripts/handover/summary.py"
+
+
+rule handover_sensitivity_shard:
+    """One sensitivity variant at the reference speed, on the sweep's first blocks."""
+    input:
+        cost="results/handover/cost.nc",
+    output:
+        "results/handover/sensitivity/{variant}/b{batch}.nc",
+    params:
+        sim=HO_SIM,
+        variant=lambda w: HO_VARIANTS[w.variant],
+        policies=HO["policies"],
+        speed_kmh=float(HO_SENS["speed_kmh"]),
+        n_blocks=HO_SENS["n_blocks"],
+        n_batches=1,
+        runs_per_block=HO_SWEEP["runs_per_block"],
+        seed=config["seed"],
+        code=CODE_HO_SIM,
+    log:
+        "results/logs/handover/sensitivity_{variant}_b{batch}.log",
+    benchmark:
+        "results/benchmarks/handover/sensitivity_{variant}_b{batch}.tsv"
+    resources:
+        mem_mb=1500,
+        runtime=20,
+    conda:
+        "../envs/railradio.yaml"
+    script:
+        "../scripts/handover/shard.py"
+
+
+rule handover_sensitivity:
+    """Rates and means per policy and sensitivity variant."""
+    input:
+        expand("results/handover/sensitivity/{variant}/b0.nc", variant=list(HO_VARIANTS)),
+    output:
+        "results/handover/sensitivity.nc",
+    params:
+        dim="variant",
+        groups=list(HO_VARIANTS),
+        variants=HO_VARIANTS,
+        policies=HO["policies"],
+        speed_kmh=float(HO_SENS["speed_kmh"]),
+        code=CODE_HO_SUMMARY,
+    log:
+        "results/logs/handover/sensitivity.log",
+    conda:
+        "../envs/railradio.yaml"
+    script:
+        "../scripts/handover/summary.py"
+
+
+rule handover_figure:
+    """One figure of the handover study (seed Fig. 4-8, sensitivity)."""
+    input:
+        lambda w: HO_FIGURES[w.name],
+    output:
+        pdf=report(
+            "results/figures/{name}.pdf",
+            caption="../report/handover_figures.rst",
+            category="handover",
+        ),
+        png="results/figures/{name}.png",
+    params:
+        code=code_hash("railradio.handover.figures") + CODE_PLOT,
+    log:
+        "results/logs/handover/figure_{name}.log",
+    wildcard_constraints:
+        name="|".join(HO_FIGURES),
+    conda:
+        "../envs/railradio.yaml"
+    script:
+        "../scripts/handover/figure.py"
+
+
+rule handover_key_numbers:
+    """Key numbers handover.* (ours beside the seed's claims)."""
+    input:
+        summary="results/handover/summary.nc",
+        cost="results/handover/cost.nc",
+        sensitivity="results/handover/sensitivity.nc",
+    output:
+        "results/handover/key_numbers.json",
+    params:
+        sim=HO_SIM,
+        code=code_hash("railradio.handover.keys", "railradio.handover.band", "railradio.keynumbers"),
+    log:
+        "results/logs/handover/key_numbers.log",
+    conda:
+        "../envs/railradio.yaml"
+    script:
+        "../scripts/handover/key_numbers.py"
