@@ -11,6 +11,7 @@ configfile: "config/config.yaml"
 include: "workflow/rules/common.smk"
 include: "workflow/rules/fusion.smk"
 include: "workflow/rules/nr.smk"
+include: "workflow/rules/handover.smk"
 include: "workflow/rules/paper.smk"
 
 
@@ -43,3 +44,9 @@ rule nr:
     input:
         STUDY_FIGURES["nr"],
         "results/nr/key_numbers.json",
+
+
+rule handover:
+    input:
+        STUDY_FIGURES["handover"],
+        "results/handover/key_numbers.json",
