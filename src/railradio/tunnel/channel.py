@@ -1,0 +1,247 @@
+"""The slot-to-receiver channel, tabulated once by along-axis offset, and what follows.
+
+A straight tunnel is translation invariant, so the channel from any slot to the receiver
+(at its fixed cross-section position) depends only on the offset dx = x_rx - x_slot, and
+by the mirror symmetry x -> -x only on |dx|.  :func:`tabulate` evaluates every ray family
+on a grid of offsets (a step that divides the slot spacing, so every slot-receiver pair
+of a receiver on the grid falls exactly on it) and stores, per offset, the band-limited
+channel as complex taps on a fine excess-delay grid (relative to the line-of-sight delay),
+their coherent sum being the narrowband gain, plus the local-mean power and the delay
+moments.  Gains are relative to the cable power at the slot: the physical model includes
+the slot EIRP of the slot-chain calibration (geometry eq. 1); the seed's model applies its
+own losses (seed 2.2-2.4): coupling loss at the slot-receiver distance, free space, tunnel
+attenuation, a fixed loss per reflection and a random 0-10 dB multipath loss per
+reflected ray.
+
+:func:`received` assembles, for receivers anywhere on the grid, the sum over all slots
+with the cable's loss and phase: RSSI coherent and local mean [seed 2.4.3], RMS delay
+spread [seed 2.5.2], per-slot powers and delays.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import xarray as xr
+
+from railradio.constants import SPEED_OF_LIGHT_M_S
+from railradio.tunnel.geometry import Cable, Tunnel
+from railradio.tunnel.rays import Families, reflection_product
+
+PROPAGATIONS = ("physical", "seed")
+
+
+@dataclass(frozen=True)
+class SeedModel:
+    """The seed's simplified propagation model (seed 2.3.2-2.4.2)."""
+
+    reflection_loss_db: float = 8.0
+    tunnel_att_db_per_m: float = 0.065
+    multipath_max_db: float = 10.0
+
+
+def offset_grid_m(step_m: float, max_offset_m: float, slot_spacing_m: float) -> np.ndarray:
+    """Offsets 0, step, ..., max_offset [m]; the step must divide the slot spacing."""
+    if not step_m > 0 or not max_offset_m > 0:
+        raise ValueError("step_m and max_offset_m must be positive")
+    ratio = slot_spacing_m / step_m
+    if abs(ratio - round(ratio)) > 1e-9:
+        raise ValueError(f"step_m={step_m} must divide the slot spacing {slot_spacing_m} m")
+    n = int(round(max_offset_m / step_m))
+    return np.arange(n + 1) * step_m
+
+
+def _interp_rows(table: np.ndarray, s: np.ndarray) -> np.ndarray:
+    """Linear interpolation of table[f, :] (uniform grid on [0, 1]) at s[f, d]."""
+    n_s = table.shape[1]
+    pos = np.clip(s, 0.0, 1.0) * (n_s - 1)
+    i0 = np.minimum(pos.astype(np.int64), n_s - 2)
+    frac = pos - i0
+    rows = np.arange(table.shape[0])[:, None]
+    return table[rows, i0] * (1.0 - frac) + table[rows, i0 + 1] * frac
+
+
+def tabulate(fam: Families, tunnel: Tunnel, cable: Cable, offsets_m: np.ndarray, *,
+             eps: complex, polarization: str, propagation: str = "physical",
+             seed_model: SeedModel | None = None, rng: np.random.Generator | None = None,
+             delay_bin_s: float = 10e-9, n_delay_bins: int = 64, n_sin_grid: int = 513,
+             chunk: int = 256) -> xr.Dataset:
+    """Tabulate the slot-to-receiver channel over ``offsets_m`` (see the module docstring).
+
+    The reflection product of each family is evaluated on ``n_sin_grid`` elevations
+    (uniform in sin b, in which the Fresnel coefficients are smooth) and interpolated;
+    spreading and phase are exact at every offset.  ``rng`` draws the seed model's
+    multipath losses (one per reflected ray).
+    """
+    if propagation not in PROPAGATIONS:
+        raise ValueError(f"propagation must be one of {PROPAGATIONS}, got {propagation!r}")
+    if n_delay_bins < 2 or delay_bin_s <= 0:
+        raise ValueError("n_delay_bins must be >= 2 and delay_bin_s > 0")
+    lam = cable.wavelength_m
+    k = 2.0 * math.pi / lam
+    offsets = np.asarray(offsets_m, dtype=float)
+    n_d, n_f = offsets.size, len(fam)
+    h = tunnel.cross_distance_m
+    if propagation == "physical":
+        sgrid = np.linspace(0.0, 1.0, n_sin_grid)
+        g_grid = reflection_product(fam, sgrid, eps, polarization)
+        g_grid = g_grid * (fam.spread * np.exp(1j * fam.caustic_phase_rad))[:, None]
+        eirp = 10.0 ** (cable.slot_eirp_offset_db(tunnel.slot_spacing_m) / 20.0)
+    else:
+        sm = seed_model or SeedModel()
+        if rng is None:
+            raise ValueError("rng is required for propagation='seed' (random multipath loss)")
+        mp_db = np.where(fam.n_refl > 0, rng.uniform(0.0, sm.multipath_max_db, n_f), 0.0)
+        fixed_db = -sm.reflection_loss_db * fam.n_refl - mp_db
+    taps = np.zeros((n_d, n_delay_bins), dtype=complex)
+    p_mean = np.zeros(n_d)
+    m1 = np.zeros(n_d)
+    m2 = np.zeros(n_d)
+    ell = fam.ell_m[:, None]
+    for a in range(0, n_d, chunk):
+        dx = offsets[a:a + chunk][None, :]
+        d = np.sqrt(ell**2 + dx**2)
+        if propagation == "physical":
+            amp = _interp_rows(g_grid, ell / d) * (eirp * lam / (4.0 * math.pi)) / d
+        else:
+            d_direct = np.sqrt(h * h + dx**2)
+            loss_db = (cable.coupling_loss_at_db(d_direct) + 20.0 * np.log10(4.0 * math.pi * d / lam)
+                       + sm.tunnel_att_db_per_m * d) - fixed_db[:, None]
+            amp = 10.0 ** (-loss_db / 20.0)
+        amp = amp * np.exp(-1j * k * d)
+        tau = d / SPEED_OF_LIGHT_M_S
+        tau_los = np.sqrt(h * h + dx**2) / SPEED_OF_LIGHT_M_S
+        pw = np.abs(amp) ** 2
+        p_mean[a:a + chunk] = pw.sum(axis=0)
+        m1[a:a + chunk] = (pw * tau).sum(axis=0)
+        m2[a:a + chunk] = (pw * tau**2).sum(axis=0)
+        b = np.clip(np.rint((tau - tau_los) / delay_bin_s), 0, n_delay_bins - 1).astype(np.int64)
+        nd = dx.shape[1]
+        flat = (np.arange(nd)[None, :] * n_delay_bins + b).ravel()
+        re = np.bincount(flat, weights=amp.real.ravel(), minlength=nd * n_delay_bins)
+        im = np.bincount(flat, weights=amp.imag.ravel(), minlength=nd * n_delay_bins)
+        taps[a:a + chunk] = (re + 1j * im).reshape(nd, n_delay_bins)
+    mean_tau = m1 / p_mean
+    rms = np.sqrt(np.maximum(m2 / p_mean - mean_tau**2, 0.0))
+    los = np.sqrt(h * h + offsets**2) / SPEED_OF_LIGHT_M_S
+    ds = xr.Dataset(
+        {
+            "taps": (("offset_m", "excess_delay_s"), taps,
+                     {"units": "1", "long_name": "slot-to-receiver channel taps (amplitude gain "
+                      "relative to the cable power at the slot, binned by excess delay)"}),
+            "power_mean": ("offset_m", p_mean, {"units": "1", "long_name": "local-mean power gain "
+                           "(incoherent sum over rays) relative to the cable power at the slot"}),
+            "delay_mean_s": ("offset_m", mean_tau, {"units": "s", "long_name": "power-weighted mean delay"}),
+            "delay_rms_s": ("offset_m", rms, {"units": "s", "long_name": "RMS delay spread of one slot"}),
+            "los_delay_s": ("offset_m", los, {"units": "s", "long_name": "line-of-sight delay"}),
+        },
+        coords={
+            "offset_m": ("offset_m", offsets, {"units": "m", "long_name": "along-axis offset |x_rx - x_slot|"}),
+            "excess_delay_s": ("excess_delay_s", np.arange(n_delay_bins) * delay_bin_s,
+                               {"units": "s", "long_name": "excess delay over the line of sight "
+                                "(last bin collects everything later)"}),
+        },
+        attrs={"engine": fam.engine, "propagation": propagation, "polarization": polarization,
+               "n_families": n_f, "max_reflections": int(fam.n_refl.max(initial=0)),
+               "shape": tunnel.shape},
+    )
+    return ds
+
+
+def power_by_order(fam: Families, offsets_m, wavelength_m: float, eps: complex,
+                   polarization: str) -> np.ndarray:
+    """Local-mean power (free-space normalized to the source) per reflection order [order, offset]."""
+    from railradio.tunnel.rays import lift
+
+    rays = lift(fam, offsets_m, wavelength_m, eps, polarization)
+    n_max = int(fam.n_refl.max(initial=0))
+    out = np.zeros((n_max + 1, np.size(offsets_m)))
+    np.add.at(out, fam.n_refl, np.abs(rays.amplitude) ** 2)
+    return out
+
+
+def converged_order(p_by_order: np.ndarray, tol_db: float) -> int:
+    """Smallest order N whose omitted tail (orders > N) is below ``tol_db`` at every offset."""
+    total = p_by_order.sum(axis=0)
+    cum = np.cumsum(p_by_order, axis=0)
+    ok = np.all(10.0 * np.log10(total / cum) <= tol_db, axis=1)
+    if not ok.any():
+        return -1
+    return int(np.argmax(ok))
+
+
+# ------------------------------------------------------------------------ assembling
+@dataclass
+class Received:
+    """Sum over slots at receiver positions (arrays over receivers)."""
+
+    rssi_coherent_dbm: np.ndarray
+    rssi_mean_dbm: np.ndarray
+    delay_rms_s: np.ndarray
+    n_strong_rays: np.ndarray
+
+
+def slot_powers(tunnel: Tunnel, cable: Cable) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Slot x [m], cable power at each slot [dBm], cable delay from its feed [s]."""
+    xs = tunnel.slot_x_m
+    return xs, cable.cable_power_dbm(xs, tunnel.length_m), cable.cable_delay_s(xs, tunnel.length_m)
+
+
+def offset_index(table: xr.Dataset, dx_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Grid index of |dx| and whether it lies within the table."""
+    off = table["offset_m"].values
+    step = off[1] - off[0]
+    idx = np.rint(np.abs(dx_m) / step).astype(np.int64)
+    inside = idx < off.size
+    return np.minimum(idx, off.size - 1), inside
+
+
+def window_slots(tunnel: Tunnel, x_rx_m: np.ndarray, half_width_m: float) -> tuple[np.ndarray, np.ndarray]:
+    """Indices of the slots within +-half_width of each receiver [rx, n] and a validity mask."""
+    xs = tunnel.slot_x_m
+    s = tunnel.slot_spacing_m
+    n = int(math.floor(half_width_m / s)) * 2 + 2
+    first = np.ceil((np.asarray(x_rx_m, dtype=float) - half_width_m) / s - 1e-9).astype(np.int64)
+    idx = first[:, None] + np.arange(n)[None, :]
+    ok = (idx >= 0) & (idx < xs.size)
+    idx_c = np.clip(idx, 0, xs.size - 1)
+    ok &= np.abs(np.asarray(x_rx_m)[:, None] - xs[idx_c]) <= half_width_m + 1e-9
+    return idx_c, ok
+
+
+def received(table: xr.Dataset, tunnel: Tunnel, cable: Cable, x_rx_m: np.ndarray,
+             strong_dbm: float = -100.0, chunk: int = 2048) -> Received:
+    """RSSI (coherent and local mean), RMS delay spread and the number of rays (taps of
+    one slot in one 10-ns delay bin) above ``strong_dbm`` at receiver positions ``x_rx_m``;
+    every slot within the table's range contributes."""
+    xs, pc_dbm, tc = slot_powers(tunnel, cable)
+    amp_c = 10.0 ** ((pc_dbm - 30.0) / 20.0) * np.exp(-2j * math.pi * cable.frequency_hz * tc)  # sqrt(W)
+    taps = table["taps"].values
+    h_nb = taps.sum(axis=1)
+    pm = table["power_mean"].values
+    mu = table["delay_mean_s"].values
+    rms = table["delay_rms_s"].values
+    x_rx = np.asarray(x_rx_m, dtype=float)
+    out = [np.empty(x_rx.size) for _ in range(4)]
+    thr_w = 10.0 ** ((strong_dbm - 30.0) / 10.0)
+    max_off = float(table["offset_m"].values[-1])
+    for a in range(0, x_rx.size, chunk):
+        x = x_rx[a:a + chunk]
+        sl, ok = window_slots(tunnel, x, max_off)
+        idx, inside = offset_index(table, x[:, None] - xs[sl])
+        w = (ok & inside).astype(float)
+        ac = amp_c[sl]
+        field = (ac * h_nb[idx] * w).sum(axis=1)
+        pw = np.abs(ac) ** 2 * pm[idx] * w
+        ptot = pw.sum(axis=1)
+        tau = tc[sl] + mu[idx]
+        m1 = (pw * tau).sum(axis=1)
+        m2 = (pw * (rms[idx] ** 2 + tau**2)).sum(axis=1)
+        strong = (np.abs(ac[..., None] * taps[idx]) ** 2 > thr_w) & (w[..., None] > 0)
+        out[0][a:a + chunk] = 10.0 * np.log10(np.abs(field) ** 2) + 30.0
+        out[1][a:a + chunk] = 10.0 * np.log10(ptot) + 30.0
+        out[2][a:a + chunk] = np.sqrt(np.maximum(m2 / ptot - (m1 / ptot) ** 2, 0.0))
+        out[3][a:a + chunk] = strong.sum(axis=(1, 2))
+    return Received(*out)

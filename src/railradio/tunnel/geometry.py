@@ -1,0 +1,195 @@
+"""Tunnel and leaky-cable geometry (seed 003 §1, §2.1-2.2; STUDY.md §4).
+
+Coordinates [seed 2.1]: x along the tunnel from the portal, y vertical from the tunnel
+floor (the lowest point of the lining), z transverse from the centreline.  The circular
+cross-section of diameter D has its centre at (y, z) = (D/2, 0); the rectangle of equal
+area (the image method's tunnel) is a square of side D sqrt(pi)/2 with its floor at y = 0.
+
+The leaky coaxial cable (LCX) radiates through slots every ``slot_spacing_m`` at
+(x_i, 0.1 H, z_slot) [seed 2.2.1].  Slot-chain model (STUDY.md §4): every slot is an
+isotropic radiator whose EIRP is set so that the along-cable mean of the incoherent
+free-space sum of all slots, at distance d_ref from the cable, equals the cable's
+specified coupling loss L_c(d_ref) = 85 + 10 log10(d_ref / 1 m) dB [seed 2.2.2]:
+
+    P_s = P_c - L_c(d_ref) + 10 log10(d_ref s / pi) + 20 log10(4 pi / lambda)     (1)
+
+(the mean over x of sum_i lambda^2 / ((4 pi)^2 (d_ref^2 + (x - x_i)^2)) is
+lambda^2 / (16 pi d_ref s) for a long chain).  The coupling loss is thereby used once, to
+set the slot power; every ray then carries free-space spreading and wall reflections only,
+never coupling loss *and* free-space loss (the seed's eq. 2.4.1 applies both).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from railradio.constants import SPEED_OF_LIGHT_M_S
+
+SHAPES = ("circle", "rect")
+
+
+def _positive(name: str, value: float) -> float:
+    value = float(value)
+    if not value > 0.0 or not math.isfinite(value):
+        raise ValueError(f"{name} must be a positive finite number, got {value!r}")
+    return value
+
+
+def equal_area_side_m(diameter_m: float) -> float:
+    """Side of the square with the area of a circle of diameter D: D sqrt(pi)/2 [m]."""
+    return _positive("diameter_m", diameter_m) * math.sqrt(math.pi) / 2.0
+
+
+@dataclass(frozen=True)
+class Tunnel:
+    """A straight tunnel, its LCX slot line and the train antenna's cross-section position.
+
+    ``shape`` 'circle' is the true cross-section [seed]; 'rect' the square of equal area
+    [ours], in which the image method is exact.
+    """
+
+    length_m: float = 5000.0
+    diameter_m: float = 8.5
+    shape: str = "circle"
+    slot_spacing_m: float = 20.0
+    slot_height_frac: float = 0.1
+    slot_z_m: float = 0.0
+    rx_y_m: float = 4.0
+    rx_z_m: float = 0.0
+
+    def __post_init__(self) -> None:
+        if self.shape not in SHAPES:
+            raise ValueError(f"shape must be one of {SHAPES}, got {self.shape!r}")
+        for name in ("length_m", "diameter_m", "slot_spacing_m"):
+            _positive(name, getattr(self, name))
+        if not 0.0 < self.slot_height_frac < 1.0:
+            raise ValueError(f"slot_height_frac must be in (0, 1), got {self.slot_height_frac!r}")
+        for name, (y, z) in (("slot", self.slot_yz), ("rx", self.rx_yz)):
+            if not self.inside(y, z, margin_m=0.05):
+                raise ValueError(f"{name} position (y={y}, z={z}) m lies outside the {self.shape} "
+                                 f"cross-section (or within 5 cm of the wall)")
+
+    @property
+    def height_m(self) -> float:
+        """Height H of the cross-section [m]."""
+        return self.diameter_m if self.shape == "circle" else equal_area_side_m(self.diameter_m)
+
+    @property
+    def width_m(self) -> float:
+        """Width W of the cross-section [m]."""
+        return self.height_m
+
+    @property
+    def area_m2(self) -> float:
+        return math.pi * self.diameter_m**2 / 4.0
+
+    @property
+    def slot_yz(self) -> tuple[float, float]:
+        """(y, z) of the slot line: 10 % of the height [seed 2.2.1]."""
+        return (self.slot_height_frac * self.height_m, self.slot_z_m)
+
+    @property
+    def rx_yz(self) -> tuple[float, float]:
+        return (self.rx_y_m, self.rx_z_m)
+
+    @property
+    def cross_distance_m(self) -> float:
+        """Distance between slot line and receiver within the cross-section [m]."""
+        (ys, zs), (yr, zr) = self.slot_yz, self.rx_yz
+        return math.hypot(yr - ys, zr - zs)
+
+    def inside(self, y: float, z: float, margin_m: float = 0.0) -> bool:
+        """Whether (y, z) lies inside the cross-section, at least ``margin_m`` from the wall."""
+        if self.shape == "circle":
+            r = self.diameter_m / 2.0
+            return math.hypot(y - r, z) <= r - margin_m
+        h, w = self.height_m, self.width_m
+        return margin_m <= y <= h - margin_m and abs(z) <= w / 2.0 - margin_m
+
+    def wall_distance_m(self, y: float, z: float) -> float:
+        """Distance from (y, z) to the nearest wall [m]."""
+        if self.shape == "circle":
+            r = self.diameter_m / 2.0
+            return r - math.hypot(y - r, z)
+        return min(y, self.height_m - y, self.width_m / 2.0 - abs(z))
+
+    @property
+    def slot_x_m(self) -> np.ndarray:
+        """Slot positions x_i = i dx, i = 0 .. N-1 [seed 2.2.1] [m]."""
+        n = int(round(self.length_m / self.slot_spacing_m))
+        return np.arange(n) * self.slot_spacing_m
+
+    def with_shape(self, shape: str) -> Tunnel:
+        """The same tunnel with another cross-section (slot at 10 % of *its* height)."""
+        return Tunnel(self.length_m, self.diameter_m, shape, self.slot_spacing_m,
+                      self.slot_height_frac, self.slot_z_m, self.rx_y_m, self.rx_z_m)
+
+
+@dataclass(frozen=True)
+class Cable:
+    """The radiating cable: feed points, longitudinal loss, velocity factor, coupling loss."""
+
+    frequency_hz: float = 900e6
+    feed_power_dbm: float = 30.0
+    feed_spacing_m: float = 1000.0
+    loss_db_per_m: float = 0.025
+    velocity_factor: float = 0.88
+    coupling_loss_db: float = 85.0
+    coupling_ref_m: float = 2.0
+
+    def __post_init__(self) -> None:
+        for name in ("frequency_hz", "feed_spacing_m", "coupling_ref_m"):
+            _positive(name, getattr(self, name))
+        if self.loss_db_per_m < 0:
+            raise ValueError(f"loss_db_per_m must be >= 0, got {self.loss_db_per_m!r}")
+        if not 0.0 < self.velocity_factor <= 1.0:
+            raise ValueError(f"velocity_factor must be in (0, 1], got {self.velocity_factor!r}")
+
+    @property
+    def wavelength_m(self) -> float:
+        return SPEED_OF_LIGHT_M_S / self.frequency_hz
+
+    def coupling_loss_at_db(self, d_m) -> np.ndarray:
+        """L_c(d) = L_c + 10 log10(d / 1 m) [seed 2.2.2] [dB]."""
+        d = np.asarray(d_m, dtype=float)
+        if np.any(d <= 0):
+            raise ValueError("d_m must be positive")
+        return self.coupling_loss_db + 10.0 * np.log10(d)
+
+    def slot_eirp_offset_db(self, slot_spacing_m: float) -> float:
+        """P_s - P_c of eq. (1): slot EIRP relative to the local cable power [dB]."""
+        d = self.coupling_ref_m
+        lam = self.wavelength_m
+        return float(-self.coupling_loss_at_db(d) + 10.0 * math.log10(d * slot_spacing_m / math.pi)
+                     + 20.0 * math.log10(4.0 * math.pi / lam))
+
+    def feed_x_m(self, length_m: float) -> np.ndarray:
+        """Feed/amplifier points: one in the middle of every ``feed_spacing_m`` section [ours]."""
+        n = max(1, int(math.ceil(length_m / self.feed_spacing_m - 1e-9)))
+        return (np.arange(n) + 0.5) * self.feed_spacing_m
+
+    def nearest_feed_m(self, x_m, length_m: float) -> np.ndarray:
+        """The feed point that powers the cable at x (its own section) [m]."""
+        feeds = self.feed_x_m(length_m)
+        idx = np.clip(np.floor(np.asarray(x_m, dtype=float) / self.feed_spacing_m).astype(int),
+                      0, feeds.size - 1)
+        return feeds[idx]
+
+    def cable_distance_m(self, x_m, length_m: float) -> np.ndarray:
+        """Cable length from the feeding point to x [m]."""
+        x = np.asarray(x_m, dtype=float)
+        return np.abs(x - self.nearest_feed_m(x, length_m))
+
+    def cable_power_dbm(self, x_m, length_m: float) -> np.ndarray:
+        """Power in the cable at x: P_c - alpha_L |x - x_feed| [dBm]."""
+        return self.feed_power_dbm - self.loss_db_per_m * self.cable_distance_m(x_m, length_m)
+
+    def cable_delay_s(self, x_m, length_m: float) -> np.ndarray:
+        """Delay from the feed to x along the cable, |x - x_feed| / (v c) [s].
+
+        All feeds are driven simultaneously (equalized distribution) [ours].
+        """
+        return self.cable_distance_m(x_m, length_m) / (self.velocity_factor * SPEED_OF_LIGHT_M_S)

@@ -1,0 +1,67 @@
+"""Wall materials: complex permittivity and Fresnel reflection coefficients.
+
+Concrete at 900 MHz: ITU-R P.2040-1 Table 3 gives eta' = 5.31 and
+sigma = 0.0326 f^0.8095 S/m (f in GHz), i.e. epsilon = eta' - j 17.98 sigma / f
+= 5.31 - j0.60 at 0.9 GHz (eq. 9b), the value of STUDY.md §4; the tests pin its
+8.0 dB loss at normal incidence.
+
+Conventions (time factor exp(+j omega t), so a lossy medium has Im(epsilon) < 0):
+TE ("s", E perpendicular to the plane of incidence) and TM ("p", E in the plane) with
+the p unit vector taken as s x k for the incident and the reflected wave alike, which
+makes Gamma_TM -> -1 at grazing incidence and Gamma_TM = -Gamma_TE at normal incidence.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+CONCRETE_900MHZ = complex(5.31, -0.60)
+"""Relative permittivity of the concrete lining at 900 MHz [STUDY.md §4, ITU-R P.2040-1]."""
+
+
+def _check_eps(eps: complex) -> complex:
+    eps = complex(eps)
+    if not eps.real > 1.0 or eps.imag > 0.0:
+        raise ValueError(f"eps must have real part > 1 and imaginary part <= 0 (exp(+jwt)), got {eps!r}")
+    return eps
+
+
+def _root(eps: complex, cos_i: np.ndarray) -> np.ndarray:
+    sin2 = 1.0 - cos_i**2
+    return np.sqrt(eps - sin2 + 0j)
+
+
+def _check_cos(cos_i) -> np.ndarray:
+    c = np.asarray(cos_i, dtype=float)
+    if np.any(c < 0.0) or np.any(c > 1.0):
+        raise ValueError("cos_i (cosine of the incidence angle from the normal) must be in [0, 1]")
+    return c
+
+
+def fresnel_te(cos_i, eps: complex = CONCRETE_900MHZ) -> np.ndarray:
+    """TE (s, perpendicular) reflection coefficient for incidence cosine ``cos_i``.
+
+    Gamma_TE = (cos t - sqrt(eps - sin^2 t)) / (cos t + sqrt(eps - sin^2 t))
+    (ITU-R P.2040-1 eq. 31a with mu = 1).
+    """
+    eps = _check_eps(eps)
+    c = _check_cos(cos_i)
+    r = _root(eps, c)
+    return (c - r) / (c + r)
+
+
+def fresnel_tm(cos_i, eps: complex = CONCRETE_900MHZ) -> np.ndarray:
+    """TM (p, parallel) reflection coefficient for incidence cosine ``cos_i``.
+
+    Gamma_TM = (eps cos t - sqrt(eps - sin^2 t)) / (eps cos t + sqrt(eps - sin^2 t))
+    (ITU-R P.2040-1 eq. 31b with mu = 1, p vector = s x k on both sides).
+    """
+    eps = _check_eps(eps)
+    c = _check_cos(cos_i)
+    r = _root(eps, c)
+    return (eps * c - r) / (eps * c + r)
+
+
+def reflection_loss_db(gamma) -> np.ndarray:
+    """Reflection loss -20 log10 |Gamma| [dB]."""
+    return -20.0 * np.log10(np.abs(gamma))

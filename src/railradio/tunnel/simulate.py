@@ -1,0 +1,353 @@
+"""A train crossing the tunnel: measurements, snapshot fixes, tracks (seed 003 §3.3, §7.2).
+
+Measurement models (STUDY.md §4, both reported):
+
+* ``separable`` - the seed's assumption that every slot's RSSI and delay are measured on
+  their own [seed 4.2, 6.2]: per slot the coherent one-slot power of the channel table
+  (its own multipath fading) plus log-normal shadowing (a spatial field per slot along the
+  tunnel, correlated over ``shadow_corr_m``, the same for every train: it belongs to the
+  place), and the line-of-sight delay plus Gaussian error; the ``n_slots`` strongest
+  measured slots within ``window_m`` are used.  Fix: RSSI ranging + linearized LS, then
+  TDOA Gauss-Newton from it.
+* ``wideband`` - what a receiver of bandwidth B actually sees: the sum of all slots'
+  rays with their cable delays (velocity factor v), sampled on ``n_tones`` tones across
+  B with thermal noise, transformed to a channel impulse response; its strongest peak
+  gives a delay that maps to the cable distance from the feed, x = x_feed +- v c (tau - h/c).
+  The +- (and which feed) is resolved by the previous fix of the same receiver (the train
+  enters at a known place).
+
+The train: K receivers evenly along its length [seed 3.3.1], constant speed, whole train
+inside the tunnel; epochs at ``rate_hz``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import xarray as xr
+from scipy.signal import lfilter
+
+from railradio.constants import SPEED_OF_LIGHT_M_S
+from railradio.rng import make_rng, spawn_key
+from railradio.tunnel.channel import offset_index, slot_powers, window_slots
+from railradio.tunnel.geometry import Cable, Tunnel
+from railradio.tunnel.positioning import (gain_to_offset_m, gdop_seed, gdop_tdoa_along,
+                                          monotone_gain_db, range_diff_from_delays, rssi_ls,
+                                          tdoa_gauss_newton)
+from railradio.tunnel.tracking import kf_track, pf_track, robust_variance
+
+BOLTZMANN_DBM_HZ = -174.0
+TRAIN_IDS = {"metro": 1, "hst": 2, "freight": 3}
+MEASUREMENTS = ("separable", "wideband")
+VARIANT_IDS = {("physical", "separable"): 1, ("physical", "wideband"): 2, ("seed", "separable"): 3,
+               ("seed", "wideband"): 4}
+SHADOW_KEY = {"evaluation": 100, "calibration": 101}
+
+
+@dataclass(frozen=True)
+class MeasurementModel:
+    shadow_sigma_db: float = 4.0
+    shadow_corr_m: float = 10.0
+    delay_sigma_s: float = 20e-9
+    n_slots: int = 8
+    window_m: float = 200.0
+    bandwidth_hz: float = 5e6
+    n_tones: int = 64
+    noise_figure_db: float = 7.0
+
+    def __post_init__(self) -> None:
+        if self.n_slots < 3:
+            raise ValueError(f"n_slots must be >= 3, got {self.n_slots!r}")
+        for name in ("shadow_corr_m", "delay_sigma_s", "window_m", "bandwidth_hz"):
+            if not getattr(self, name) > 0:
+                raise ValueError(f"{name} must be positive, got {getattr(self, name)!r}")
+        if self.shadow_sigma_db < 0:
+            raise ValueError("shadow_sigma_db must be >= 0")
+
+
+@dataclass(frozen=True)
+class Train:
+    name: str
+    length_m: float
+    speed_kmh: float
+    n_receivers: int = 4
+
+    def __post_init__(self) -> None:
+        if self.n_receivers < 2:
+            raise ValueError("n_receivers must be >= 2 (head and tail)")
+        if not self.length_m > 0 or not self.speed_kmh > 0:
+            raise ValueError("length_m and speed_kmh must be positive")
+
+    @property
+    def receiver_offsets_m(self) -> np.ndarray:
+        """Receiver k at x_head - k L / (K - 1) [seed 3.3.1]."""
+        return np.arange(self.n_receivers) * self.length_m / (self.n_receivers - 1)
+
+
+def shadow_field(rng: np.random.Generator, n_slots: int, length_m: float, sigma_db: float,
+                 corr_m: float, step_m: float = 1.0) -> np.ndarray:
+    """Per-slot shadowing along the tunnel [slot, x on a ``step_m`` grid] [dB], AR(1) with
+    correlation exp(-dx / corr_m) (Gudmundson)."""
+    n = int(math.ceil(length_m / step_m)) + 1
+    rho = math.exp(-step_m / corr_m)
+    w = rng.standard_normal((n_slots, n))
+    w[:, 1:] *= math.sqrt(1.0 - rho * rho)
+    return sigma_db * lfilter([1.0], [1.0, -rho], w, axis=1)
+
+
+def _field_at(field: np.ndarray, slots: np.ndarray, x_m: np.ndarray, step_m: float = 1.0) -> np.ndarray:
+    pos = np.clip(x_m / step_m, 0, field.shape[1] - 1.000001)
+    i0 = pos.astype(np.int64)
+    fr = pos - i0
+    return field[slots, i0] * (1 - fr) + field[slots, i0 + 1] * fr
+
+
+def separable_measurements(table: xr.Dataset, tunnel: Tunnel, cable: Cable, x_rx_m: np.ndarray,
+                           shadow: np.ndarray, rng: np.random.Generator, mm: MeasurementModel,
+                           propagation: str) -> dict[str, np.ndarray]:
+    """Per-slot RSSI and delay of the ``n_slots`` strongest measured slots [epoch, n]."""
+    xs, pc_dbm, _ = slot_powers(tunnel, cable)
+    x = np.asarray(x_rx_m, dtype=float)
+    sl, ok = window_slots(tunnel, x, mm.window_m)
+    idx, inside = offset_index(table, x[:, None] - xs[sl])
+    if propagation == "physical":
+        gain_db = 20.0 * np.log10(np.abs(table["taps"].values.sum(axis=1)))[idx]
+    else:
+        gain_db = 10.0 * np.log10(table["power_mean"].values)[idx]
+    rssi = pc_dbm[sl] + gain_db + _field_at(shadow, sl, x[:, None])
+    rssi = np.where(ok & inside, rssi, -np.inf)
+    order = np.argsort(-rssi, axis=1, kind="stable")[:, : mm.n_slots]
+    pick = np.take_along_axis(sl, order, axis=1)
+    rssi = np.take_along_axis(rssi, order, axis=1)
+    if not np.all(np.isfinite(rssi)):
+        raise ValueError(f"fewer than n_slots={mm.n_slots} slots within window_m={mm.window_m}")
+    h = tunnel.cross_distance_m
+    delay = np.sqrt((x[:, None] - xs[pick]) ** 2 + h * h) / SPEED_OF_LIGHT_M_S \
+        + mm.delay_sigma_s * rng.standard_normal(pick.shape)
+    return {"slot": pick, "slot_x_m": xs[pick], "rssi_dbm": rssi, "cable_power_dbm": pc_dbm[pick],
+            "delay_s": delay}
+
+
+def separable_fix(meas: dict, table: xr.Dataset, tunnel: Tunnel, mm: MeasurementModel):
+    """RSSI-LS fix, TDOA fix from it, its variance, both GDOPs [epoch]."""
+    h = tunnel.cross_distance_m
+    off, curve = monotone_gain_db(table)
+    dx = gain_to_offset_m(meas["rssi_dbm"] - meas["cable_power_dbm"], off, curve)
+    x_rssi = rssi_ls(meas["slot_x_m"], np.sqrt(dx**2 + h * h), h)
+    x_rssi = np.clip(x_rssi, 0.0, tunnel.length_m)
+    sig = SPEED_OF_LIGHT_M_S * mm.delay_sigma_s
+    x_tdoa, var = tdoa_gauss_newton(x_rssi, meas["slot_x_m"], range_diff_from_delays(meas["delay_s"]), h, sig)
+    gd_seed = gdop_seed(x_tdoa, tunnel.rx_y_m, meas["slot_x_m"], tunnel.slot_yz[0])
+    gd_tdoa = gdop_tdoa_along(x_tdoa, meas["slot_x_m"], h)
+    return x_rssi, x_tdoa, np.sqrt(var), gd_seed, gd_tdoa
+
+
+def tone_response(table: xr.Dataset, mm: MeasurementModel) -> tuple[np.ndarray, np.ndarray]:
+    """Baseband tone frequencies [tone] and every offset's frequency response [offset, tone]
+    (taps at line-of-sight + excess delay), computed once per table."""
+    n_t = mm.n_tones
+    f = (np.arange(n_t) - n_t // 2) * (mm.bandwidth_hz / n_t)
+    tau = table["los_delay_s"].values[:, None] + table["excess_delay_s"].values[None, :]
+    taps = table["taps"].values
+    out = np.empty((tau.shape[0], n_t), dtype=complex)
+    for a in range(0, tau.shape[0], 2048):
+        out[a:a + 2048] = np.einsum("ob,obf->of", taps[a:a + 2048],
+                                    np.exp(-2j * math.pi * tau[a:a + 2048, :, None] * f[None, None, :]))
+    return f, out
+
+
+def wideband_delays(table: xr.Dataset, tunnel: Tunnel, cable: Cable, x_rx_m: np.ndarray,
+                    rng: np.random.Generator, mm: MeasurementModel, tones=None, chunk: int = 1024,
+                    oversample: int = 16) -> np.ndarray:
+    """Delay of the strongest peak of the band-limited CIR at each receiver position [s]:
+    ``n_tones`` tones across the bandwidth, thermal noise kT F B, zero-padded IFFT,
+    parabolic refinement of the peak."""
+    xs, pc_dbm, tc = slot_powers(tunnel, cable)
+    amp_c = 10.0 ** ((pc_dbm - 30.0) / 20.0) * np.exp(-2j * math.pi * cable.frequency_hz * tc)
+    f, resp = tones if tones is not None else tone_response(table, mm)
+    df = f[1] - f[0]
+    noise_w = 10.0 ** ((BOLTZMANN_DBM_HZ + mm.noise_figure_db - 30.0) / 10.0) * mm.bandwidth_hz
+    n_fft = f.size * oversample
+    x_all = np.asarray(x_rx_m, dtype=float)
+    out = np.empty(x_all.size)
+    for a in range(0, x_all.size, chunk):
+        x = x_all[a:a + chunk]
+        sl, ok = window_slots(tunnel, x, mm.window_m)
+        idx, inside = offset_index(table, x[:, None] - xs[sl])
+        w = (ok & inside)[..., None]
+        cab = amp_c[sl][..., None] * np.exp(-2j * math.pi * tc[sl][..., None] * f[None, None, :])
+        hf = np.sum(cab * resp[idx] * w, axis=1)
+        hf += math.sqrt(noise_w / 2.0) * (rng.standard_normal(hf.shape) + 1j * rng.standard_normal(hf.shape))
+        cir = np.abs(np.fft.ifft(hf, n=n_fft, axis=1)) ** 2
+        k = np.argmax(cir, axis=1)
+        rows = np.arange(x.size)
+        y0, y1, y2 = cir[rows, (k - 1) % n_fft], cir[rows, k], cir[rows, (k + 1) % n_fft]
+        den = y0 - 2 * y1 + y2
+        frac = np.where(den < 0, 0.5 * (y0 - y2) / np.where(den < 0, den, -1.0), 0.0)
+        out[a:a + chunk] = (k + frac) / (n_fft * df)
+    return out
+
+
+def cable_model_delay_s(x_m: np.ndarray, tunnel: Tunnel, cable: Cable) -> np.ndarray:
+    """The receiver's delay model: cable delay to the nearest cable point plus h / c [s]."""
+    return cable.cable_delay_s(x_m, tunnel.length_m) + tunnel.cross_distance_m / SPEED_OF_LIGHT_M_S
+
+
+def wideband_candidates(tau_s: np.ndarray, tunnel: Tunnel, cable: Cable, bias_s: float = 0.0) -> np.ndarray:
+    """Cable ranging x = x_feed +- v c (tau - bias - h/c) for every feed [epoch, 2 n_feeds];
+    which one is right the tracker decides (nearest its prediction)."""
+    feeds = cable.feed_x_m(tunnel.length_m)
+    half = cable.feed_spacing_m / 2.0
+    r = cable.velocity_factor * SPEED_OF_LIGHT_M_S * (
+        np.asarray(tau_s) - bias_s - tunnel.cross_distance_m / SPEED_OF_LIGHT_M_S)
+    r = np.clip(r, 0.0, half)
+    cand = np.concatenate([feeds[None, :] - r[:, None], feeds[None, :] + r[:, None]], axis=1)
+    return np.clip(cand, 0.0, tunnel.length_m)
+
+
+def epochs(tunnel: Tunnel, train: Train, rate_hz: float, head_range_m: tuple[float, float] | None = None):
+    """Times [s] and head positions [m] while the whole train is inside the tunnel."""
+    v = train.speed_kmh / 3.6
+    lo, hi = head_range_m or (train.length_m, tunnel.length_m)
+    n = int(math.floor((hi - lo) / v * rate_hz)) + 1
+    t = np.arange(n) / rate_hz
+    return t, lo + v * t
+
+
+def snapshot_fixes(table, tunnel, cable, train, x_head, mm, propagation, measurement, shadow, rng,
+                   tones=None, bias_s: float = 0.0):
+    """Per receiver snapshot measurements and fixes [epoch, receiver].
+
+    ``fix`` is the snapshot position (separable: TDOA from the RSSI fix; wideband: the
+    cable-ranging candidate nearest the truth, i.e. with the +- ambiguity resolved - the
+    tracker resolves it itself from ``candidates``); ``scale`` is each fix's relative
+    standard deviation from its geometry (separable: the TDOA dilution; wideband: 1).
+    """
+    x_rx = x_head[:, None] - train.receiver_offsets_m[None, :]
+    n_e, k = x_rx.shape
+    res = {n: np.full((n_e, k), np.nan) for n in
+           ("fix", "fix_rssi", "sigma_tdoa", "gdop_seed", "gdop_tdoa", "tau", "scale")}
+    res["candidates"] = None
+    cands = []
+    for j in range(k):
+        if measurement == "separable":
+            meas = separable_measurements(table, tunnel, cable, x_rx[:, j], shadow, rng, mm, propagation)
+            xr_, xt, st, gs, gt = separable_fix(meas, table, tunnel, mm)
+            res["fix"][:, j], res["fix_rssi"][:, j], res["sigma_tdoa"][:, j] = xt, xr_, st
+            res["gdop_seed"][:, j], res["gdop_tdoa"][:, j] = gs, gt
+            res["scale"][:, j] = gt
+        elif measurement == "wideband":
+            tau = wideband_delays(table, tunnel, cable, x_rx[:, j], rng, mm, tones=tones)
+            c = wideband_candidates(tau, tunnel, cable, bias_s)
+            cands.append(c)
+            res["tau"][:, j] = tau
+            res["fix"][:, j] = c[np.arange(n_e), np.argmin(np.abs(c - x_rx[:, j:j + 1]), axis=1)]
+            res["scale"][:, j] = 1.0
+        else:
+            raise ValueError(f"measurement must be one of {MEASUREMENTS}, got {measurement!r}")
+    if cands:
+        res["candidates"] = np.stack(cands, axis=1)  # [epoch, receiver, candidate]
+    return x_rx, res
+
+
+def run_train(table: xr.Dataset, tunnel: Tunnel, cable: Cable, train: Train, mm: MeasurementModel,
+              propagation: str, measurement: str, tracking: dict, seed: int) -> xr.Dataset:
+    """Calibration run, then the evaluation run: snapshot fixes, KF on the head and on
+    the tail receiver, rigid-train KF on all receivers, PF on head and tail; errors.
+
+    The calibration run (another tunnel realization of the shadowing, its own noise, the
+    first ``calibration_m`` of travel) sets the measurement variance: R_t = r0 s_t^2 with
+    s_t the fix's geometric dilution and r0 the robust variance of error / s on that run;
+    for the wideband receiver also the median delay bias of its peak.  Nothing is taken
+    from the evaluation run.
+    """
+    vid = VARIANT_IDS[(propagation, measurement)]
+    tid = TRAIN_IDS.get(train.name, 9)
+    dt = 1.0 / tracking["rate_hz"]
+    n_sl = tunnel.slot_x_m.size
+    shadow_cal = shadow_field(make_rng(seed, spawn_key("tunnel", SHADOW_KEY["calibration"])),
+                              n_sl, tunnel.length_m, mm.shadow_sigma_db, mm.shadow_corr_m)
+    shadow_eval = shadow_field(make_rng(seed, spawn_key("tunnel", SHADOW_KEY["evaluation"])),
+                               n_sl, tunnel.length_m, mm.shadow_sigma_db, mm.shadow_corr_m)
+    tones = tone_response(table, mm) if measurement == "wideband" else None
+    lo = train.length_m
+    _, xh_cal = epochs(tunnel, train, tracking["rate_hz"],
+                       (lo, min(tunnel.length_m, lo + tracking["calibration_m"])))
+    rng_cal = make_rng(seed, spawn_key("tunnel", 300, tid, vid))
+    xrx_cal, cal = snapshot_fixes(table, tunnel, cable, train, xh_cal, mm, propagation, measurement,
+                                  shadow_cal, rng_cal, tones)
+    bias_s = 0.0
+    if measurement == "wideband":
+        bias_s = float(np.median(cal["tau"] - cable_model_delay_s(xrx_cal, tunnel, cable)))
+        cal["fix"] = np.stack([wideband_candidates(cal["tau"][:, j], tunnel, cable, bias_s)[
+            np.arange(xrx_cal.shape[0]), np.argmin(np.abs(wideband_candidates(
+                cal["tau"][:, j], tunnel, cable, bias_s) - xrx_cal[:, j:j + 1]), axis=1)]
+            for j in range(xrx_cal.shape[1])], axis=1)
+    r0 = robust_variance(((cal["fix"] - xrx_cal) / cal["scale"]).ravel())
+    t, x_head = epochs(tunnel, train, tracking["rate_hz"])
+    rng = make_rng(seed, spawn_key("tunnel", 200, tid, vid))
+    x_rx, res = snapshot_fixes(table, tunnel, cable, train, x_head, mm, propagation, measurement,
+                               shadow_eval, rng, tones, bias_s)
+    meas = res["candidates"] if res["candidates"] is not None else res["fix"][..., None]
+    r_t = r0 * res["scale"] ** 2
+    q = tracking["accel_sigma_m_s2"]
+    vmax = tracking["max_speed_m_s"]
+    offs = train.receiver_offsets_m
+    k = x_rx.shape[1]
+    ends = (0, k - 1)
+    kf = np.empty((t.size, 2))
+    kf_var = np.empty((t.size, 2))
+    nis = np.empty((t.size, 2))
+    x_start = x_rx[0]  # the train enters at a known place
+    for c, j in enumerate(ends):
+        kf[:, c], _, kf_var[:, c], nis[:, c] = kf_track(meas[:, j:j + 1], r_t[:, j:j + 1], dt, q,
+                                                        (x_start[j], 0.0), (r0, vmax**2))
+    rigid, _, rigid_var, _ = kf_track(meas, r_t, dt, q, (x_start[0], 0.0), (r0, vmax**2), offsets_m=offs)
+    rng_pf = make_rng(seed, spawn_key("tunnel", 400, tid, vid))
+    pf = np.empty((t.size, 2))
+    for c, j in enumerate(ends):
+        pf[:, c], _ = pf_track(meas[:, j], r_t[:, j], dt, q, (x_start[j], 0.0), (r0, vmax**2),
+                               tracking["n_particles"], rng_pf)
+    head, tail = x_head, x_head - train.length_m
+    m = {"units": "m"}
+    tr = ("time_s", "receiver")
+    ds = xr.Dataset(
+        {
+            "x_head_true": ("time_s", x_head, {**m, "long_name": "true head position"}),
+            "x_rx_true": (tr, x_rx, {**m, "long_name": "true receiver position"}),
+            "snapshot": (tr, res["fix"], {**m, "long_name": f"snapshot fix ({measurement})"}),
+            "snapshot_rssi": (tr, res["fix_rssi"], {**m, "long_name": "RSSI-ranging LS fix (separable only)"}),
+            "sigma_tdoa": (tr, res["sigma_tdoa"], {**m, "long_name": "TDOA fix standard deviation from its geometry"}),
+            "gdop_seed": (tr, res["gdop_seed"], {"units": "1", "long_name": "GDOP, the seed's 2-D formula (seed 4.1.1)"}),
+            "gdop_tdoa": (tr, res["gdop_tdoa"], {"units": "1", "long_name": "along-track TDOA dilution (sigma_x / c sigma_tau)"}),
+            "wideband_delay": (tr, res["tau"], {"units": "s", "long_name": "CIR peak delay (wideband only)"}),
+            "kf_head": ("time_s", kf[:, 0], {**m, "long_name": "Kalman-filtered head position (head receiver)"}),
+            "kf_tail": ("time_s", kf[:, 1], {**m, "long_name": "Kalman-filtered tail position (tail receiver)"}),
+            "kf_head_var": ("time_s", kf_var[:, 0], {"units": "m2", "long_name": "KF head position variance"}),
+            "kf_head_nis": ("time_s", nis[:, 0], {"units": "1", "long_name": "KF head normalized innovation squared"}),
+            "rigid_head": ("time_s", rigid, {**m, "long_name": "rigid-train KF head position (all receivers)"}),
+            "rigid_tail": ("time_s", rigid - train.length_m, {**m, "long_name": "rigid-train KF tail position"}),
+            "pf_head": ("time_s", pf[:, 0], {**m, "long_name": "particle-filter head position"}),
+            "pf_tail": ("time_s", pf[:, 1], {**m, "long_name": "particle-filter tail position"}),
+        },
+        coords={
+            "time_s": ("time_s", t, {"units": "s", "long_name": "time since the tail entered"}),
+            "receiver": ("receiver", np.arange(k), {"units": "1", "long_name": "receiver index from the head"}),
+            "receiver_offset_m": ("receiver", offs, {**m, "long_name": "receiver distance behind the head"}),
+        },
+        attrs={"train": train.name, "length_m": train.length_m, "speed_kmh": train.speed_kmh,
+               "propagation": propagation, "measurement": measurement,
+               "r0_m2": r0, "wideband_bias_s": bias_s},
+    )
+    for est in ("kf", "rigid", "pf"):
+        eh = np.abs(ds[f"{est}_head"].values - head)
+        et = np.abs(ds[f"{est}_tail"].values - tail)
+        ds[f"{est}_err_head"] = ("time_s", eh, {**m, "long_name": f"{est} head error"})
+        ds[f"{est}_err_tail"] = ("time_s", et, {**m, "long_name": f"{est} tail error"})
+        ds[f"{est}_err"] = ("time_s", np.sqrt((eh**2 + et**2) / 2.0),
+                            {**m, "long_name": f"{est} train error sqrt((e_head^2 + e_tail^2)/2) (seed 4.4.3)"})
+    ds["snapshot_err"] = (tr, np.abs(res["fix"] - x_rx), {**m, "long_name": "snapshot error"})
+    ds["snapshot_rssi_err"] = (tr, np.abs(res["fix_rssi"] - x_rx), {**m, "long_name": "RSSI-LS snapshot error"})
+    return ds

@@ -1,0 +1,161 @@
+"""Tracking along the track: Kalman filter and particle filter (filterpy) [seed 7.2].
+
+State [x, v] along the track (the seed's eq. 7.2.1 state [x, vx, y, vy] reduced to the
+track: the cross-section position is known), constant velocity with white acceleration
+noise of standard deviation ``accel_sigma``: Q = sigma_a^2 [[dt^4/4, dt^3/2], [dt^3/2, dt^2]].
+Measurements are snapshot positions (one per receiver) with variance R from a separate
+calibration run.  The rigid-train option stacks all K receivers: receiver k measures
+x_head - k L / (K - 1).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from filterpy.kalman import KalmanFilter
+import filterpy.monte_carlo.resampling as _resampling
+
+
+def _cv_model(dt_s: float, accel_sigma: float) -> tuple[np.ndarray, np.ndarray]:
+    if dt_s <= 0 or accel_sigma <= 0:
+        raise ValueError("dt_s and accel_sigma must be positive")
+    f = np.array([[1.0, dt_s], [0.0, 1.0]])
+    g = np.array([[dt_s**2 / 2.0], [dt_s]])
+    return f, accel_sigma**2 * (g @ g.T)
+
+
+def _as_candidates(z_m) -> np.ndarray:
+    z = np.asarray(z_m, dtype=float)
+    if z.ndim == 1:
+        return z[:, None, None]
+    if z.ndim == 2:
+        return z[:, :, None]
+    if z.ndim == 3:
+        return z
+    raise ValueError("z_m must be [T], [T, K] or [T, K, C]")
+
+
+def kf_track(z_m: np.ndarray, r_m2, dt_s: float, accel_sigma: float,
+             x0: tuple[float, float], p0: tuple[float, float], offsets_m: np.ndarray | None = None,
+             gate_sigma: float | None = 4.0):
+    """Kalman filter (filterpy) over snapshot fixes.
+
+    ``z_m``: [T] (one receiver), [T, K] (rigid train: column k measures x - ``offsets_m[k]``)
+    or [T, K, C] (C candidate fixes per receiver, e.g. the two sides of a cable feed: the
+    one nearest the prediction is used, nearest-neighbour association).  ``r_m2``: scalar,
+    [T] or [T, K] measurement variances.  NaN measurements are skipped (prediction only);
+    with ``gate_sigma`` a measurement whose innovation exceeds that many standard
+    deviations is rejected (the covariance grows until the filter re-acquires).
+    Returns (x [T], v [T], var_x [T], nis [T]).
+    """
+    z = _as_candidates(z_m)
+    n, k, _ = z.shape
+    offs = np.zeros(k) if offsets_m is None else np.asarray(offsets_m, dtype=float)
+    if offs.shape != (k,):
+        raise ValueError("offsets_m must have one entry per measurement column")
+    r_arr = np.asarray(r_m2, dtype=float)
+    r = (np.full((n, k), float(r_arr)) if r_arr.ndim == 0
+         else np.repeat(r_arr[:, None], k, axis=1) if r_arr.ndim == 1 else r_arr)
+    if r.shape != (n, k):
+        raise ValueError(f"r_m2 must be a scalar, [T] or [T, K]; got shape {r_arr.shape}")
+    if np.any(r <= 0):
+        raise ValueError("r_m2 must be positive")
+    kf = KalmanFilter(dim_x=2, dim_z=k)
+    kf.F, kf.Q = _cv_model(dt_s, accel_sigma)
+    kf.H = np.column_stack([np.ones(k), np.zeros(k)])
+    kf.x = np.array([[x0[0]], [x0[1]]])
+    kf.P = np.diag([p0[0], p0[1]])
+    out = np.empty((n, 3))
+    nis = np.full(n, np.nan)
+    for t in range(n):
+        kf.predict()
+        pred = kf.x[0, 0] - offs
+        cand = z[t]
+        j = np.nanargmin(np.where(np.isfinite(cand), np.abs(cand - pred[:, None]), np.inf), axis=1)
+        zt = cand[np.arange(k), j] + offs
+        if gate_sigma is not None:
+            s_inn = kf.P[0, 0] + r[t]
+            zt = np.where(np.abs(zt - kf.x[0, 0]) <= gate_sigma * np.sqrt(s_inn), zt, np.nan)
+        use = np.isfinite(zt)
+        if np.all(use):
+            kf.update(zt.reshape(-1, 1), R=np.diag(r[t]))
+            nis[t] = float((kf.y.T @ kf.SI @ kf.y).item()) / k
+        elif np.any(use):  # rigid train: update with the receivers that passed the gate
+            h_sub = kf.H[use]
+            kf.update(zt[use].reshape(-1, 1), R=np.diag(r[t][use]), H=h_sub)
+        out[t] = kf.x[0, 0], kf.x[1, 0], kf.P[0, 0]
+    return out[:, 0], out[:, 1], out[:, 2], nis
+
+
+def pf_track(z_m: np.ndarray, r_m2, dt_s: float, accel_sigma: float,
+             x0: tuple[float, float], p0: tuple[float, float], n_particles: int,
+             rng: np.random.Generator, outlier_prob: float = 0.02, outlier_width_m: float = 200.0,
+             inject_frac: float = 0.01):
+    """Bootstrap particle filter with filterpy's systematic resampling.
+
+    ``z_m`` [T] or [T, C] candidate fixes; likelihood: the sum over candidates of
+    N(z; x, R), mixed with a uniform outlier density of weight ``outlier_prob`` over
+    ``outlier_width_m`` (robust to a wrong fix).  Resampling when the effective sample
+    size drops below N/2; after every update a fraction ``inject_frac`` of the particles
+    is redrawn around the candidate nearest the estimate (sensor resetting, so a filter
+    that lost the train can find it again).  Returns (x [T], var_x [T]).
+    """
+    if n_particles < 10:
+        raise ValueError("n_particles must be >= 10")
+    z = np.asarray(z_m, dtype=float)
+    z = z[:, None] if z.ndim == 1 else z
+    r = np.broadcast_to(np.asarray(r_m2, dtype=float), (z.shape[0],))
+    f, q = _cv_model(dt_s, accel_sigma)
+    lq = np.linalg.cholesky(q + 1e-12 * np.eye(2))
+    parts = np.column_stack([x0[0] + np.sqrt(p0[0]) * rng.standard_normal(n_particles),
+                             x0[1] + np.sqrt(p0[1]) * rng.standard_normal(n_particles)])
+    w = np.full(n_particles, 1.0 / n_particles)
+    out = np.empty((z.shape[0], 2))
+    n_inj = int(round(inject_frac * n_particles))
+    for t in range(z.shape[0]):
+        parts = parts @ f.T + rng.standard_normal((n_particles, 2)) @ lq.T
+        zt = z[t][np.isfinite(z[t])]
+        if zt.size:
+            g = np.exp(-0.5 * (zt[None, :] - parts[:, :1]) ** 2 / r[t]).sum(axis=1)
+            lik = (1.0 - outlier_prob) * g / np.sqrt(2.0 * np.pi * r[t]) + outlier_prob / outlier_width_m
+            w = w * lik
+            w /= w.sum()
+            if 1.0 / np.sum(w * w) < n_particles / 2:
+                idx = systematic_resample_with(w, rng)
+                parts, w = parts[idx], np.full(n_particles, 1.0 / n_particles)
+            if n_inj:
+                mean = np.sum(w * parts[:, 0])
+                c = zt[np.argmin(np.abs(zt - mean))]
+                sel = rng.choice(n_particles, n_inj, replace=False)
+                parts[sel, 0] = c + np.sqrt(r[t]) * rng.standard_normal(n_inj)
+                parts[sel, 1] = np.sum(w * parts[:, 1])
+                w[sel] = np.mean(w)
+                w /= w.sum()
+        mean = np.sum(w * parts[:, 0])
+        out[t] = mean, np.sum(w * (parts[:, 0] - mean) ** 2)
+    return out[:, 0], out[:, 1]
+
+
+def systematic_resample_with(weights: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    """filterpy's systematic resampling with its random offset drawn from ``rng``.
+
+    ``filterpy.monte_carlo.systematic_resample`` takes its offset from the module-level
+    ``random`` (numpy's global state); it is swapped for one draw of ``rng`` during the call,
+    so the global state is neither used nor changed.
+    """
+    u = float(rng.random())
+    orig = _resampling.random
+    _resampling.random = lambda: u
+    try:
+        return _resampling.systematic_resample(weights)
+    finally:
+        _resampling.random = orig
+
+
+def robust_variance(errors_m: np.ndarray) -> float:
+    """(1.4826 MAD)^2 of the errors: the measurement variance from a calibration run."""
+    e = np.asarray(errors_m, dtype=float)
+    e = e[np.isfinite(e)]
+    if e.size < 2:
+        raise ValueError("need at least two finite errors")
+    mad = 1.4826 * np.median(np.abs(e - np.median(e)))
+    return float(max(mad, 1e-3) ** 2)
