@@ -12,6 +12,7 @@ include: "workflow/rules/common.smk"
 include: "workflow/rules/fusion.smk"
 include: "workflow/rules/nr.smk"
 include: "workflow/rules/handover.smk"
+include: "workflow/rules/tunnel.smk"
 include: "workflow/rules/paper.smk"
 
 
@@ -50,3 +51,9 @@ rule handover:
     input:
         STUDY_FIGURES["handover"],
         "results/handover/key_numbers.json",
+
+
+rule tunnel:
+    input:
+        STUDY_FIGURES["tunnel"],
+        "results/tunnel/key_numbers.json",

@@ -351,18 +351,23 @@ def _perp_vertical(k: np.ndarray) -> np.ndarray:
     return np.where(nrm > 1e-9, e / np.maximum(nrm, 1e-300), fallback)
 
 
-def reflection_product(fam: Families, sin_b: np.ndarray, eps: complex, polarization: str,
+def reflection_product(fam: Families, sin_b: np.ndarray, eps: complex | None, polarization: str,
                        return_history: bool = False):
     """Product of the reflection coefficients G[f, s] at elevations with sin b = ``sin_b``.
 
     ``paraxial``: prod_k Gamma_{TM or TE}(sin b |u_k . n_k|).  ``vector``: the vertical
     field is tracked through the s/p split of every reflection and projected on the
     receiver's vertical polarization.  With ``return_history`` (vector only) also the
-    field magnitude after each reflection [f, s, k] (it can never grow).
+    field magnitude after each reflection [f, s, k] (it can never grow).  ``eps=None``:
+    perfectly absorbing walls (G = 0 for every reflected ray).
     """
     if polarization not in POLARIZATIONS:
         raise ValueError(f"polarization must be one of {POLARIZATIONS}, got {polarization!r}")
     s = np.asarray(sin_b, dtype=float)
+    if eps is None:  # perfectly absorbing walls: only the unreflected ray survives
+        shape = (len(fam), s.shape[-1])
+        g = np.where((fam.n_refl == 0)[:, None], 1.0 + 0j, 0.0 + 0j) * np.ones(shape)
+        return (g, np.zeros((*shape, fam.normal.shape[1]))) if return_history else g
     if np.any(s < 0) or np.any(s > 1):
         raise ValueError("sin_b must be in [0, 1]")
     n_f, r_max = fam.normal.shape[:2]

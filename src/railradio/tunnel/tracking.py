@@ -95,7 +95,8 @@ def pf_track(z_m: np.ndarray, r_m2, dt_s: float, accel_sigma: float,
     ``z_m`` [T] or [T, C] candidate fixes; likelihood: the sum over candidates of
     N(z; x, R), mixed with a uniform outlier density of weight ``outlier_prob`` over
     ``outlier_width_m`` (robust to a wrong fix).  Resampling when the effective sample
-    size drops below N/2; after every update a fraction ``inject_frac`` of the particles
+    size drops below N/2, followed by a Gaussian-kernel regularization (Silverman's
+    bandwidth) against sample impoverishment; after every update a fraction ``inject_frac`` of the particles
     is redrawn around the candidate nearest the estimate (sensor resetting, so a filter
     that lost the train can find it again).  Returns (x [T], var_x [T]).
     """
@@ -111,6 +112,7 @@ def pf_track(z_m: np.ndarray, r_m2, dt_s: float, accel_sigma: float,
     w = np.full(n_particles, 1.0 / n_particles)
     out = np.empty((z.shape[0], 2))
     n_inj = int(round(inject_frac * n_particles))
+    bandwidth = (4.0 / (4.0 * n_particles)) ** (1.0 / 6.0)  # Silverman, 2-D state
     for t in range(z.shape[0]):
         parts = parts @ f.T + rng.standard_normal((n_particles, 2)) @ lq.T
         zt = z[t][np.isfinite(z[t])]
@@ -120,8 +122,12 @@ def pf_track(z_m: np.ndarray, r_m2, dt_s: float, accel_sigma: float,
             w = w * lik
             w /= w.sum()
             if 1.0 / np.sum(w * w) < n_particles / 2:
+                mean_p = w @ parts
+                std_p = np.sqrt(np.maximum(w @ (parts - mean_p) ** 2, 1e-12))
                 idx = systematic_resample_with(w, rng)
                 parts, w = parts[idx], np.full(n_particles, 1.0 / n_particles)
+                # regularization (Gaussian kernel, Silverman's bandwidth) against impoverishment
+                parts = parts + bandwidth * std_p * rng.standard_normal(parts.shape)
             if n_inj:
                 mean = np.sum(w * parts[:, 0])
                 c = zt[np.argmin(np.abs(zt - mean))]

@@ -1,0 +1,138 @@
+"""Figures of the tunnel study (cheap: read the intermediates)."""
+
+from __future__ import annotations
+
+import numpy as np
+import xarray as xr
+
+from railradio.plotting import figure, log_axis, save
+
+TRAINS = ("metro", "hst", "freight")
+
+
+def rssi_map(maps: dict[str, xr.Dataset], coverage_dbm: float, blind_dbm: float, pdf, png) -> None:
+    fig, (ax, az) = figure(nrows=2, figsize=(7.0, 5.6))
+    labels = {"image": "physical, image method (square)", "sbr": "physical, SBR (circle)",
+              "seed": "seed's model"}
+    for name, ds in maps.items():
+        ax.plot(ds["x_m"], ds["rssi_mean_dbm"], lw=0.8, label=labels.get(name, name))
+    for a in (ax, az):
+        a.axhline(coverage_dbm, color="k", ls="--", lw=0.8)
+        a.axhline(blind_dbm, color="k", ls=":", lw=0.8)
+    ax.set_xlabel("position along the tunnel x [m]")
+    ax.set_ylabel("RSSI, local mean [dBm]")
+    ax.legend(fontsize=7, loc="lower right")
+    ds = maps["image"]
+    sel = (ds["x_m"] >= 1000) & (ds["x_m"] <= 1100)
+    az.plot(ds["x_m"][sel], ds["rssi_coherent_dbm"][sel], lw=0.6, label="coherent (image)")
+    az.plot(ds["x_m"][sel], ds["rssi_mean_dbm"][sel], lw=1.2, label="local mean (image)")
+    if "sbr" in maps:
+        s = maps["sbr"]
+        sel2 = (s["x_m"] >= 1000) & (s["x_m"] <= 1100)
+        az.plot(s["x_m"][sel2], s["rssi_coherent_dbm"][sel2], lw=0.6, label="coherent (SBR circle)")
+    az.set_xlabel("x [m] (zoom; coverage - - , blind spot ···)")
+    az.set_ylabel("RSSI [dBm]")
+    az.legend(fontsize=7, loc="lower right")
+    save(fig, pdf, png)
+
+
+def delay_spread(maps: dict[str, xr.Dataset], pdf, png) -> None:
+    fig, (ax, ac) = figure(ncols=2, figsize=(7.5, 3.2))
+    for name, ds in maps.items():
+        v = ds["delay_rms_s"].values * 1e9
+        ax.plot(ds["x_m"], v, lw=0.6, label=name)
+        s = np.sort(v)
+        ac.plot(s, np.arange(1, s.size + 1) / s.size, label=name)
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("RMS delay spread [ns]")
+    ac.set_xlabel("RMS delay spread [ns]")
+    ac.set_ylabel("CDF over the tunnel")
+    ac.set_xscale("log")
+    ac.legend(fontsize=7)
+    save(fig, pdf, png)
+
+
+def gdop(run: xr.Dataset, pdf, png, span_m: float = 200.0) -> None:
+    fig, ax = figure(figsize=(6.4, 3.4))
+    x = run["x_rx_true"].values[:, 0]
+    sel = (x >= 2000) & (x <= 2000 + span_m)
+    ax.plot(x[sel], run["gdop_seed"].values[sel, 0], ".", ms=2, label="seed's 2-D GDOP (4.1.1)")
+    ax.plot(x[sel], run["gdop_tdoa"].values[sel, 0], ".", ms=2,
+            label=r"along-track TDOA: $\sigma_x / c\sigma_\tau$")
+    ax.set_yscale("log")
+    ax.set_xlabel("head receiver position x [m] (HST run)")
+    ax.set_ylabel("dilution of precision")
+    ax.legend(fontsize=7)
+    save(fig, pdf, png)
+
+
+def _cdf(ax, v, **kw):
+    s = np.sort(np.asarray(v)[np.isfinite(v)])
+    ax.plot(s, np.arange(1, s.size + 1) / s.size, **kw)
+
+
+def position_error_cdf(runs: dict[tuple[str, str], xr.Dataset], pdf, png) -> None:
+    fig, axes = figure(ncols=3, figsize=(9.0, 3.3), sharey=True)
+    for ax, tr in zip(axes, TRAINS, strict=True):
+        ds = runs[(tr, "physical_separable")]
+        _cdf(ax, ds["kf_err_head"], label="head, KF")
+        _cdf(ax, ds["kf_err_tail"], label="tail, KF")
+        _cdf(ax, ds["rigid_err"], label="rigid train, KF")
+        _cdf(ax, ds["pf_err"], label="train, PF", ls=":")
+        _cdf(ax, ds["snapshot_err"].values[:, 0], label="head, snapshot", ls="--")
+        if (tr, "physical_wideband") in runs:
+            _cdf(ax, runs[(tr, "physical_wideband")]["kf_err"], label="train, KF, wideband", ls="-.")
+        if (tr, "seed_separable") in runs:
+            _cdf(ax, runs[(tr, "seed_separable")]["kf_err"], label="train, KF, seed's channel", ls=(0, (1, 3)))
+        log_axis(ax, "x")
+        ax.set_xlabel("error [m]")
+        ax.set_title(f"{tr} ({ds.attrs['length_m']:g} m, {ds.attrs['speed_kmh']:g} km/h)", fontsize=8)
+        for lim in (2.0, 5.0):
+            ax.axvline(lim, color="k", lw=0.5, ls=":")
+    axes[0].set_ylabel("CDF")
+    axes[-1].legend(fontsize=6, loc="lower right")
+    save(fig, pdf, png)
+
+
+def ray_engines(eng: xr.Dataset, pdf, png) -> None:
+    fig, (ax, ad) = figure(nrows=2, figsize=(6.4, 5.0), sharex=True)
+    off = eng["offset_m"].values
+    for m in eng["model"].values:
+        ax.plot(off, eng["power_mean_db"].sel(model=m), label=f"{m} (local mean)")
+    ax.plot(off, eng["power_coherent_db"].sel(model="image_rect"), lw=0.5, color="grey", label="image_rect (coherent)")
+    ref = eng["power_mean_db"].sel(model="image_rect")
+    for m in ("sbr_rect", "sbr_rect_vector"):
+        ad.plot(off, eng["power_mean_db"].sel(model=m) - ref, label=f"{m} - image (local mean)")
+    ad.plot(off, eng["power_coherent_db"].sel(model="sbr_rect") - eng["power_coherent_db"].sel(model="image_rect"),
+            lw=0.6, label="sbr_rect - image (coherent)")
+    ax.set_xscale("log")
+    ax.set_ylabel("path gain of one slot [dB]")
+    ax.legend(fontsize=6)
+    ad.set_xlabel("offset along the tunnel [m]")
+    ad.set_ylabel("difference [dB]")
+    ad.legend(fontsize=6)
+    save(fig, pdf, png)
+
+
+def seed_vs_physical(tables: dict[str, xr.Dataset], maps: dict[str, xr.Dataset], h_m: float,
+                     coupling_db: float, coverage_dbm: float, pdf, png) -> None:
+    fig, (ax, ac) = figure(ncols=2, figsize=(8.0, 3.4))
+    labels = {"image": "physical (image, square)", "sbr": "physical (SBR, circle)", "seed": "seed's model"}
+    for name, t in tables.items():
+        off = t["offset_m"].values
+        sel = off >= 0.5
+        ax.plot(off[sel], 10 * np.log10(t["power_mean"].values[sel]), label=labels.get(name, name))
+    off = tables["image"]["offset_m"].values
+    sel = off >= 0.5
+    ax.plot(off[sel], -(coupling_db + 10 * np.log10(np.hypot(off[sel], h_m))), "k--", lw=0.8,
+            label="coupling loss alone (85 + 10 lg d)")
+    ax.set_xscale("log")
+    ax.set_xlabel("offset from the slot [m]")
+    ax.set_ylabel("gain re cable power [dB]")
+    ax.legend(fontsize=6)
+    for name, m in maps.items():
+        _cdf(ac, m["rssi_mean_dbm"].values, label=labels.get(name, name))
+    ac.axvline(coverage_dbm, color="k", ls="--", lw=0.8)
+    ac.set_xlabel("RSSI, local mean [dBm]")
+    ac.set_ylabel("CDF over the tunnel")
+    save(fig, pdf, png)

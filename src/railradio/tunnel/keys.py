@@ -1,0 +1,117 @@
+"""Key numbers of the tunnel study (STUDY.md §4; source values from seed 003 §8)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+from railradio.keynumbers import KeySpec
+
+TRAINS = ("metro", "hst", "freight")
+SOURCE_P95 = {"metro": (1.5, 1.2, 1.8), "hst": (2.0, 1.5, 2.5), "freight": (3.5, 2.0, 5.0)}
+"""seed 003 §8.1: 95 % accuracy of the train, its head and its tail [m] (stated as ±)."""
+
+
+def _specs() -> dict[str, KeySpec]:
+    s: dict[str, KeySpec] = {}
+
+    def add(name, unit, desc, src=None, rel=None, digits=3):
+        s[name] = KeySpec(name, unit, desc, src, rel, digits)
+
+    for tr in TRAINS:
+        tot, head, tail = SOURCE_P95[tr]
+        add(f"tunnel.{tr}.err_m.p95", "m", f"{tr}: 95th pct of the train error sqrt((e_h^2+e_t^2)/2), KF", tot, "=")
+        add(f"tunnel.{tr}.head_err_m.p95", "m", f"{tr}: 95th pct of the head error, KF", head, "=")
+        add(f"tunnel.{tr}.tail_err_m.p95", "m", f"{tr}: 95th pct of the tail error, KF", tail, "=")
+        add(f"tunnel.{tr}.rigid.err_m.p95", "m", f"{tr}: 95th pct, rigid-train KF on all receivers")
+        add(f"tunnel.{tr}.pf.err_m.p95", "m", f"{tr}: 95th pct, particle filter")
+        add(f"tunnel.{tr}.snapshot.err_m.p95", "m", f"{tr}: 95th pct of the head receiver's TDOA snapshot error")
+        add(f"tunnel.{tr}.rssi.err_m.p95", "m", f"{tr}: 95th pct of the head receiver's RSSI-ranging LS error")
+        add(f"tunnel.{tr}.wideband.err_m.p95", "m", f"{tr}: 95th pct of the train error, KF, wideband receiver")
+        add(f"tunnel.{tr}.seed_channel.err_m.p95", "m", f"{tr}: 95th pct of the train error, KF, the seed's channel")
+    add("tunnel.coverage_frac", "1", "share of the tunnel with local-mean RSSI >= -95 dBm (physical, image)", 0.96, "≥")
+    add("tunnel.coverage_frac.coherent", "1", "same with the coherent RSSI (fading included)")
+    add("tunnel.coverage_frac.sbr_circle", "1", "same, SBR in the circular cross-section")
+    add("tunnel.coverage_frac.seed_model", "1", "same, the seed's propagation model")
+    add("tunnel.blind_spot_frac", "1", "share of the tunnel in a blind spot (seed 5.1.2), physical")
+    add("tunnel.blind_spot_frac.seed_model", "1", "share in a blind spot, the seed's model")
+    add("tunnel.availability.err_lt_5m", "1", "share of epochs with train error < 5 m (KF, all trains)", 0.95, "≥")
+    add("tunnel.availability.err_lt_2m", "1", "share of epochs with train error < 2 m (KF, all trains)", 0.85, "≥")
+    add("tunnel.availability.wideband.err_lt_5m", "1", "same, < 5 m, wideband receiver")
+    add("tunnel.delay_spread_ns.median", "ns", "median RMS delay spread along the tunnel (physical, image)")
+    add("tunnel.delay_spread_ns.median.seed_model", "ns", "median RMS delay spread, the seed's model")
+    add("tunnel.rssi_dbm.median", "dBm", "median local-mean RSSI (physical, image)")
+    add("tunnel.rssi_dbm.median.seed_model", "dBm", "median local-mean RSSI, the seed's model")
+    add("tunnel.rays.order", "1", "reflection order chosen by the convergence criterion")
+    add("tunnel.rays.families_image", "1", "image-method rays (families) per slot")
+    add("tunnel.rays.families_sbr_circle", "1", "SBR ray families per slot, circular cross-section")
+    add("tunnel.engines.rect_max_diff_db", "dB", "largest |SBR - image| local-mean gain in the square tunnel", digits=2)
+    add("tunnel.hst.cep_m", "m", "HST: CEP = 0.59 sigma_x (seed 4.3.2) of the TDOA snapshot, sigma_y = 0")
+    add("tunnel.hst.snapshot.err_m.p50", "m", "HST: median TDOA snapshot error (the CEP's empirical counterpart)")
+    add("tunnel.hst.gdop_seed.median", "1", "HST head receiver: median of the seed's 2-D GDOP")
+    add("tunnel.hst.gdop_tdoa.median", "1", "HST head receiver: median along-track TDOA dilution")
+    return s
+
+
+SPECS = _specs()
+
+
+def key_numbers(runs: dict[tuple[str, str], xr.Dataset], maps: dict[str, xr.Dataset],
+                tables: dict[str, xr.Dataset], engines: xr.Dataset, coverage_dbm: float,
+                blind_dbm: float, min_rays: int) -> dict[str, Any]:
+    out: dict[str, Any] = {}
+
+    def put(name, value):
+        out[name] = SPECS[name].entry(None if value is None else float(value))
+
+    p95 = lambda v: np.nanpercentile(np.asarray(v), 95)  # noqa: E731
+    pooled, pooled_wb = [], []
+    for tr in TRAINS:
+        ds = runs[(tr, "physical_separable")]
+        put(f"tunnel.{tr}.err_m.p95", p95(ds["kf_err"]))
+        put(f"tunnel.{tr}.head_err_m.p95", p95(ds["kf_err_head"]))
+        put(f"tunnel.{tr}.tail_err_m.p95", p95(ds["kf_err_tail"]))
+        put(f"tunnel.{tr}.rigid.err_m.p95", p95(ds["rigid_err"]))
+        put(f"tunnel.{tr}.pf.err_m.p95", p95(ds["pf_err"]))
+        put(f"tunnel.{tr}.snapshot.err_m.p95", p95(ds["snapshot_err"].values[:, 0]))
+        put(f"tunnel.{tr}.rssi.err_m.p95", p95(ds["snapshot_rssi_err"].values[:, 0]))
+        pooled.append(ds["kf_err"].values)
+        wb = runs.get((tr, "physical_wideband"))
+        put(f"tunnel.{tr}.wideband.err_m.p95", None if wb is None else p95(wb["kf_err"]))
+        if wb is not None:
+            pooled_wb.append(wb["kf_err"].values)
+        sd = runs.get((tr, "seed_separable"))
+        put(f"tunnel.{tr}.seed_channel.err_m.p95", None if sd is None else p95(sd["kf_err"]))
+    err = np.concatenate(pooled)
+    put("tunnel.availability.err_lt_5m", np.mean(err < 5.0))
+    put("tunnel.availability.err_lt_2m", np.mean(err < 2.0))
+    put("tunnel.availability.wideband.err_lt_5m",
+        np.mean(np.concatenate(pooled_wb) < 5.0) if pooled_wb else None)
+
+    def blind(m):  # seed 5.1.2: RSSI_max < -100 dBm or fewer than 3 usable rays
+        return np.mean((m["rssi_mean_dbm"].values < blind_dbm) | (m["n_strong_rays"].values < min_rays))
+
+    put("tunnel.coverage_frac", np.mean(maps["image"]["rssi_mean_dbm"].values >= coverage_dbm))
+    put("tunnel.coverage_frac.coherent", np.mean(maps["image"]["rssi_coherent_dbm"].values >= coverage_dbm))
+    put("tunnel.coverage_frac.sbr_circle", np.mean(maps["sbr"]["rssi_mean_dbm"].values >= coverage_dbm))
+    put("tunnel.coverage_frac.seed_model", np.mean(maps["seed"]["rssi_mean_dbm"].values >= coverage_dbm))
+    put("tunnel.blind_spot_frac", blind(maps["image"]))
+    put("tunnel.blind_spot_frac.seed_model", blind(maps["seed"]))
+    put("tunnel.delay_spread_ns.median", np.median(maps["image"]["delay_rms_s"].values) * 1e9)
+    put("tunnel.delay_spread_ns.median.seed_model", np.median(maps["seed"]["delay_rms_s"].values) * 1e9)
+    put("tunnel.rssi_dbm.median", np.median(maps["image"]["rssi_mean_dbm"].values))
+    put("tunnel.rssi_dbm.median.seed_model", np.median(maps["seed"]["rssi_mean_dbm"].values))
+    put("tunnel.rays.order", tables["image"].attrs["reflection_order"])
+    put("tunnel.rays.families_image", tables["image"].attrs["n_families"])
+    put("tunnel.rays.families_sbr_circle", tables["sbr"].attrs["n_families"])
+    diff = engines["power_mean_db"].sel(model="sbr_rect") - engines["power_mean_db"].sel(model="image_rect")
+    put("tunnel.engines.rect_max_diff_db", float(np.max(np.abs(diff.values))))
+    hst = runs[("hst", "physical_separable")]
+    e = (hst["snapshot"].values[:, 0] - hst["x_rx_true"].values[:, 0])
+    put("tunnel.hst.cep_m", 0.59 * np.std(e))
+    put("tunnel.hst.snapshot.err_m.p50", np.median(np.abs(e)))
+    put("tunnel.hst.gdop_seed.median", np.median(hst["gdop_seed"].values[:, 0]))
+    put("tunnel.hst.gdop_tdoa.median", np.median(hst["gdop_tdoa"].values[:, 0]))
+    return out

@@ -1,0 +1,147 @@
+"""Config -> objects, and the pipeline steps of the tunnel study (kept out of the scripts)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+from railradio.rng import make_rng, spawn_key
+from railradio.tunnel.channel import (SeedModel, converged_order, offset_grid_m, power_by_order,
+                                      received, tabulate)
+from railradio.tunnel.geometry import Cable, Tunnel
+from railradio.tunnel.rays import Families, image_families, lift, sbr_families
+from railradio.tunnel.simulate import MeasurementModel, Train
+
+TABLES = {"image": ("rect", "image", "physical"), "sbr": ("circle", "sbr", "physical"),
+          "seed": ("rect", "image", "seed")}
+"""table name -> (cross-section, engine, propagation)"""
+VARIANTS = {"physical_separable": ("physical", "separable"),
+            "physical_wideband": ("physical", "wideband"),
+            "seed_separable": ("seed", "separable")}
+TABLE_OF_PROPAGATION = {"physical": None, "seed": "seed"}  # physical: the configured engine
+
+
+def tunnel_from_config(cfg: dict[str, Any], shape: str = "circle") -> Tunnel:
+    g = cfg["geometry"]
+    return Tunnel(g["length_m"], g["diameter_m"], shape, g["slot_spacing_m"], g["slot_height_frac"],
+                  g["slot_z_m"], g["rx_y_m"], g["rx_z_m"])
+
+
+def cable_from_config(cfg: dict[str, Any]) -> Cable:
+    c = cfg["cable"]
+    return Cable(c["frequency_hz"], c["feed_power_dbm"], c["feed_spacing_m"],
+                 c["loss_db_per_100m"] / 100.0, c["velocity_factor"], c["coupling_loss_db"],
+                 c["coupling_ref_m"])
+
+
+def eps_from_config(cfg: dict[str, Any]) -> complex:
+    return complex(cfg["wall"]["eps_real"], -cfg["wall"]["eps_imag"])
+
+
+def measurement_from_config(cfg: dict[str, Any]) -> MeasurementModel:
+    m = cfg["measurement"]
+    return MeasurementModel(m["shadow_sigma_db"], m["shadow_corr_m"], m["delay_sigma_ns"] * 1e-9,
+                            m["n_slots"], m["window_m"], m["bandwidth_hz"], m["n_tones"],
+                            m["noise_figure_db"])
+
+
+def train_from_config(cfg: dict[str, Any], name: str) -> Train:
+    t = cfg["trains"][name]
+    return Train(name, t["length_m"], t["speed_kmh"], cfg["positioning"]["n_receivers"])
+
+
+def families(cfg: dict[str, Any], shape: str, engine: str, order: int) -> Families:
+    tun = tunnel_from_config(cfg, shape)
+    if engine == "image":
+        return image_families(tun, order)
+    r = cfg["rays"]
+    return sbr_families(tun, r["sbr_rays"], order, r["sbr_rx_radius_m"])
+
+
+def choose_order(cfg: dict[str, Any]) -> tuple[int, np.ndarray, np.ndarray]:
+    """Reflection order by the convergence criterion (STUDY.md §4): the smallest order whose
+    omitted higher orders carry less than ``convergence_db`` of the local-mean power at every
+    test offset, in the image-method tunnel.  Returns (order, power by order, offsets)."""
+    r = cfg["rays"]
+    tun = tunnel_from_config(cfg, "rect")
+    fam = image_families(tun, r["max_order"])
+    offs = np.array(r["convergence_offsets_m"], dtype=float)
+    pbo = power_by_order(fam, offs, cable_from_config(cfg).wavelength_m, eps_from_config(cfg), "paraxial")
+    order = converged_order(pbo, r["convergence_db"])
+    if order < 0:
+        raise ValueError(f"tunnel.rays.max_order={r['max_order']} does not converge to "
+                         f"{r['convergence_db']} dB at offsets {list(offs)}; raise it")
+    return order, pbo, offs
+
+
+def make_table(cfg: dict[str, Any], name: str, seed: int) -> xr.Dataset:
+    """The tabulated slot-to-receiver channel ``name`` (see :data:`TABLES`)."""
+    shape, engine, prop = TABLES[name]
+    order, pbo, offs = choose_order(cfg)
+    fam = families(cfg, shape, engine, order)
+    tun = tunnel_from_config(cfg, shape)
+    cab = cable_from_config(cfg)
+    r = cfg["rays"]
+    sm = cfg["seed_model"]
+    grid = offset_grid_m(r["offset_step_m"], r["max_offset_m"], tun.slot_spacing_m)
+    pol = "paraxial" if engine == "image" else cfg["rays"]["sbr_polarization"]
+    rng = make_rng(seed, spawn_key("tunnel", 10)) if prop == "seed" else None
+    ds = tabulate(fam, tun, cab, grid, eps=eps_from_config(cfg), polarization=pol, propagation=prop,
+                  seed_model=SeedModel(sm["reflection_loss_db"], sm["tunnel_att_db_per_m"],
+                                       sm["multipath_max_db"]),
+                  rng=rng, delay_bin_s=r["delay_bin_ns"] * 1e-9, n_delay_bins=r["n_delay_bins"])
+    ds = ds.assign_coords(order=("order", np.arange(pbo.shape[0]), {"units": "1", "long_name": "reflection order"}),
+                          convergence_offset_m=("convergence_offset_m", offs,
+                                                {"units": "m", "long_name": "offsets of the order-convergence test"}))
+    ds["power_by_order"] = (("order", "convergence_offset_m"), pbo,
+                            {"units": "1", "long_name": "image-method local-mean power gain per reflection order (unit EIRP)"})
+    ds.attrs.update({"reflection_order": order, "slot_eirp_offset_db": cab.slot_eirp_offset_db(tun.slot_spacing_m),
+                     **{f"sbr_{k}": v for k, v in fam.stats.items()}})
+    return ds
+
+
+def make_map(cfg: dict[str, Any], table: xr.Dataset, name: str) -> xr.Dataset:
+    """RSSI (coherent, local mean), RMS delay spread, strong-ray count along the tunnel."""
+    shape = TABLES[name][0]
+    tun = tunnel_from_config(cfg, shape)
+    cab = cable_from_config(cfg)
+    step = cfg["coverage"]["map_step_m"]
+    x = np.arange(int(round(tun.length_m / step)) + 1) * step
+    rec = received(table, tun, cab, x, strong_dbm=cfg["coverage"]["blind_spot_dbm"])
+    dims = ("x_m",)
+    return xr.Dataset(
+        {"rssi_coherent_dbm": (dims, rec.rssi_coherent_dbm, {"units": "dBm", "long_name": "RSSI, coherent sum of all rays of all slots"}),
+         "rssi_mean_dbm": (dims, rec.rssi_mean_dbm, {"units": "dBm", "long_name": "RSSI, local mean (power sum over rays, seed 2.4.3)"}),
+         "delay_rms_s": (dims, rec.delay_rms_s, {"units": "s", "long_name": "RMS delay spread over all slots' rays (seed 2.5.2)"}),
+         "n_strong_rays": (dims, rec.n_strong_rays, {"units": "1", "long_name": "rays above the blind-spot level"})},
+        coords={"x_m": (dims, x, {"units": "m", "long_name": "receiver position along the tunnel"})},
+        attrs={"table": name, "shape": shape})
+
+
+def make_engines(cfg: dict[str, Any]) -> xr.Dataset:
+    """Image method vs SBR in the rectangular tunnel (and SBR in the circle): per-slot
+    local-mean and coherent gain at a set of offsets, same order, same Fresnel rule."""
+    order, _, _ = choose_order(cfg)
+    cab = cable_from_config(cfg)
+    eps = eps_from_config(cfg)
+    offs = np.array(cfg["rays"]["engine_offsets_m"], dtype=float)
+    out = {}
+    for label, shape, engine, pol in (("image_rect", "rect", "image", "paraxial"),
+                                      ("sbr_rect", "rect", "sbr", "paraxial"),
+                                      ("sbr_rect_vector", "rect", "sbr", "vector"),
+                                      ("sbr_circle", "circle", "sbr", cfg["rays"]["sbr_polarization"])):
+        rays = lift(families(cfg, shape, engine, order), offs, cab.wavelength_m, eps, pol)
+        out[label] = (10 * np.log10(np.sum(np.abs(rays.amplitude) ** 2, axis=0)),
+                      20 * np.log10(np.abs(rays.amplitude.sum(axis=0))), rays.amplitude.shape[0])
+    labels = list(out)
+    return xr.Dataset(
+        {"power_mean_db": (("model", "offset_m"), np.array([out[k][0] for k in labels]),
+                           {"units": "dB", "long_name": "local-mean path gain of one slot (unit EIRP)"}),
+         "power_coherent_db": (("model", "offset_m"), np.array([out[k][1] for k in labels]),
+                               {"units": "dB", "long_name": "coherent path gain of one slot (unit EIRP)"}),
+         "n_rays": ("model", np.array([out[k][2] for k in labels]), {"units": "1", "long_name": "rays (families)"})},
+        coords={"model": ("model", labels, {"units": "1", "long_name": "engine, cross-section, polarization rule"}),
+                "offset_m": ("offset_m", offs, {"units": "m", "long_name": "along-axis offset"})},
+        attrs={"reflection_order": order})

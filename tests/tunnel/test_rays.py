@@ -1,0 +1,118 @@
+"""Ray engines: free space with absorbing walls, image vs SBR, energy, tabulation."""
+import math
+
+import numpy as np
+import pytest
+
+from railradio.constants import SPEED_OF_LIGHT_M_S
+from railradio.tunnel.channel import converged_order, offset_grid_m, power_by_order, tabulate
+from railradio.tunnel.geometry import Cable, Tunnel
+from railradio.tunnel.materials import CONCRETE_900MHZ
+from railradio.tunnel.rays import image_families, lift, reflection_product, sbr_families, trace
+
+LAM = SPEED_OF_LIGHT_M_S / 900e6
+RECT = Tunnel(shape="rect")
+CIRCLE = Tunnel(shape="circle")
+OFFSETS = np.array([0.0, 3.0, 20.0, 100.0, 300.0, 1000.0])
+
+
+def test_image_method_is_free_space_when_walls_absorb():
+    rays = trace("image", RECT, OFFSETS, LAM, None, order=10)
+    d = np.hypot(RECT.cross_distance_m, OFFSETS)
+    free = LAM / (4 * math.pi * d) * np.exp(-2j * math.pi * d / LAM)
+    np.testing.assert_allclose(rays.amplitude.sum(axis=0), free, rtol=1e-12)
+    assert np.all(rays.amplitude[rays.n_reflections > 0] == 0)
+    los = rays.n_reflections == 0
+    assert los.sum() == 1
+    np.testing.assert_allclose(rays.delay_s[los][0], d / SPEED_OF_LIGHT_M_S, rtol=1e-12)
+
+
+def test_image_method_geometry_against_hand_images():
+    fam = image_families(RECT, 1)
+    (ys, zs), (yr, zr) = RECT.slot_yz, RECT.rx_yz
+    h, w = RECT.height_m, RECT.width_m
+    expected = sorted([math.hypot(yr - ys, zr - zs),  # line of sight
+                       math.hypot(yr + ys, zr - zs),  # floor image at -ys
+                       math.hypot(2 * h - ys - yr, zr - zs),  # ceiling image at 2H - ys
+                       math.hypot(yr - ys, zr - (w - zs)),  # wall z = +W/2: image at W - zs
+                       math.hypot(yr - ys, zr - (-w - zs))])  # wall z = -W/2
+    np.testing.assert_allclose(np.sort(fam.ell_m), expected, rtol=1e-12)
+
+
+@pytest.mark.parametrize("order", [12, 30])
+def test_engines_agree_in_a_rectangular_tunnel(order):
+    """Stated tolerance: same rays (count and 2-D length to 1e-6 m), local-mean gain within
+    0.05 dB and coherent gain within 0.3 dB at 0-1000 m with the same (paraxial) rule;
+    the SBR's vector s/p tracking stays within 1 dB of the paraxial rule beyond 20 m."""
+    img = image_families(RECT, order)
+    sbr = sbr_families(RECT, 100_000, order, 0.05)
+    assert len(sbr) == len(img)
+    np.testing.assert_allclose(np.sort(sbr.ell_m), np.sort(img.ell_m), atol=1e-6)
+    a_img = lift(img, OFFSETS, LAM, CONCRETE_900MHZ, "paraxial").amplitude
+    a_sbr = lift(sbr, OFFSETS, LAM, CONCRETE_900MHZ, "paraxial").amplitude
+    p_img, p_sbr = (np.sum(np.abs(a) ** 2, axis=0) for a in (a_img, a_sbr))
+    assert np.max(np.abs(10 * np.log10(p_sbr / p_img))) < 0.05
+    c_img, c_sbr = (np.abs(a.sum(axis=0)) for a in (a_img, a_sbr))
+    assert np.max(np.abs(20 * np.log10(c_sbr / c_img))) < 0.3
+    a_vec = lift(sbr, OFFSETS, LAM, CONCRETE_900MHZ, "vector").amplitude
+    far = OFFSETS >= 20
+    p_vec = np.sum(np.abs(a_vec) ** 2, axis=0)
+    assert np.max(np.abs(10 * np.log10(p_vec[far] / p_img[far]))) < 1.0
+
+
+def test_sbr_circle_finds_the_line_of_sight_and_spreads_correctly():
+    fam = sbr_families(CIRCLE, 50_000, 10, 0.05)
+    assert fam.n_refl[0] == 0
+    assert fam.ell_m[0] == pytest.approx(CIRCLE.cross_distance_m, abs=1e-6)
+    assert fam.spread[0] == pytest.approx(1.0, abs=1e-3)  # no wall: straight-line spreading
+    assert fam.stats["n_families"] > 10
+
+
+def test_energy_never_increases_with_reflections():
+    # every reflection of the vector-tracked field can only lose energy
+    fam = sbr_families(CIRCLE, 50_000, 20, 0.05)
+    s = np.linspace(0.0, 1.0, 33)
+    _, hist = reflection_product(fam, s, CONCRETE_900MHZ, "vector", return_history=True)
+    for k in range(1, hist.shape[2]):
+        act = fam.n_refl > k
+        assert np.all(hist[act, :, k] <= hist[act, :, k - 1] + 1e-12)
+    assert np.all(hist[:, :, 0] <= 1 + 1e-12)
+    # image method: a ray's spreading-normalized amplitude |a| 4 pi d / lambda is the
+    # product of its reflection coefficients, <= 1 and shrinking with the order on average
+    img = image_families(RECT, 20)
+    rays = lift(img, OFFSETS, LAM, CONCRETE_900MHZ, "paraxial")
+    norm = np.abs(rays.amplitude) * 4 * math.pi * rays.delay_s * SPEED_OF_LIGHT_M_S / LAM
+    assert np.all(norm <= 1 + 1e-12)
+    mean_by_order = [norm[img.n_refl == n].mean(axis=0) for n in range(21)]
+    assert np.all(np.diff(mean_by_order, axis=0) <= 1e-12)
+    # the total power converges: the chosen order leaves out less than the tolerance
+    pbo = power_by_order(image_families(RECT, 40), OFFSETS, LAM, CONCRETE_900MHZ, "paraxial")
+    n = converged_order(pbo, 0.1)
+    assert 0 < n < 40
+    assert np.all(10 * np.log10(pbo.sum(axis=0) / pbo[: n + 1].sum(axis=0)) <= 0.1)
+
+
+def test_table_equals_direct_tracing():
+    fam = image_families(RECT, 20)
+    cab = Cable()
+    grid = offset_grid_m(0.5, 200.0, RECT.slot_spacing_m)
+    tab = tabulate(fam, RECT, cab, grid, eps=CONCRETE_900MHZ, polarization="paraxial")
+    sel = np.array([0, 7, 40, 399])
+    direct = lift(fam, grid[sel], LAM, CONCRETE_900MHZ, "paraxial").amplitude
+    eirp = 10 ** (cab.slot_eirp_offset_db(RECT.slot_spacing_m) / 20)
+    np.testing.assert_allclose(tab["taps"].values[sel].sum(axis=1), eirp * direct.sum(axis=0), rtol=2e-3)
+    np.testing.assert_allclose(tab["power_mean"].values[sel], eirp**2 * np.sum(np.abs(direct) ** 2, axis=0),
+                               rtol=2e-3)
+
+
+def test_bad_arguments_raise():
+    with pytest.raises(ValueError, match="shape"):
+        image_families(CIRCLE, 3)
+    with pytest.raises(ValueError, match="rx_radius_m"):
+        sbr_families(CIRCLE, 1000, 3, 5.0)
+    with pytest.raises(ValueError, match="engine"):
+        trace("fdtd", RECT, OFFSETS, LAM, CONCRETE_900MHZ, 3)
+    with pytest.raises(ValueError, match="polarization"):
+        lift(image_families(RECT, 2), OFFSETS, LAM, CONCRETE_900MHZ, "circular")
+    with pytest.raises(ValueError, match="divide"):
+        offset_grid_m(0.3, 100.0, 20.0)

@@ -1,0 +1,179 @@
+# Study `tunnel`: long-train positioning with a leaky cable in a tunnel (seed 003, STUDY.md §4).
+# Chain: ray families -> tabulated slot-to-receiver channel per engine (NetCDF) ->
+# RSSI map, delay spread, coverage (NetCDF) -> one run per train type and channel /
+# measurement variant (snapshot fixes, KF, PF; NetCDF) -> figures + key numbers.
+from railradio.tunnel.study import TABLES, VARIANTS
+
+TUNNEL = config["tunnel"]
+TUNNEL_TABLES = list(TABLES)  # image (square), sbr (circle), seed (the seed's model)
+TUNNEL_TRAINS = list(TUNNEL["trains"])
+TUNNEL_VARIANTS = list(VARIANTS)
+TUNNEL_RUNS = [f"{t}/{v}" for t in TUNNEL_TRAINS for v in TUNNEL_VARIANTS]
+TUNNEL_CHANNEL_KEYS = ["geometry", "cable", "wall", "rays", "seed_model"]
+TUNNEL_CHANNEL = {k: TUNNEL[k] for k in TUNNEL_CHANNEL_KEYS}
+CODE_TUNNEL_CHANNEL = (
+    code_hash(
+        "railradio.tunnel.geometry",
+        "railradio.tunnel.materials",
+        "railradio.tunnel.rays",
+        "railradio.tunnel.channel",
+        "railradio.tunnel.study",
+    )
+    + CODE_SHARED
+)
+CODE_TUNNEL_RUN = (
+    code_hash("railradio.tunnel.positioning", "railradio.tunnel.tracking", "railradio.tunnel.simulate")
+    + CODE_TUNNEL_CHANNEL
+)
+TUNNEL_FIGURE_NAMES = [
+    "tunnel_rssi_map",
+    "tunnel_delay_spread",
+    "tunnel_gdop",
+    "tunnel_position_error_cdf",
+    "tunnel_ray_engines",
+    "tunnel_seed_vs_physical",
+]
+
+register_figures("tunnel", TUNNEL_FIGURE_NAMES)
+KEY_NUMBER_FRAGMENTS.append("results/tunnel/key_numbers.json")
+
+
+def tunnel_run_table(w):
+    prop = VARIANTS[w.variant][0]
+    return "results/tunnel/table_{}.nc".format("seed" if prop == "seed" else TUNNEL["engine"])
+
+
+rule tunnel_table:
+    """Ray families of one engine, tabulated by slot-receiver offset (order by convergence)."""
+    output:
+        "results/tunnel/table_{name}.nc",
+    params:
+        cfg=TUNNEL_CHANNEL,
+        seed=config["seed"],
+        code=CODE_TUNNEL_CHANNEL,
+    wildcard_constraints:
+        name="image|sbr|seed",
+    log:
+        "results/logs/tunnel/table_{name}.log",
+    benchmark:
+        "results/benchmarks/tunnel/table_{name}.tsv"
+    resources:
+        mem_mb=3000,
+        runtime=10,
+    conda:
+        "../envs/railradio.yaml"
+    script:
+        "../scripts/tunnel/table.py"
+
+
+rule tunnel_map:
+    """RSSI (coherent, local mean), RMS delay spread and usable rays along the tunnel."""
+    input:
+        "results/tunnel/table_{name}.nc",
+    output:
+        "results/tunnel/map_{name}.nc",
+    params:
+        cfg=TUNNEL_CHANNEL | {"coverage": TUNNEL["coverage"]},
+        code=CODE_TUNNEL_CHANNEL,
+    wildcard_constraints:
+        name="image|sbr|seed",
+    log:
+        "results/logs/tunnel/map_{name}.log",
+    benchmark:
+        "results/benchmarks/tunnel/map_{name}.tsv"
+    resources:
+        mem_mb=3000,
+        runtime=10,
+    conda:
+        "../envs/railradio.yaml"
+    script:
+        "../scripts/tunnel/map.py"
+
+
+rule tunnel_engines:
+    """Image method vs SBR in the square tunnel (and SBR in the circle) at fixed offsets."""
+    output:
+        "results/tunnel/engines.nc",
+    params:
+        cfg=TUNNEL_CHANNEL,
+        code=CODE_TUNNEL_CHANNEL,
+    log:
+        "results/logs/tunnel/engines.log",
+    benchmark:
+        "results/benchmarks/tunnel/engines.tsv"
+    conda:
+        "../envs/railradio.yaml"
+    script:
+        "../scripts/tunnel/engines.py"
+
+
+rule tunnel_run:
+    """One train type crossing the tunnel: measurements, snapshot fixes, KF, rigid KF, PF."""
+    input:
+        tunnel_run_table,
+    output:
+        "results/tunnel/runs/{train}/{variant}.nc",
+    params:
+        cfg=lambda w: TUNNEL_CHANNEL
+        | {k: TUNNEL[k] for k in ("measurement", "trains", "positioning", "tracking")},
+        seed=config["seed"],
+        code=CODE_TUNNEL_RUN,
+    wildcard_constraints:
+        train="metro|hst|freight",
+        variant="|".join(VARIANTS),
+    log:
+        "results/logs/tunnel/run_{train}_{variant}.log",
+    benchmark:
+        "results/benchmarks/tunnel/run_{train}_{variant}.tsv"
+    resources:
+        mem_mb=3000,
+        runtime=20,
+    conda:
+        "../envs/railradio.yaml"
+    script:
+        "../scripts/tunnel/run.py"
+
+
+rule tunnel_figures:
+    """The six tunnel figures (cheap: reads the intermediates)."""
+    input:
+        maps=expand("results/tunnel/map_{name}.nc", name=TUNNEL_TABLES),
+        tables=expand("results/tunnel/table_{name}.nc", name=TUNNEL_TABLES),
+        runs=expand("results/tunnel/runs/{run}.nc", run=TUNNEL_RUNS),
+        engines="results/tunnel/engines.nc",
+    output:
+        [report(f, caption="../report/tunnel.rst", category="tunnel") for f in STUDY_FIGURES["tunnel"]],
+    params:
+        cfg=TUNNEL,
+        tables=TUNNEL_TABLES,
+        runs=TUNNEL_RUNS,
+        names=TUNNEL_FIGURE_NAMES,
+        code=code_hash("railradio.tunnel.figures") + CODE_PLOT,
+    log:
+        "results/logs/tunnel/figures.log",
+    conda:
+        "../envs/railradio.yaml"
+    script:
+        "../scripts/tunnel/figures.py"
+
+
+rule tunnel_key_numbers:
+    """Key numbers tunnel.* beside the seed's design targets."""
+    input:
+        maps=expand("results/tunnel/map_{name}.nc", name=TUNNEL_TABLES),
+        tables=expand("results/tunnel/table_{name}.nc", name=TUNNEL_TABLES),
+        runs=expand("results/tunnel/runs/{run}.nc", run=TUNNEL_RUNS),
+        engines="results/tunnel/engines.nc",
+    output:
+        "results/tunnel/key_numbers.json",
+    params:
+        cfg=TUNNEL,
+        tables=TUNNEL_TABLES,
+        runs=TUNNEL_RUNS,
+        code=code_hash("railradio.tunnel.keys", "railradio.keynumbers"),
+    log:
+        "results/logs/tunnel/key_numbers.log",
+    conda:
+        "../envs/railradio.yaml"
+    script:
+        "../scripts/tunnel/key_numbers.py"

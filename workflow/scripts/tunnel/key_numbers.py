@@ -1,0 +1,13 @@
+"""Adapter: maps, tables, engines, runs -> results/tunnel/key_numbers.json."""
+from railradio.io import read_dataset, write_json
+from railradio.tunnel.keys import key_numbers
+from railradio.workflow import setup_script
+
+smk = snakemake  # noqa: F821 - injected by Snakemake
+setup_script(smk.log[0])
+cov = smk.params.cfg["coverage"]
+maps = {n: read_dataset(p) for n, p in zip(smk.params.tables, smk.input.maps, strict=True)}
+tables = {n: read_dataset(p) for n, p in zip(smk.params.tables, smk.input.tables, strict=True)}
+runs = {tuple(k.split("/")): read_dataset(p) for k, p in zip(smk.params.runs, smk.input.runs, strict=True)}
+write_json(smk.output[0], key_numbers(runs, maps, tables, read_dataset(smk.input.engines),
+                                      cov["threshold_dbm"], cov["blind_spot_dbm"], cov["min_rays"]))
