@@ -38,11 +38,6 @@ register_figures("tunnel", TUNNEL_FIGURE_NAMES)
 KEY_NUMBER_FRAGMENTS.append("results/tunnel/key_numbers.json")
 
 
-def tunnel_run_table(w):
-    prop = VARIANTS[w.variant][0]
-    return "results/tunnel/table_{}.nc".format("seed" if prop == "seed" else TUNNEL["engine"])
-
-
 rule tunnel_table:
     """Ray families of one engine, tabulated by slot-receiver offset (order by convergence)."""
     output:
@@ -110,7 +105,9 @@ rule tunnel_engines:
 rule tunnel_run:
     """One train type crossing the tunnel: measurements, snapshot fixes, KF, rigid KF, PF."""
     input:
-        tunnel_run_table,
+        lambda w: "results/tunnel/table_{}.nc".format(
+            "seed" if VARIANTS[w.variant][0] == "seed" else TUNNEL["engine"]
+        ),
     output:
         "results/tunnel/runs/{train}/{variant}.nc",
     params:
