@@ -50,7 +50,7 @@ def _rate_plot(ax, summary, name, transform=None, log=False):
         hi = summary[f"{name}_hi"].sel(policy=pol).values
         if transform is not None:
             p, lo, hi = transform(p), transform(hi), transform(lo)
-        err = np.vstack([p - lo, hi - p])
+        err = np.maximum(np.vstack([p - lo, hi - p]), 0.0)
         shown = p > 0 if log else np.ones_like(p, dtype=bool)
         ax.errorbar(v[shown], p[shown], yerr=err[:, shown], marker=MARKERS.get(str(pol), "o"), capsize=2,
                     markerfacecolor="none", label=LABELS.get(str(pol), str(pol)))
@@ -122,7 +122,7 @@ def plot_sensitivity(sens: xr.Dataset, pdf_path, png_path=None) -> None:
             hi = sens[f"{name}_hi"].sel(policy=pol).values
             if tr is not None:
                 p, lo, hi = tr(p), tr(hi), tr(lo)
-            ax.errorbar(p[aff], y[aff] + dy, xerr=np.vstack([p - lo, hi - p])[:, aff], linestyle="none",
+            ax.errorbar(p[aff], y[aff] + dy, xerr=np.maximum(np.vstack([p - lo, hi - p]), 0.0)[:, aff], linestyle="none",
                         marker=MARKERS.get(str(pol), "o"), markerfacecolor="none", capsize=2,
                         label=LABELS.get(str(pol), str(pol)))
     axes[0].set_yticks(y, [v if v != "reference" else "reference" for v in variants], fontsize="small")
