@@ -167,7 +167,7 @@ rule tunnel_key_numbers:
         cfg=TUNNEL,
         tables=TUNNEL_TABLES,
         runs=TUNNEL_RUNS,
-        code=code_hash("railradio.tunnel.keys", "railradio.keynumbers"),
+        code=code_hash("railradio.tunnel.keys", "railradio.tunnel.materials", "railradio.keynumbers"),
     log:
         "results/logs/tunnel/key_numbers.log",
     conda:

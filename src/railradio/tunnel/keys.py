@@ -52,6 +52,13 @@ def _specs() -> dict[str, KeySpec]:
     add("tunnel.hst.snapshot.err_m.p50", "m", "HST: median TDOA snapshot error (the CEP's empirical counterpart)")
     add("tunnel.hst.gdop_seed.median", "1", "HST head receiver: median of the seed's 2-D GDOP")
     add("tunnel.hst.gdop_tdoa.median", "1", "HST head receiver: median along-track TDOA dilution")
+    add("tunnel.fresnel.normal_loss_db", "dB", "Fresnel reflection loss of the lining at normal incidence", 8.0, "=", 2)
+    add("tunnel.fresnel.te_loss_db.graze1deg", "dB", "TE reflection loss at 1 degree grazing", digits=2)
+    add("tunnel.fresnel.te_loss_db.graze10deg", "dB", "TE reflection loss at 10 degrees grazing", digits=2)
+    add("tunnel.fresnel.tm_loss_db.graze10deg", "dB", "TM reflection loss at 10 degrees grazing", digits=2)
+    add("tunnel.modal_att_db_per_m", "dB/m", "EH11 modal attenuation of the square tunnel (Emslie); the seed: 0.05-0.08 dB/m", 0.065, "≈", 2)
+    add("tunnel.rays.slope_db_per_m_500_1000", "dB/m", "decay of one slot's local-mean gain from 500 to 1000 m (image)", digits=2)
+    add("tunnel.slot_eirp_db_re_cable", "dB", "slot EIRP relative to the cable power (slot-chain calibration)")
     return s
 
 
@@ -60,7 +67,11 @@ SPECS = _specs()
 
 def key_numbers(runs: dict[tuple[str, str], xr.Dataset], maps: dict[str, xr.Dataset],
                 tables: dict[str, xr.Dataset], engines: xr.Dataset, coverage_dbm: float,
-                blind_dbm: float, min_rays: int) -> dict[str, Any]:
+                blind_dbm: float, min_rays: int, wavelength_m: float, side_m: float,
+                eps: complex) -> dict[str, Any]:
+    from railradio.tunnel.materials import (eh11_attenuation_db_per_m, fresnel_te, fresnel_tm,
+                                            reflection_loss_db)
+
     out: dict[str, Any] = {}
 
     def put(name, value):
@@ -114,4 +125,17 @@ def key_numbers(runs: dict[tuple[str, str], xr.Dataset], maps: dict[str, xr.Data
     put("tunnel.hst.snapshot.err_m.p50", np.median(np.abs(e)))
     put("tunnel.hst.gdop_seed.median", np.median(hst["gdop_seed"].values[:, 0]))
     put("tunnel.hst.gdop_tdoa.median", np.median(hst["gdop_tdoa"].values[:, 0]))
+    put("tunnel.fresnel.normal_loss_db", reflection_loss_db(fresnel_te(1.0, eps)))
+    put("tunnel.fresnel.te_loss_db.graze1deg", reflection_loss_db(fresnel_te(np.sin(np.deg2rad(1.0)), eps)))
+    put("tunnel.fresnel.te_loss_db.graze10deg", reflection_loss_db(fresnel_te(np.sin(np.deg2rad(10.0)), eps)))
+    put("tunnel.fresnel.tm_loss_db.graze10deg", reflection_loss_db(fresnel_tm(np.sin(np.deg2rad(10.0)), eps)))
+    put("tunnel.modal_att_db_per_m", eh11_attenuation_db_per_m(wavelength_m, side_m, side_m, eps))
+    t = tables["image"]
+    off = t["offset_m"].values
+    g = 10 * np.log10(t["power_mean"].values)
+    if off[-1] >= 1000.0:
+        put("tunnel.rays.slope_db_per_m_500_1000", (g[np.searchsorted(off, 500.0)] - g[np.searchsorted(off, 1000.0)]) / 500.0)
+    else:
+        put("tunnel.rays.slope_db_per_m_500_1000", None)
+    put("tunnel.slot_eirp_db_re_cable", t.attrs["slot_eirp_offset_db"])
     return out

@@ -65,3 +65,18 @@ def fresnel_tm(cos_i, eps: complex = CONCRETE_900MHZ) -> np.ndarray:
 def reflection_loss_db(gamma) -> np.ndarray:
     """Reflection loss -20 log10 |Gamma| [dB]."""
     return -20.0 * np.log10(np.abs(gamma))
+
+
+def eh11_attenuation_db_per_m(wavelength_m: float, width_m: float, height_m: float,
+                              eps: complex = CONCRETE_900MHZ) -> float:
+    """Attenuation of the dominant vertically polarized mode EH11 of a rectangular tunnel
+    (Emslie, Lagace & Strong 1975, eq. 7 with the polarizations swapped) [dB/m]:
+
+        alpha = 4.343 lambda^2 Re[ 1 / (w^3 sqrt(eps - 1)) + eps / (h^3 sqrt(eps - 1)) ]
+
+    (side walls TE, floor and ceiling TM for a vertical field).
+    """
+    if wavelength_m <= 0 or width_m <= 0 or height_m <= 0:
+        raise ValueError("wavelength_m, width_m and height_m must be positive")
+    root = np.sqrt(complex(eps) - 1.0)
+    return float(4.343 * wavelength_m**2 * np.real(1.0 / (width_m**3 * root) + eps / (height_m**3 * root)))

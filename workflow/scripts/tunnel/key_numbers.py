@@ -1,6 +1,7 @@
 """Adapter: maps, tables, engines, runs -> results/tunnel/key_numbers.json."""
 from railradio.io import read_dataset, write_json
 from railradio.tunnel.keys import key_numbers
+from railradio.tunnel.study import cable_from_config, eps_from_config, tunnel_from_config
 from railradio.workflow import setup_script
 
 smk = snakemake  # noqa: F821 - injected by Snakemake
@@ -10,4 +11,7 @@ maps = {n: read_dataset(p) for n, p in zip(smk.params.tables, smk.input.maps, st
 tables = {n: read_dataset(p) for n, p in zip(smk.params.tables, smk.input.tables, strict=True)}
 runs = {tuple(k.split("/")): read_dataset(p) for k, p in zip(smk.params.runs, smk.input.runs, strict=True)}
 write_json(smk.output[0], key_numbers(runs, maps, tables, read_dataset(smk.input.engines),
-                                      cov["threshold_dbm"], cov["blind_spot_dbm"], cov["min_rays"]))
+                                      cov["threshold_dbm"], cov["blind_spot_dbm"], cov["min_rays"],
+                                      cable_from_config(smk.params.cfg).wavelength_m,
+                                      tunnel_from_config(smk.params.cfg, "rect").width_m,
+                                      eps_from_config(smk.params.cfg)))
