@@ -2,7 +2,9 @@
 # Chain: trajectory -> per-shard channel + burst + per-cell estimates (NetCDF) ->
 # calibration run (noise levels, q) -> EKF tracking per realization -> figures + numbers.
 from railradio.config import deep_merge, load_schema, validate_config
+from railradio.nr.workflow import receiver_selection as nr_selection
 from railradio.nr.simulate import scenario_from_config
+from railradio.nr.workflow import sim_config as nr_sim
 
 NR = config["nr"]
 NR_SCN = scenario_from_config(NR)
@@ -13,28 +15,6 @@ NR_EPOCHS = (
 )
 NR_REALS = [f"r{i}" for i in range(NR["realizations"])]
 NR_CAL_SHARDS = 2
-NR_SIM_KEYS = [
-    "trajectory",
-    "deployment",
-    "radio",
-    "antenna",
-    "channel",
-    "receiver",
-    "receiver_variants",
-    "traffic",
-]
-
-
-def nr_sim(c):
-    return {k: c[k] for k in NR_SIM_KEYS if k in c}
-
-
-def nr_selection(c):
-    return {"seed": c["receiver"]["selection"]} | {
-        name: v["selection"] for name, v in c.get("receiver_variants", {}).items()
-    }
-
-
 NR_SIM = nr_sim(NR)
 NR_SELECTION = nr_selection(NR)
 
@@ -54,7 +34,7 @@ NR_CASE_EPOCHS = min(NR_SENS["epochs"], NR_SCN.trajectory.n_epochs)
 CODE_NR_SIM = (
     code_hash(
         "railradio.nr",
-        exclude=("figures.py", "keys.py", "tracking.py", "bounds.py"),
+        exclude=("figures.py", "keys.py", "tracking.py", "bounds.py", "workflow.py"),
         data=("tdl.json",),
     )
     + CODE_SHARED
@@ -106,13 +86,42 @@ rule nr_shard:
     params:
         sim=NR_SIM,
         seed=config["seed"],
-        n_epochs=lambda w: NR["calibration"]["epochs"] if w.real == "cal" else NR_EPOCHS,
-        n_shards=lambda w: NR_CAL_SHARDS if w.real == "cal" else NR["n_shards"],
+        n_epochs=NR_EPOCHS,
+        n_shards=NR["n_shards"],
         code=CODE_NR_SIM,
     log:
         "results/logs/nr/shard_{real}_s{shard}.log",
     benchmark:
         "results/benchmarks/nr/shard_{real}_s{shard}.tsv"
+    wildcard_constraints:
+        real=r"r\d+",
+    resources:
+        mem_mb=3000,
+        runtime=60,
+    conda:
+        "../envs/railradio.yaml"
+    script:
+        "../scripts/nr/shard.py"
+
+
+rule nr_cal_shard:
+    """A shard of the calibration run (the first epochs, its own random key); scheduled
+    first so that the calibration overlaps the evaluation shards."""
+    output:
+        "results/nr/estimates/{real}/s{shard}.nc",
+    params:
+        sim=NR_SIM,
+        seed=config["seed"],
+        n_epochs=NR["calibration"]["epochs"],
+        n_shards=NR_CAL_SHARDS,
+        code=CODE_NR_SIM,
+    log:
+        "results/logs/nr/shard_{real}_s{shard}.log",
+    benchmark:
+        "results/benchmarks/nr/shard_{real}_s{shard}.tsv"
+    wildcard_constraints:
+        real="cal",
+    priority: 10
     resources:
         mem_mb=3000,
         runtime=60,
@@ -135,6 +144,7 @@ rule nr_calibrate:
         code=CODE_NR_TRACK,
     log:
         "results/logs/nr/calibrate.log",
+    priority: 10
     benchmark:
         "results/benchmarks/nr/calibrate.tsv"
     conda:

@@ -59,6 +59,13 @@ def peb_m(rrh_xy: NDArray, x_m: float, dh_m: float, sigma_r_m: NDArray, sigma_th
     return float(np.sqrt(np.trace(np.linalg.inv(j))))
 
 
+def change_epochs(phases, dt_s: float) -> NDArray[np.int64]:
+    """First epoch of every trajectory phase after the first (the acceleration changes
+    just before it); ``phases`` as in :class:`railradio.nr.geometry.Trajectory`."""
+    ends = np.cumsum([d for d, _ in phases])[:-1]
+    return np.ceil(ends / dt_s - 1e-9).astype(np.int64)
+
+
 def pcrb_m(rrh_xy_seq: list[NDArray], x_true: NDArray, dh_m: float, sigma_toa_s_seq: list[NDArray],
            sigma_theta_rad: float, dt_s: float, q: float, p0: NDArray,
            reset_epochs: NDArray | None = None, reset_acc_sigma: float = 10.0) -> NDArray[np.float64]:

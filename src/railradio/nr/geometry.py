@@ -54,11 +54,6 @@ class Trajectory:
     def times_s(self) -> NDArray[np.float64]:
         return np.arange(self.n_epochs) * self.dt_s
 
-    def change_epochs(self) -> NDArray[np.int64]:
-        """First epoch of every phase after the first (the acceleration changes just before)."""
-        ends = np.cumsum([d for d, _ in self.phases])[:-1]
-        return np.ceil(ends / self.dt_s - 1e-9).astype(np.int64)
-
     def state(self, t_s: NDArray[np.float64]) -> tuple[NDArray, NDArray, NDArray]:
         """Exact position [m], speed [m/s] and acceleration [m/s²] at times ``t_s``."""
         t = np.asarray(t_s, dtype=float)

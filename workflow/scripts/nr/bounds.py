@@ -10,7 +10,8 @@ from common import scenario  # noqa: E402
 
 from railradio.constants import SPEED_OF_LIGHT_M_S  # noqa: E402
 from railradio.io import write_dataset  # noqa: E402
-from railradio.nr.bounds import INTEGER_SAMPLE_SIGMA_M, burst_e_over_n0, pcrb_m, peb_m, toa_crb_s  # noqa: E402
+from railradio.nr.bounds import (INTEGER_SAMPLE_SIGMA_M, burst_e_over_n0, change_epochs, pcrb_m,  # noqa: E402
+                                 peb_m, toa_crb_s)
 from railradio.nr.link import ShadowingMap, link_budget  # noqa: E402
 from railradio.nr.simulate import KEY_SHADOWING  # noqa: E402
 from railradio.rng import spawn_key  # noqa: E402
@@ -47,7 +48,7 @@ pcrb = pcrb_m(xy_seq, x, dh, s_seq, cal["sigma_aod_rad"], scn.trajectory.dt_s, c
               np.diag([100.0, 100.0, 1.0, 1.0, 1.0, 1.0]))
 # the true motion: constant acceleration within phases, unknown jumps at the changes
 pcrb_true = pcrb_m(xy_seq, x, dh, s_seq, cal["sigma_aod_rad"], scn.trajectory.dt_s, 0.0,
-                   np.diag([100.0, 100.0, 1.0, 1.0, 1.0, 1.0]), reset_epochs=scn.trajectory.change_epochs())
+                   np.diag([100.0, 100.0, 1.0, 1.0, 1.0, 1.0]), reset_epochs=change_epochs(scn.trajectory.phases, scn.trajectory.dt_s))
 log.info("median TOA CRB %.4f m, median PEB %.3f m, mean PCRB %.3f m (true motion %.3f m)",
          np.median(crb_best), np.median(peb), np.mean(pcrb), np.mean(pcrb_true))
 ds = xr.Dataset(
