@@ -44,7 +44,8 @@ def plot_cost_vs_m(cost: xr.Dataset, pdf_path, png_path=None) -> None:
 
 def _rate_plot(ax, summary, name, transform=None, log=False):
     v = summary["speed_kmh"].values
-    for pol in summary["policy"].values:
+    dv = 0.006 * (v.max() - v.min() + 1.0)  # side-by-side offsets of the upper-bound markers
+    for j, pol in enumerate(summary["policy"].values):
         p = summary[name].sel(policy=pol).values
         lo = summary[f"{name}_lo"].sel(policy=pol).values
         hi = summary[f"{name}_hi"].sel(policy=pol).values
@@ -52,10 +53,11 @@ def _rate_plot(ax, summary, name, transform=None, log=False):
             p, lo, hi = transform(p), transform(hi), transform(lo)
         err = np.maximum(np.vstack([p - lo, hi - p]), 0.0)
         shown = p > 0 if log else np.ones_like(p, dtype=bool)
-        ax.errorbar(v[shown], p[shown], yerr=err[:, shown], marker=MARKERS.get(str(pol), "o"), capsize=2,
-                    markerfacecolor="none", label=LABELS.get(str(pol), str(pol)))
+        cont = ax.errorbar(v[shown], p[shown], yerr=err[:, shown], marker=MARKERS.get(str(pol), "o"),
+                           capsize=2, markerfacecolor="none", label=LABELS.get(str(pol), str(pol)))
         if log and np.any(~shown):  # zero observed: draw the upper bound only
-            ax.plot(v[~shown], hi[~shown], marker="v", linestyle="none", color=ax.lines[-1].get_color())
+            ax.plot(v[~shown] + (j - 1) * dv, hi[~shown], marker="v", linestyle="none",
+                    color=cont[0].get_color())
 
 
 def plot_pingpong_vs_speed(summary: xr.Dataset, pdf_path, png_path=None) -> None:

@@ -18,7 +18,7 @@ def _spec(name, unit, desc, src=None, rel=None, digits=3):
 
 SPECS = {s.name: s for s in [
     _spec("handover.best_m", "1", "number of joint nodes m minimizing the cost (config WSLR reading)", 3, "="),
-    _spec("handover.best_alpha", "1", "geometric weight parameter alpha at the cost minimum"),
+    _spec("handover.best_alpha", "1", "geometric weight parameter alpha at the cost minimum (no effect when m = 1)"),
     _spec("handover.cost.min", "1", "minimum cost J = E[C/N] + E[F]", digits=3),
     _spec("handover.cost.m3_minus_best", "1", "cost at m = 3 (best alpha) minus the minimum cost"),
     _spec("handover.cost.full_grid_gain", "1",
