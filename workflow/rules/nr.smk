@@ -34,7 +34,8 @@ NR_CASE_EPOCHS = min(NR_SENS["epochs"], NR_SCN.trajectory.n_epochs)
 CODE_NR_SIM = (
     code_hash(
         "railradio.nr",
-        exclude=("figures.py", "keys.py", "tracking.py", "bounds.py", "workflow.py", "imm.py", "smoother.py"),
+        exclude=("figures.py", "keys.py", "tracking.py", "bounds.py", "workflow.py",
+                 "imm.py", "smoother.py", "imm_report.py"),
         data=("tdl.json",),
     )
     + CODE_SHARED
