@@ -47,3 +47,13 @@ def test_compare_uses_monte_carlo_errors():
     assert compare({"k": {"value": 10.7, "mc_stderr": 0.1}}, ref)  # 4.9 sigma
     assert compare({}, ref) == ["k: missing from the new numbers"]
     assert compare({"k": {"value": 10.0}}, {"k": {"value": 10.0}}) == []
+
+
+def test_tex_escape_is_ascii_and_pdflatex_safe():
+    from railradio.keynumbers import _tex_escape
+
+    got = _tex_escape("sqrt((e_h^2+e_t^2)/2) ~ 50% & #1 $x{y}\\ σ Δ Α ο → ≥ − ‰")
+    assert got.isascii()
+    assert r"e\_h\^{}2" in got and r"\~{}" in got and r"\%" in got and r"\$x\{y\}" in got
+    assert r"$\sigma$" in got and r"$\Delta$" in got and r"$\to$" in got and r"$\ge$" in got
+    assert r"$\Alpha$" not in got and r"$\omicron$" not in got  # no such LaTeX macros

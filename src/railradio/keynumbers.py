@@ -152,11 +152,41 @@ def config_to_latex(cfg: Mapping[str, Any]) -> str:
     return "\n".join(lines) + "\n"
 
 
+_TEX_REPL = {"_": r"\_", "%": r"\%", "&": r"\&", "#": r"\#", "$": r"\$", "{": r"\{", "}": r"\}",
+             "\\": r"\textbackslash{}", "^": r"\^{}", "~": r"\~{}", "|": r"$|$", "<": r"$<$",
+             ">": r"$>$", "≥": r"$\ge$", "≤": r"$\le$", "µ": r"$\mu$", "°": r"$^\circ$",
+             "≈": r"$\approx$", "−": "-", "–": "--", "—": "---", "×": r"$\times$", "·": r"$\cdot$",
+             "±": r"$\pm$", "→": r"$\to$", "²": r"$^2$", "³": r"$^3$", "…": r"\dots{}", "’": "'",
+             "√": r"$\surd$", "∞": r"$\infty$"}
+
+
+_TEX_GREEK_CAPITALS = {"Gamma", "Delta", "Theta", "Lambda", "Xi", "Pi", "Sigma", "Upsilon", "Phi",
+                       "Psi", "Omega"}
+
+
 def _tex_escape(text: str) -> str:
-    repl = {"_": r"\_", "%": r"\%", "&": r"\&", "#": r"\#", "|": r"$|$", "<": r"$<$", ">": r"$>$",
-            "σ": r"$\sigma$", "≥": r"$\ge$",
-            "≤": r"$\le$", "µ": r"$\mu$", "°": r"$^\circ$", "≈": r"$\approx$"}
-    return "".join(repl.get(ch, ch) for ch in text)
+    """Plain text -> LaTeX (pdflatex-safe): specials escaped, Greek letters and common
+    symbols as math, any other non-ASCII character as '?'."""
+    import unicodedata
+
+    out = []
+    for ch in text:
+        if ch in _TEX_REPL:
+            out.append(_TEX_REPL[ch])
+        elif ord(ch) < 128:
+            out.append(ch)
+        else:
+            name = unicodedata.name(ch, "")
+            if name.startswith("GREEK SMALL LETTER ") or name.startswith("GREEK CAPITAL LETTER "):
+                letter = name.rsplit(" ", 1)[1].lower()
+                letter = {"lamda": "lambda"}.get(letter, letter)
+                if name.startswith("GREEK CAPITAL"):
+                    letter = letter.capitalize()
+                ok = letter in _TEX_GREEK_CAPITALS if letter[0].isupper() else letter != "omicron"
+                out.append(rf"$\{letter}$" if ok else "?")
+            else:
+                out.append("?")
+    return "".join(out)
 
 
 def claims_table(numbers: Mapping[str, Any], prefixes: Iterable[str] | None = None,
