@@ -1,0 +1,311 @@
+"""Tracking that does not lag (STUDY.md §6 item 3, issue 7): an interacting-multiple-model
+(IMM) filter of white-jerk constant-acceleration EKFs, run with the same measurement
+selection, χ² gate and re-acquisition as :func:`railradio.nr.tracking.track`.
+
+IMM cycle (Blom & Bar-Shalom 1988; Bar-Shalom, Li & Kirubarajan 2001, §11.6.6, "BLK"):
+
+1. mixing: c̄_j = Σ_i p_ij μ_i, μ_i|j = p_ij μ_i / c̄_j (BLK eq. 11.6.6-8, -9);
+   x0_j = Σ_i μ_i|j x_i, P0_j = Σ_i μ_i|j [P_i + (x_i − x0_j)(x_i − x0_j)ᵀ] (-10, -11);
+2. each model's EKF prediction with its own white-jerk intensity q_j and update with the
+   common validated measurements; likelihood Λ_j = N(ν_j; 0, S_j) (-12);
+3. mode probabilities μ_j = Λ_j c̄_j / Σ_l Λ_l c̄_l (-15);
+4. combination x = Σ_j μ_j x_j, P = Σ_j μ_j [P_j + (x_j − x)(x_j − x)ᵀ] (-16, -17).
+
+Markov transition matrix from the mean sojourn time τ_j of each mode: a geometric
+sojourn of mean τ_j epochs·dt has p_jj = 1 − dt/τ_j (BLK §11.6.3); the rest of the row is
+shared equally by the other modes [ours]. The manoeuvre model's intensity follows the
+rule that the acceleration changes over one interval T by about √(qT) (BLK §6.2.3):
+q = Δa²/T for a jump Δa [m/s²] [ours: Δa from config].
+
+Selection and gate [ours]: the measured RRHs are chosen from the mode-weighted predicted
+position; a measurement passes the χ² gate if it passes the gate of at least one model
+(the union of the models' validation regions), so that the manoeuvre model can still see
+the measurements the quiet model's gate would reject. With one model every step reduces to
+:func:`railradio.nr.tracking.run_ekf` (a test checks equality).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.stats import chi2
+
+from railradio.constants import SPEED_OF_LIGHT_M_S
+from railradio.nr.tracking import (
+    VARIANTS,
+    TrackerConfig,
+    hx,
+    jacobian,
+    process_noise,
+    residual_fn,
+    run_ekf,
+    select_measurements,
+    snapshot_ls,
+    transition,
+)
+
+
+def markov_matrix(sojourn_s, dt_s: float) -> NDArray[np.float64]:
+    """Mode transition matrix Π[i, j] = P(mode j at k+1 | mode i at k) from the mean
+    sojourn times ``sojourn_s`` [s] of the modes: p_ii = 1 − dt/τ_i (BLK §11.6.3), the
+    remainder split equally among the other modes. One mode: [[1]]."""
+    tau = np.atleast_1d(np.asarray(sojourn_s, dtype=float))
+    if not dt_s > 0:
+        raise ValueError(f"dt_s must be > 0 [s], got {dt_s!r}")
+    if tau.ndim != 1 or tau.size == 0:
+        raise ValueError("sojourn_s must be a non-empty list of times [s]")
+    m = tau.size
+    if m == 1:
+        return np.ones((1, 1))
+    if not np.all(tau >= dt_s):
+        raise ValueError(f"sojourn_s must all be >= dt_s = {dt_s} s, got {tau.tolist()}")
+    stay = 1.0 - dt_s / tau
+    pi = np.repeat(((1.0 - stay) / (m - 1))[:, None], m, axis=1)
+    np.fill_diagonal(pi, stay)
+    return pi
+
+
+def stationary(pi: NDArray) -> NDArray[np.float64]:
+    """Stationary distribution μ = μ Π of a Markov matrix (the initial mode probabilities)."""
+    w, v = np.linalg.eig(np.asarray(pi, float).T)
+    mu = np.real(v[:, np.argmin(np.abs(w - 1.0))])
+    return mu / mu.sum()
+
+
+def q_for_jump(delta_a_m_s2: float, dt_s: float) -> float:
+    """White-jerk intensity [m² s⁻⁵] whose acceleration change over one interval,
+    √(q·T), equals the jump Δa [m/s²] (BLK §6.2.3): q = Δa²/T."""
+    if not delta_a_m_s2 > 0:
+        raise ValueError(f"delta_a_m_s2 must be > 0 [m/s²], got {delta_a_m_s2!r}")
+    if not dt_s > 0:
+        raise ValueError(f"dt_s must be > 0 [s], got {dt_s!r}")
+    return float(delta_a_m_s2) ** 2 / float(dt_s)
+
+
+@dataclass(frozen=True)
+class ImmConfig:
+    """Model set of the IMM: white-jerk intensities ``q`` [m² s⁻⁵] and mean sojourn times
+    ``sojourn_s`` [s], one per model (the first is the quiet model); ``mu0``: initial mode
+    probabilities (None: the stationary distribution of the Markov chain)."""
+
+    q: tuple[float, ...]
+    sojourn_s: tuple[float, ...]
+    mu0: tuple[float, ...] | None = None
+
+    def __post_init__(self) -> None:
+        q = np.atleast_1d(np.asarray(self.q, float))
+        if q.size == 0 or not np.all(q > 0):
+            raise ValueError(f"q must be a non-empty list of values > 0 [m² s⁻⁵], got {self.q!r}")
+        if len(np.atleast_1d(self.sojourn_s)) != q.size:
+            raise ValueError(f"sojourn_s must have one entry per model ({q.size}), got {self.sojourn_s!r}")
+        if not np.all(np.asarray(self.sojourn_s, float) > 0):
+            raise ValueError(f"sojourn_s must be > 0 [s], got {self.sojourn_s!r}")
+        if self.mu0 is not None:
+            mu0 = np.asarray(self.mu0, float)
+            if mu0.shape != q.shape or np.any(mu0 < 0) or not np.isclose(mu0.sum(), 1.0):
+                raise ValueError(f"mu0 must be {q.size} probabilities summing to 1, got {self.mu0!r}")
+
+    @property
+    def n_models(self) -> int:
+        return len(np.atleast_1d(self.q))
+
+    def initial(self, dt_s: float) -> tuple[NDArray, NDArray]:
+        """(Π, μ0) for interval ``dt_s``."""
+        pi = markov_matrix(self.sojourn_s, dt_s)
+        mu0 = stationary(pi) if self.mu0 is None else np.asarray(self.mu0, float)
+        return pi, mu0
+
+
+def _gauss_logpdf(nu: NDArray, s: NDArray) -> tuple[float, float]:
+    """(log N(ν; 0, S), νᵀS⁻¹ν), with S scaled to unit diagonal first: the AOD [rad] and
+    TOA [s] entries differ by ~10 orders of magnitude."""
+    d = 1.0 / np.sqrt(np.diag(s))
+    sc = s * np.outer(d, d)
+    nus = nu * d
+    chol = np.linalg.cholesky(sc)
+    w = np.linalg.solve(chol, nus)
+    maha = float(w @ w)
+    logdet = 2.0 * np.sum(np.log(np.diag(chol))) - 2.0 * np.sum(np.log(d))
+    return -0.5 * (maha + logdet + nu.size * np.log(2 * np.pi)), maha
+
+
+def _moments(mu: NDArray, xs: NDArray, ps: NDArray) -> tuple[NDArray, NDArray]:
+    """Mixture mean and covariance (BLK eq. 11.6.6-16, -17) of models ``xs`` [m, 6], ``ps``."""
+    x = mu @ xs
+    d = xs - x
+    return x, np.einsum("j,jab->ab", mu, ps) + np.einsum("j,ja,jb->ab", mu, d, d)
+
+
+def run_imm(select, dt_s: float, dh_m: float, cfg: TrackerConfig, imm: ImmConfig, s0: NDArray,
+            p0: NDArray, n_epochs: int, reacquire=None, reacquire_after: int = 10) -> dict[str, NDArray]:
+    """Run the IMM over ``n_epochs`` epochs; ``select(n, x_pred) -> (rrh_xy, aod, toa)`` and
+    ``reacquire`` as in :func:`railradio.nr.tracking.run_ekf` (measurement noise, variant and
+    gate from ``cfg``; its ``q`` is not used: each model has its own).
+
+    Returns ``state`` [n, 6] and ``cov`` [n, 6, 6] (combined posterior), ``mu`` [n, m] (mode
+    probabilities), ``n_used`` [n] (RRHs used after gating), ``reacquired`` [n].
+    """
+    if n_epochs < 0:
+        raise ValueError(f"n_epochs must be >= 0, got {n_epochs!r}")
+    if reacquire_after < 1:
+        raise ValueError(f"reacquire_after must be >= 1, got {reacquire_after!r}")
+    m = imm.n_models
+    f = transition(dt_s)
+    qs = [process_noise(dt_s, float(q)) for q in np.atleast_1d(imm.q)]
+    pi, mu = imm.initial(dt_s)
+    xs = np.repeat(np.asarray(s0, float)[None], m, axis=0)
+    ps = np.repeat(np.asarray(p0, float)[None], m, axis=0)
+    res = residual_fn(cfg.variant)
+    per = sum(VARIANTS[cfg.variant])
+    gate = chi2.ppf(cfg.gate_prob, per) if cfg.gate else np.inf
+    eye = np.eye(6)
+    out = {"state": np.zeros((n_epochs, 6)), "cov": np.zeros((n_epochs, 6, 6)), "mu": np.zeros((n_epochs, m)),
+           "n_used": np.zeros(n_epochs, dtype=np.int64),
+           "reacquired": np.zeros(n_epochs, dtype=bool)}
+    misses = 0
+    for k in range(n_epochs):
+        cbar = mu.copy()
+        if k > 0:  # 1. mixing, 2. per-model prediction
+            cbar = mu @ pi
+            mix = pi * mu[:, None] / np.where(cbar > 0, cbar, 1.0)[None, :]  # μ_i|j [i, j]
+            x0 = mix.T @ xs
+            p0m = np.empty_like(ps)
+            for j in range(m):
+                d = xs - x0[j]
+                p0m[j] = np.einsum("i,iab->ab", mix[:, j], ps) + np.einsum("i,ia,ib->ab", mix[:, j], d, d)
+            xs = x0 @ f.T
+            ps = np.einsum("ab,jbc,dc->jad", f, p0m, f) + np.stack(qs)
+        x_pred = cbar @ xs
+        xy, aod_k, toa_k = select(k, x_pred)
+        xy = np.asarray(xy, float).reshape(-1, 2)
+        if xy.shape[0]:
+            z = cfg.pick(np.asarray(aod_k), np.asarray(toa_k))
+            keep = np.ones(xy.shape[0], dtype=bool)
+            if cfg.gate:  # per-RRH χ² test, passed if any model's gate passes it
+                for i in range(xy.shape[0]):
+                    ok = False
+                    for j in range(m):
+                        hi = jacobian(xs[j], xy[i:i + 1], dh_m, cfg.variant)
+                        si = hi @ ps[j] @ hi.T + cfg.noise(1)
+                        ri = res(z[i * per:(i + 1) * per], hx(xs[j], xy[i:i + 1], dh_m, cfg.variant))
+                        ok = ok or float(ri @ np.linalg.solve(si, ri)) <= gate
+                    keep[i] = ok
+            if keep.any():
+                sel = xy[keep]
+                zs = z[np.repeat(keep, per)]
+                r = cfg.noise(sel.shape[0])
+                loglik = np.empty(m)
+                for j in range(m):  # EKF update of model j (Joseph form, as filterpy's)
+                    h = jacobian(xs[j], sel, dh_m, cfg.variant)
+                    pht = ps[j] @ h.T
+                    s = h @ pht + r
+                    gain = pht @ np.linalg.inv(s)
+                    nu = res(zs, hx(xs[j], sel, dh_m, cfg.variant))
+                    loglik[j], _ = _gauss_logpdf(nu, s)
+                    xs[j] = xs[j] + gain @ nu
+                    ikh = eye - gain @ h
+                    ps[j] = ikh @ ps[j] @ ikh.T + gain @ r @ gain.T
+                # 3. mode probabilities (log-sum-exp)
+                lw = loglik + np.log(np.maximum(cbar, 1e-300))
+                w = np.exp(lw - lw.max())
+                mu = w / w.sum()
+                out["n_used"][k] = int(keep.sum())
+                misses = 0
+            else:
+                mu = cbar
+                misses += 1
+                if reacquire is not None and misses >= reacquire_after:
+                    fix = reacquire(k)
+                    if fix is not None:
+                        xs[:, :2] = fix[0]
+                        ps[:, :2, :] = 0.0
+                        ps[:, :, :2] = 0.0
+                        ps[:, :2, :2] = fix[1]
+                        out["reacquired"][k] = True
+                        misses = 0
+        else:
+            mu = cbar
+        out["state"][k], out["cov"][k] = _moments(mu, xs, ps)
+        out["mu"][k] = mu
+    return out
+
+
+def _setup(ds, rrh_x: NDArray, rrh_y: float, dh_m: float, cfg: TrackerConfig, strength: str, n_use: int):
+    """Measurement selection, first epoch k0 and initial state of
+    :func:`railradio.nr.tracking.track` (same rules, restated here so that the EKF of
+    ``track`` and the filters below start alike; a test checks the EKF is identical)."""
+    rrh = ds["rrh"].values
+    aod = ds["aod_hat"].values
+    toa = ds["toa_hat"].values
+    ok = np.isfinite(aod) & np.isfinite(toa)
+    stren = np.nan_to_num(ds[strength].values, nan=-np.inf)
+
+    def pick(k: int, x_pred: float):
+        cols = select_measurements(rrh[k], ok[k], stren[k], rrh_x, x_pred, rrh.shape[1], n_use)
+        xy = np.stack([rrh_x[rrh[k, cols]], np.full(cols.size, rrh_y)], axis=1) if cols.size else np.zeros((0, 2))
+        return xy, aod[k, cols], toa[k, cols]
+
+    k0 = int(np.argmax(ok.any(axis=1)))
+    xy0, a0, t0 = pick(k0, float(rrh_x[rrh[k0, 0]]))
+    p_fix, cov = snapshot_ls(xy0, a0, t0, dh_m, cfg, np.array([rrh_x[rrh[k0, 0]] + 1.0, 0.0]))
+    s0 = np.array([p_fix[0], p_fix[1], 0.0, 0.0, 0.0, 0.0])
+    p0 = np.diag([cov[0, 0], cov[1, 1], 1.0, 1.0, 1.0, 1.0])
+    p0[0, 1] = p0[1, 0] = cov[0, 1]
+
+    def snapshot_fix(k: int, x_pred: float):
+        xy, a_k, t_k = pick(k, x_pred)
+        if xy.shape[0] == 0:
+            return None
+        rho = np.sqrt(max((SPEED_OF_LIGHT_M_S * t_k[0]) ** 2 - dh_m**2, 1.0))
+        guess = np.array([xy[0, 0] + rho * np.cos(a_k[0]), xy[0, 1] + rho * np.sin(a_k[0])])
+        return snapshot_ls(xy, a_k, t_k, dh_m, cfg, guess)
+
+    return pick, snapshot_fix, k0, s0, p0, rrh.shape[0]
+
+
+def track_filters(ds, rrh_x: NDArray, rrh_y: float, dh_m: float, dt_s: float, cfg: TrackerConfig,
+                  imm: ImmConfig | None, strength: str = "peak", n_use: int = 3) -> dict[str, dict[str, NDArray]]:
+    """Track one realization with the EKF of :func:`railradio.nr.tracking.track` (q =
+    ``cfg.q``) and, if ``imm`` is given, the IMM, on the same selection, gate and
+    re-acquisition rules. Returns ``{"ekf": ..., "imm": ...}``, each with ``state`` [n, 6],
+    ``cov`` [n, 6, 6] (NaN before the first measured epoch ``k0``), ``reacquired`` [n]
+    and, for the IMM, ``mu`` [n, models]; plus ``k0``.
+    """
+    pick, snapshot_fix, k0, s0, p0, n = _setup(ds, rrh_x, rrh_y, dh_m, cfg, strength, n_use)
+    out: dict = {"k0": k0}
+    runs = {"ekf": None} | ({"imm": imm} if imm is not None else {})
+    for name, model in runs.items():
+        state_now = {"x": s0[0]}
+
+        def select(k: int, s, state_now=state_now):
+            state_now["x"] = float(s[0])
+            return pick(k + k0, float(s[0]))
+
+        def reacq(k: int, state_now=state_now):
+            return snapshot_fix(k + k0, state_now["x"]) if cfg.gate else None
+
+        if model is None:
+            r = run_ekf(select, None, None, dt_s, dh_m, cfg, s0, p0, n_epochs=n - k0, reacquire=reacq)
+        else:
+            r = run_imm(select, dt_s, dh_m, cfg, model, s0, p0, n_epochs=n - k0, reacquire=reacq)
+        full = {}
+        for key in ("state", "cov", "mu", "reacquired"):
+            if key in r:
+                v = r[key]
+                pad = np.zeros((n,) + v.shape[1:], v.dtype) if v.dtype == bool else np.full((n,) + v.shape[1:], np.nan)
+                pad[k0:] = v
+                full[key] = pad
+        out[name] = full
+    return out
+
+
+def position_nees(state: NDArray, cov: NDArray, x_true: NDArray, y_true: NDArray | float = 0.0) -> NDArray:
+    """2-D position NEES eᵀ P_xy⁻¹ e per epoch (χ²₂ with mean 2 for a consistent filter)."""
+    e = np.stack([state[:, 0] - x_true, state[:, 1] - y_true], axis=1)
+    pxy = cov[:, :2, :2]
+    good = np.all(np.isfinite(e), axis=1) & np.all(np.isfinite(pxy), axis=(1, 2))
+    out = np.full(state.shape[0], np.nan)
+    out[good] = np.einsum("ka,ka->k", e[good], np.linalg.solve(pxy[good], e[good][..., None])[..., 0])
+    return out

@@ -1,0 +1,72 @@
+# Tracking that does not lag (STUDY.md §6 item 3, issue 7): the nr study's EKF beside an
+# IMM (quiet + manoeuvre white-jerk models) and an RTS smoother, around the trajectory's
+# acceleration changes. Reads the nr shards and calibration; simulates nothing.
+NR_IMM = NR["imm"]
+CODE_NR_IMM = code_hash("railradio.nr.imm", "railradio.nr.smoother") + CODE_NR_TRACK
+
+register_figures("nr_imm", ["nr_imm_lag"])
+KEY_NUMBER_FRAGMENTS.append("results/nr/imm/key_numbers.json")
+
+
+rule nr_imm:
+    """EKF (the seed's, calibrated), IMM and RTS-smoothed EKF of one realization."""
+    input:
+        shards=expand("results/nr/estimates/{{real}}/s{shard}.nc", shard=range(NR["n_shards"])),
+        calibration="results/nr/calibration.json",
+    output:
+        "results/nr/imm/{real}.nc",
+    params:
+        sim=NR_SIM,
+        tracker=NR["tracker"],
+        imm=NR_IMM,
+        selection=NR_SELECTION,
+        code=CODE_NR_IMM,
+    wildcard_constraints:
+        real=r"r\d+",
+    log:
+        "results/logs/nr/imm_{real}.log",
+    benchmark:
+        "results/benchmarks/nr/imm_{real}.tsv"
+    conda:
+        "../envs/railradio.yaml"
+    script:
+        "../scripts/nr_imm/imm.py"
+
+
+rule nr_imm_key_numbers:
+    """Key numbers nr.track.{ekf,imm,rts}.* pooled over the realizations, with their spread."""
+    input:
+        expand("results/nr/imm/{real}.nc", real=NR_REALS),
+    output:
+        "results/nr/imm/key_numbers.json",
+    params:
+        window_s=NR_IMM["window_s"],
+        code=code_hash("railradio.nr.imm_report", "railradio.nr.keys", "railradio.keynumbers"),
+    log:
+        "results/logs/nr/imm_key_numbers.log",
+    conda:
+        "../envs/railradio.yaml"
+    script:
+        "../scripts/nr_imm/key_numbers.py"
+
+
+rule nr_imm_figure:
+    """Error, lag and IMM mode probability around each acceleration change."""
+    input:
+        expand("results/nr/imm/{real}.nc", real=NR_REALS),
+    output:
+        pdf=report(
+            "results/figures/nr_imm_lag.pdf",
+            caption="../report/nr_imm_lag.rst",
+            category="nr",
+        ),
+        png="results/figures/nr_imm_lag.png",
+    params:
+        window_s=NR_IMM["figure_window_s"],
+        code=code_hash("railradio.nr.imm_report") + CODE_PLOT,
+    log:
+        "results/logs/nr/imm_figure.log",
+    conda:
+        "../envs/railradio.yaml"
+    script:
+        "../scripts/nr_imm/figure.py"
