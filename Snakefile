@@ -11,6 +11,7 @@ configfile: "config/config.yaml"
 include: "workflow/rules/common.smk"
 include: "workflow/rules/fusion.smk"
 include: "workflow/rules/nr.smk"
+include: "workflow/rules/nr_imm.smk"
 include: "workflow/rules/handover.smk"
 include: "workflow/rules/tunnel.smk"
 include: "workflow/rules/paper.smk"
@@ -45,6 +46,12 @@ rule nr:
     input:
         STUDY_FIGURES["nr"],
         "results/nr/key_numbers.json",
+
+
+rule nr_imm_all:
+    input:
+        STUDY_FIGURES["nr_imm"],
+        "results/nr/imm/key_numbers.json",
 
 
 rule handover:
