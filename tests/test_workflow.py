@@ -156,6 +156,10 @@ def test_intermediates_are_self_explaining(ci_run_j2):
     # 3 sensitivity cases: 2 calibration + 1 evaluation shard, 1 track each
     assert len(case_paths) == 3 * (2 + 1 + 1)
     paths += nr_paths + case_paths
+    for study, n_min in (("handover", 10), ("tunnel", 10)):
+        found = sorted((ci_run_j2 / "results" / study).rglob("*.nc"))
+        assert len(found) >= n_min, (study, len(found))
+        paths += found
     for p in paths:
         with xr.open_dataset(p) as ds:
             for name, var in {**ds.data_vars, **ds.coords}.items():
@@ -164,7 +168,11 @@ def test_intermediates_are_self_explaining(ci_run_j2):
                 assert attr in ds.attrs, (p, attr)
     for name in ("fusion_rmse_vs_distance", "fusion_rmse_vs_tdoa_error", "fusion_rmse_vs_aoa_error",
                  "nr_trajectory", "nr_burst_correlation", "nr_measurement_error_cdf",
-                 "nr_position_error_cdf", "nr_position_error_vs_time", "nr_sensitivity"):
+                 "nr_position_error_cdf", "nr_position_error_vs_time", "nr_sensitivity",
+                 "handover_cost_vs_m", "handover_pingpong_vs_speed", "handover_rsrp_gap_vs_speed",
+                 "handover_delay_vs_speed", "handover_interruption_vs_speed",
+                 "tunnel_rssi_map", "tunnel_delay_spread", "tunnel_gdop", "tunnel_position_error_cdf",
+                 "tunnel_ray_engines", "tunnel_seed_vs_physical"):
         assert (ci_run_j2 / f"results/figures/{name}.pdf").stat().st_size > 1000
     tex = (ci_run_j2 / "results/paper/numbers.tex").read_text()
     assert r"\@namedef{kn@fusion.d1500.rmse_fused_m}" in tex
