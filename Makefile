@@ -8,7 +8,7 @@ SNAKE  := $(BIN)/snakemake --workflow-profile workflow/profiles/default
 export HDF5_USE_FILE_LOCKING := FALSE
 export MPLBACKEND := Agg
 
-.PHONY: all figures numbers paper test test-fast bench reproduce report lint expected publish clean
+.PHONY: all figures numbers paper test test-fast bench reproduce report lint expected publish dag gallery clean
 
 all: figures numbers
 
@@ -58,6 +58,16 @@ expected: $(STAMP)  ## regenerate tests/expected/key_numbers_ci.json (CI scale, 
 
 publish: numbers  ## copy the paper-scale key numbers to paper/numbers.json (commit it)
 	cp results/key_numbers.json paper/numbers.json
+
+GALLERY := fusion_rmse_vs_distance nr_position_error_cdf nr_sensitivity tunnel_position_error_cdf \
+           tunnel_seed_vs_physical handover_interruption_vs_speed
+
+dag: $(STAMP)  ## docs/rulegraph.png: the rules and their dependencies (no Graphviz needed)
+	$(BIN)/snakemake --rulegraph --workflow-profile workflow/profiles/default 2>/dev/null > results/rulegraph.dot
+	$(BIN)/python -c "from railradio.plotting import plot_rulegraph; plot_rulegraph(open('results/rulegraph.dot').read(), 'docs/rulegraph.png')"
+
+gallery: figures  ## docs/gallery/*.png: the README's figures, from a paper-scale run (commit them)
+	mkdir -p docs/gallery && for f in $(GALLERY); do cp results/figures/$$f.png docs/gallery/; done
 
 clean:
 	rm -rf results .snakemake

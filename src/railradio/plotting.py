@@ -51,3 +51,47 @@ def save(fig, pdf_path: str | os.PathLike[str], png_path: str | os.PathLike[str]
     with atomic_path(png_path) as tmp:
         fig.savefig(tmp, format="png", metadata={"Software": None})
     plt.close(fig)
+
+
+def plot_rulegraph(dot: str, png: str, svg: str | None = None) -> None:
+    """Draw Snakemake's ``--rulegraph`` (DOT text) without Graphviz: rules in layers by
+    their longest path from the inputs, one colour per study (the name's prefix), edges
+    from producer to consumer."""
+    import re
+
+    import matplotlib.pyplot as plt
+
+    labels = dict(re.findall(r'^\s*(\d+)\[label = "([^"]+)"', dot, re.M))
+    edges = [(a, b) for a, b in re.findall(r"^\s*(\d+) -> (\d+)", dot, re.M)]
+    if not labels:
+        raise ValueError("dot has no nodes (expected `snakemake --rulegraph` output)")
+    layer = {n: 0 for n in labels}
+    for _ in range(len(labels)):  # longest path from a source (the graph is acyclic)
+        changed = False
+        for a, b in edges:
+            if layer[b] < layer[a] + 1:
+                layer[b], changed = layer[a] + 1, True
+        if not changed:
+            break
+    rows: dict[int, list[str]] = {}
+    for n in sorted(labels, key=lambda n: labels[n]):
+        rows.setdefault(layer[n], []).append(n)
+    width = max(len(r) for r in rows.values())
+    pos = {n: ((i + 0.5) * width / len(r), -lv) for lv, r in rows.items() for i, n in enumerate(r)}
+    studies = sorted({labels[n].split("_")[0] for n in labels})
+    colour = {s: f"C{i}" for i, s in enumerate(studies)}
+    fig, ax = plt.subplots(figsize=(max(8.0, 1.6 * width), 0.9 * (len(rows) + 1)))
+    for a, b in edges:
+        ax.annotate("", xy=pos[b], xytext=pos[a],
+                    arrowprops=dict(arrowstyle="->", color="0.6", lw=0.8, shrinkA=9, shrinkB=9))
+    for n, (x, y) in pos.items():
+        ax.text(x, y, labels[n], ha="center", va="center", fontsize=7,
+                bbox=dict(boxstyle="round,pad=0.3", fc="white", ec=colour[labels[n].split("_")[0]], lw=1.5))
+    ax.set_xlim(-0.2, width + 0.2)
+    ax.set_ylim(-max(rows) - 0.6, 0.6)
+    ax.axis("off")
+    fig.tight_layout()
+    fig.savefig(png, dpi=110)
+    if svg:
+        fig.savefig(svg)
+    plt.close(fig)
