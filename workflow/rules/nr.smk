@@ -5,6 +5,7 @@ from railradio.config import deep_merge, load_schema, validate_config
 from railradio.nr.workflow import receiver_selection as nr_selection
 from railradio.nr.simulate import scenario_from_config
 from railradio.nr.workflow import sim_config as nr_sim
+from railradio.nr.workflow import case_shard_paths
 
 NR = config["nr"]
 NR_SCN = scenario_from_config(NR)
@@ -286,10 +287,8 @@ rule nr_case_shard:
 rule nr_case_calibrate:
     """Calibration of a sensitivity case (its own calibration run, the main run's key)."""
     input:
-        lambda w: expand(
-            "results/nr/cases/{case}/estimates/cal/s{shard}.nc",
-            case=w.case,
-            shard=range(NR_CAL_SHARDS),
+        lambda w: case_shard_paths(
+            w.case, NR_CASES[w.case], NR, "cal", NR_CAL_SHARDS, NR_SENS["n_shards"]
         ),
     output:
         "results/nr/cases/{case}/calibration.json",
@@ -309,10 +308,8 @@ rule nr_case_calibrate:
 rule nr_case_track:
     """EKF tracks of a sensitivity case."""
     input:
-        shards=lambda w: expand(
-            "results/nr/cases/{case}/estimates/r0/s{shard}.nc",
-            case=w.case,
-            shard=range(NR_SENS["n_shards"]),
+        shards=lambda w: case_shard_paths(
+            w.case, NR_CASES[w.case], NR, "r0", NR_CAL_SHARDS, NR_SENS["n_shards"]
         ),
         calibration="results/nr/cases/{case}/calibration.json",
     output:

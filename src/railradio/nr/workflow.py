@@ -17,3 +17,17 @@ def receiver_selection(c: dict) -> dict[str, str]:
     """Receiver name -> the strength measure choosing its 3 measured RRHs."""
     return {"seed": c["receiver"]["selection"]} | {
         name: v["selection"] for name, v in c.get("receiver_variants", {}).items()}
+
+
+def case_shard_paths(case: str, case_cfg: dict, main_cfg: dict, real: str, n_cal_shards: int,
+                     n_case_shards: int) -> list[str]:
+    """Estimate shards a sensitivity case's calibration (``real="cal"``) or track
+    (``real="r0"``) reads: the main run's own when the case changes nothing that the
+    bursts or the calibration run depend on (a tracker-only case), else the case's."""
+    same = (sim_config(case_cfg) == sim_config(main_cfg)
+            and case_cfg["calibration"] == main_cfg["calibration"])
+    if same:
+        n = n_cal_shards if real == "cal" else int(main_cfg["n_shards"])
+        return [f"results/nr/estimates/{real}/s{k}.nc" for k in range(n)]
+    n = n_cal_shards if real == "cal" else n_case_shards
+    return [f"results/nr/cases/{case}/estimates/{real}/s{k}.nc" for k in range(n)]
