@@ -305,6 +305,7 @@ def _report_ds(lag: float = 0.4, after_err: float = 1.0) -> xr.Dataset:
     return xr.Dataset({"pos_err": (("filter", "epoch"), pos), "along_err": (("filter", "epoch"), along),
                        "pos_nees": (("filter", "epoch"), np.full((3, n), 2.0)),
                        "mode_prob": (("mode", "epoch"), mu), "t": (("epoch",), t),
+                       "q": (("mode",), [0.01, 10.0]),
                        "change_epoch": (("change",), [200]), "delta_a": (("change",), [-0.85])},
                       coords={"filter": ["ekf", "imm", "rts"], "mode": ["quiet", "manoeuvre"]})
 
@@ -318,6 +319,7 @@ def test_key_numbers_measure_the_lag():
     assert k["nr.track.imm.err_m.after_change_mean"]["value"] == pytest.approx(0.5)
     assert k["nr.track.imm.manoeuvre_prob.after_change_mean"]["value"] == pytest.approx(0.3)
     assert k["nr.track.ekf.err_m.mean"]["mc_stderr"] == pytest.approx(0.0)
+    assert k["nr.track.imm.q_manoeuvre"]["value"] == 10.0 and k["nr.track.imm.q_quiet"]["mc_stderr"] is None
     skip = np.arange(400) * DT >= 5.0
     expect = np.mean(np.where(np.arange(400) >= 200, np.where(np.arange(400) < 300, 1.0, 0.2), 0.2)[skip])
     assert k["nr.track.ekf.err_m.mean"]["value"] == pytest.approx(expect)

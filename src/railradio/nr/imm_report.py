@@ -102,6 +102,12 @@ def key_numbers(runs: list[xr.Dataset], window_s: float) -> dict[str, Any]:
         put(f"nr.track.{f}.nees.mean", "1",
             f"mean 2-D position NEES of {who} (2 for a consistent filter)",
             lambda rs, f=f: _stat(_overall(rs, "pos_nees", f), np.mean))
+    for mode in ("quiet", "manoeuvre"):
+        name = f"nr.track.imm.q_{mode}"
+        q = {float(r["q"].sel(mode=mode)) for r in runs}
+        if len(q) != 1:
+            raise ValueError(f"runs disagree on the {mode} model's q: {sorted(q)}")
+        out[name] = KeySpec(name, "m2 s-5", f"white-jerk intensity of the IMM's {mode} model").entry(q.pop())
     put("nr.track.imm.manoeuvre_prob.mean", "1", "mean probability of the IMM's manoeuvre model",
         lambda rs: _stat(np.concatenate([r["mode_prob"].sel(mode="manoeuvre").values[r["t"].values >= SKIP_S]
                                          for r in rs]), np.mean))
