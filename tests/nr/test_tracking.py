@@ -164,3 +164,40 @@ def test_pcrb_true_motion_bound_orders_and_resets():
     with pytest.raises(ValueError, match="q"):
         pcrb_m(*args, -1.0, p0)
     np.testing.assert_array_equal(change_epochs(((20.0, 0.5), (2.75, 0.0), (3.0, 1.0)), 0.1), [200, 228])
+
+
+def test_distance_dependent_measurement_noise():
+    from railradio.nr.tracking import TrackerConfig
+
+    cfg = TrackerConfig(variant="aod_toa", q=1.0, sigma_aod_rad=0.02, sigma_toa_s=1e-9,
+                        distance_edges_m=(300.0, 800.0), sigma_aod_bins_rad=(0.05, 0.02, 0.01),
+                        sigma_toa_bins_s=(1e-9, 2e-9, 4e-9))
+    w = np.diag(cfg.noise(3, np.array([10.0, 500.0, 2000.0])))
+    np.testing.assert_allclose(w, [0.05**2, 1e-18, 0.02**2, 4e-18, 0.01**2, 16e-18])
+    # without distances (or bins) the constant W
+    np.testing.assert_allclose(np.diag(cfg.noise(1)), [0.02**2, 1e-18])
+    back = TrackerConfig.from_record(cfg.record(), variant="aod_toa")
+    assert back == cfg
+    with pytest.raises(ValueError, match="sigma_toa_bins_s"):
+        TrackerConfig(distance_edges_m=(300.0,), sigma_aod_bins_rad=(0.1, 0.1), sigma_toa_bins_s=(1e-9,))
+    with pytest.raises(ValueError, match="distance_edges_m"):
+        TrackerConfig(distance_edges_m=(300.0, 100.0), sigma_aod_bins_rad=(1, 1, 1), sigma_toa_bins_s=(1, 1, 1))
+
+
+def test_robust_sigmas_per_distance_bin():
+    from railradio.nr.tracking import robust_sigmas
+
+    rng = np.random.default_rng(3)
+    dist = rng.uniform(0, 1500, 20000)
+    e_rng = rng.standard_normal(dist.size) * np.where(dist < 500, 1.0, 3.0)
+    e_rng[:200] = 5e3  # 1 % outliers barely move a MAD
+    e_aod = rng.standard_normal(dist.size) * 0.01
+    s_aod, s_toa, bins = robust_sigmas(e_aod, e_rng, dist, (500.0,), fs_hz=245.76e6)
+    c = 299_792_458.0
+    assert bins["sigma_toa_bins_s"][0] * c == pytest.approx(1.0, rel=0.06)
+    assert bins["sigma_toa_bins_s"][1] * c == pytest.approx(3.0, rel=0.06)
+    assert 1.0 < s_toa * c < 3.0 and s_aod == pytest.approx(0.01, rel=0.05)
+    # a sparse bin falls back to the overall values; the TOA floor is the quantization
+    _, _, b2 = robust_sigmas(e_aod, e_rng * 0, dist, (1499.9,), fs_hz=245.76e6)
+    assert b2["sigma_toa_bins_s"][1] == pytest.approx(1 / (np.sqrt(12) * 245.76e6))
+    assert robust_sigmas(e_aod, e_rng, dist)[2] == {}

@@ -36,6 +36,7 @@ from railradio.constants import SPEED_OF_LIGHT_M_S
 from railradio.nr.tracking import (
     VARIANTS,
     TrackerConfig,
+    distances_m,
     hx,
     jacobian,
     process_noise,
@@ -188,14 +189,14 @@ def run_imm(select, dt_s: float, dh_m: float, cfg: TrackerConfig, imm: ImmConfig
                     ok = False
                     for j in range(m):
                         hi = jacobian(xs[j], xy[i:i + 1], dh_m, cfg.variant)
-                        si = hi @ ps[j] @ hi.T + cfg.noise(1)
+                        si = hi @ ps[j] @ hi.T + cfg.noise(1, distances_m(xs[j], xy[i:i + 1]))
                         ri = res(z[i * per:(i + 1) * per], hx(xs[j], xy[i:i + 1], dh_m, cfg.variant))
                         ok = ok or float(ri @ np.linalg.solve(si, ri)) <= gate
                     keep[i] = ok
             if keep.any():
                 sel = xy[keep]
                 zs = z[np.repeat(keep, per)]
-                r = cfg.noise(sel.shape[0])
+                r = cfg.noise(sel.shape[0], distances_m(x_pred, sel))
                 loglik = np.empty(m)
                 for j in range(m):  # EKF update of model j (Joseph form, as filterpy's)
                     h = jacobian(xs[j], sel, dh_m, cfg.variant)

@@ -91,7 +91,10 @@ class TrackerConfig:
 
     variant: ``aod``, ``toa`` or ``aod_toa`` [seed]; q: white-jerk intensity [m² s⁻⁵];
     sigma_aod_rad, sigma_toa_s: measurement noise standard deviations; gate: χ² innovation
-    gate per RRH at ``gate_prob``.
+    gate per RRH at ``gate_prob``. Distance-dependent W [ours, an option]: with
+    ``distance_edges_m`` (increasing 2-D train–RRH distances [m]) the standard deviations of
+    a measurement are those of its distance bin, ``sigma_aod_bins_rad`` and
+    ``sigma_toa_bins_s`` (one more entry than edges), at the predicted distance.
     """
 
     variant: str = "aod_toa"
@@ -100,6 +103,9 @@ class TrackerConfig:
     sigma_toa_s: float = 1.0 / 245.76e6
     gate: bool = False
     gate_prob: float = 0.99
+    distance_edges_m: tuple[float, ...] = ()
+    sigma_aod_bins_rad: tuple[float, ...] = ()
+    sigma_toa_bins_s: tuple[float, ...] = ()
 
     def __post_init__(self) -> None:
         if self.variant not in VARIANTS:
@@ -107,9 +113,40 @@ class TrackerConfig:
         for name in ("q", "sigma_aod_rad", "sigma_toa_s"):
             if not getattr(self, name) > 0:
                 raise ValueError(f"{name} must be > 0, got {getattr(self, name)!r}")
+        nb = len(self.distance_edges_m) + 1
+        if self.distance_edges_m:
+            if np.any(np.diff(self.distance_edges_m) <= 0) or self.distance_edges_m[0] <= 0:
+                raise ValueError(f"distance_edges_m must be positive and increasing, got {self.distance_edges_m!r}")
+            for name in ("sigma_aod_bins_rad", "sigma_toa_bins_s"):
+                v = getattr(self, name)
+                if len(v) != nb or not all(x > 0 for x in v):
+                    raise ValueError(f"{name} must hold {nb} positive values (one per distance bin), got {v!r}")
 
-    def noise(self, n: int) -> NDArray[np.float64]:
+    def record(self) -> dict:
+        """The calibrated quantities as stored in ``calibration.json``."""
+        out = {"q": self.q, "sigma_aod_rad": self.sigma_aod_rad, "sigma_toa_s": self.sigma_toa_s}
+        if self.distance_edges_m:
+            out |= {"distance_edges_m": list(self.distance_edges_m),
+                    "sigma_aod_bins_rad": list(self.sigma_aod_bins_rad),
+                    "sigma_toa_bins_s": list(self.sigma_toa_bins_s)}
+        return out
+
+    @classmethod
+    def from_record(cls, rec: dict, **kw) -> TrackerConfig:
+        """Inverse of :meth:`record` (``kw``: variant, gate, gate_prob)."""
+        bins = {k: tuple(rec[k]) for k in ("distance_edges_m", "sigma_aod_bins_rad", "sigma_toa_bins_s")
+                if k in rec}
+        return cls(q=rec["q"], sigma_aod_rad=rec["sigma_aod_rad"], sigma_toa_s=rec["sigma_toa_s"], **bins, **kw)
+
+    def noise(self, n: int, dist_m: NDArray | None = None) -> NDArray[np.float64]:
+        """W for ``n`` RRHs; ``dist_m`` [n] their predicted 2-D distances [m] (used only
+        with distance bins)."""
         use_aod, use_toa = VARIANTS[self.variant]
+        if self.distance_edges_m and dist_m is not None:
+            b = np.searchsorted(self.distance_edges_m, np.asarray(dist_m, float).reshape(n))
+            cols = (([np.asarray(self.sigma_aod_bins_rad)[b] ** 2] if use_aod else [])
+                    + ([np.asarray(self.sigma_toa_bins_s)[b] ** 2] if use_toa else []))
+            return np.diag(np.stack(cols, axis=1).ravel())
         per = ([self.sigma_aod_rad**2] if use_aod else []) + ([self.sigma_toa_s**2] if use_toa else [])
         return np.diag(np.tile(per, n))
 
@@ -119,11 +156,16 @@ class TrackerConfig:
         return np.stack(cols, axis=1).ravel()
 
 
+def distances_m(s: NDArray, rrh_xy: NDArray) -> NDArray[np.float64]:
+    """2-D distances [m] from the position in state (or position) ``s`` to ``rrh_xy`` [n, 2]."""
+    return np.hypot(s[0] - rrh_xy[:, 0], s[1] - rrh_xy[:, 1])
+
+
 def snapshot_ls(rrh_xy: NDArray, aod: NDArray, toa: NDArray, dh_m: float, cfg: TrackerConfig,
                 x_init: NDArray, n_iter: int = 20) -> tuple[NDArray, NDArray]:
     """Weighted Gauss–Newton position fix [x, y] from one epoch and its covariance [m²]."""
     p = np.asarray(x_init, float).copy()
-    w = np.linalg.inv(cfg.noise(rrh_xy.shape[0]))
+    w = np.linalg.inv(cfg.noise(rrh_xy.shape[0], distances_m(p, rrh_xy)))
     z = cfg.pick(aod, toa)
     res = residual_fn(cfg.variant)
     h_full = np.zeros(6)
@@ -192,14 +234,15 @@ def run_ekf(rrh_xy, aod, toa, dt_s: float, dh_m: float,
             if cfg.gate:  # per-RRH χ² test on the predicted innovation
                 for i in range(xy.shape[0]):
                     hi = jacobian(ekf.x, xy[i:i + 1], dh_m, cfg.variant)
-                    si = hi @ ekf.P @ hi.T + cfg.noise(1)
+                    si = hi @ ekf.P @ hi.T + cfg.noise(1, distances_m(ekf.x, xy[i:i + 1]))
                     ri = res(z[i * per:(i + 1) * per], hx(ekf.x, xy[i:i + 1], dh_m, cfg.variant))
                     keep[i] = float(ri @ np.linalg.solve(si, ri)) <= gate
             if keep.any():
                 xs = xy[keep]
                 zs = z[np.repeat(keep, per)]
                 ekf.update(zs, lambda s, xs=xs: jacobian(s, xs, dh_m, cfg.variant),
-                           lambda s, xs=xs: hx(s, xs, dh_m, cfg.variant), R=cfg.noise(xs.shape[0]),
+                           lambda s, xs=xs: hx(s, xs, dh_m, cfg.variant),
+                           R=cfg.noise(xs.shape[0], distances_m(ekf.x, xs)),
                            residual=res)
                 nis[k] = float(ekf.y @ np.linalg.solve(ekf.S, ekf.y))
                 used[k] = int(keep.sum())
@@ -295,10 +338,12 @@ def track(ds, rrh_x: NDArray, rrh_y: float, dh_m: float, dt_s: float, cfg: Track
     return {"state": state, "nis": nis, "n_used": used, "snapshot": snap, "k0": k0, "reacquired": reac}
 
 
-def measurement_errors(ds, strength: str = "peak", n_use: int = 3, flat: bool = True) -> tuple[NDArray, NDArray]:
+def measurement_errors(ds, strength: str = "peak", n_use: int = 3, flat: bool = True,
+                       with_distance: bool = False) -> tuple[NDArray, ...]:
     """AOD [rad, wrapped] and TOA range [m] errors of the measurements the tracker would use
     (the ``n_use`` strongest detected candidates per epoch); ``flat=False`` returns
-    [epoch, n_use] arrays with NaN where fewer were detected."""
+    [epoch, n_use] arrays with NaN where fewer were detected. ``with_distance`` also
+    returns (flat only) the true 3-D distances [m] of those measurements."""
     aod = ds["aod_hat"].values
     toa = ds["toa_hat"].values
     ok = np.isfinite(aod) & np.isfinite(toa)
@@ -309,27 +354,61 @@ def measurement_errors(ds, strength: str = "peak", n_use: int = 3, flat: bool = 
     e_rng = np.take_along_axis(toa - ds["toa_true"].values, order, axis=1) * SPEED_OF_LIGHT_M_S
     if not flat:
         return np.where(sel_ok, e_aod, np.nan), np.where(sel_ok, e_rng, np.nan)
+    if with_distance:
+        return e_aod[sel_ok], e_rng[sel_ok], np.take_along_axis(ds["d3d"].values, order, axis=1)[sel_ok]
     return e_aod[sel_ok], e_rng[sel_ok]
 
 
+def robust_sigmas(e_aod_rad: NDArray, e_range_m: NDArray, dist_m: NDArray,
+                  distance_edges_m: tuple[float, ...] = (), min_per_bin: int = 50,
+                  fs_hz: float = 245.76e6) -> tuple[float, float, dict]:
+    """σ_AOD [rad] and σ_TOA [s] as robust standard deviations (1.4826 · MAD) of calibration
+    errors, σ_TOA floored at the integer-sample quantization 1/(√12 F_s); with
+    ``distance_edges_m`` also per bin of ``dist_m`` (a bin with fewer than ``min_per_bin``
+    errors takes the overall values), returned as :class:`TrackerConfig` keyword arguments."""
+    def mad(e):
+        return 1.4826 * float(np.median(np.abs(e - np.median(e)))) if e.size else np.nan
+
+    floor = 1.0 / (np.sqrt(12) * fs_hz)
+    s_aod = max(mad(e_aod_rad), 1e-4)
+    s_toa = max(mad(e_range_m) / SPEED_OF_LIGHT_M_S, floor)
+    if not distance_edges_m:
+        return s_aod, s_toa, {}
+    b = np.searchsorted(np.asarray(distance_edges_m, float), dist_m)
+    a_bins, t_bins = [], []
+    for i in range(len(distance_edges_m) + 1):
+        m = b == i
+        if m.sum() < min_per_bin:
+            a_bins.append(s_aod)
+            t_bins.append(s_toa)
+        else:
+            a_bins.append(max(mad(e_aod_rad[m]), 1e-4))
+            t_bins.append(max(mad(e_range_m[m]) / SPEED_OF_LIGHT_M_S, floor))
+    return s_aod, s_toa, dict(distance_edges_m=tuple(float(x) for x in distance_edges_m),
+                              sigma_aod_bins_rad=tuple(a_bins), sigma_toa_bins_s=tuple(t_bins))
+
+
 def calibrate(ds, variant: str, rrh_x: NDArray, rrh_y: float, dh_m: float, dt_s: float,
-              q_grid: NDArray, gate: bool, strength: str = "peak", fs_hz: float = 245.76e6) -> TrackerConfig:
+              q_grid: NDArray, gate: bool, strength: str = "peak", fs_hz: float = 245.76e6,
+              distance_edges_m: tuple[float, ...] = (), min_per_bin: int = 50) -> TrackerConfig:
     """Measurement and process noise from a calibration run (never the evaluation run).
 
     σ_AOD, σ_TOA: robust standard deviations (1.4826 · median absolute deviation) of the
     selected measurements' errors, the TOA one floored at the integer-sample quantization
-    1/(√12 F_s); q: the value of ``q_grid`` whose mean normalized innovation squared
-    (NIS / measurement dimension) on the calibration run is closest to 1.
+    1/(√12 F_s); with ``distance_edges_m``, also per bin of the true 2-D distance (a bin with
+    fewer than ``min_per_bin`` measurements takes the overall values); q: the value of
+    ``q_grid`` whose mean normalized innovation squared (NIS / measurement dimension) on the
+    calibration run is closest to 1.
     """
-    e_aod, e_rng = measurement_errors(ds, strength)
-    mad = lambda e: 1.4826 * np.median(np.abs(e - np.median(e))) if e.size else np.nan  # noqa: E731
-    s_aod = max(float(mad(e_aod)), 1e-4)
-    s_toa = max(float(mad(e_rng)) / SPEED_OF_LIGHT_M_S, 1.0 / (np.sqrt(12) * fs_hz))
+    e_aod, e_rng, d3 = measurement_errors(ds, strength, with_distance=True)
+    dist = np.sqrt(np.maximum(d3**2 - dh_m**2, 0.0))  # 2-D, as the tracker predicts it
+    s_aod, s_toa, bins = robust_sigmas(e_aod, e_rng, dist, distance_edges_m, min_per_bin, fs_hz)
     per = sum(VARIANTS[variant])
     best, best_cost = None, np.inf
     most_used, most_used_cfg = -1, None
     for q in q_grid:
-        cfg = TrackerConfig(variant=variant, q=float(q), sigma_aod_rad=s_aod, sigma_toa_s=s_toa, gate=gate)
+        cfg = TrackerConfig(variant=variant, q=float(q), sigma_aod_rad=s_aod, sigma_toa_s=s_toa, gate=gate,
+                            **bins)
         out = track(ds, rrh_x, rrh_y, dh_m, dt_s, cfg, strength=strength, snapshot=False)
         used = out["n_used"] > 0
         if used.sum() > most_used:

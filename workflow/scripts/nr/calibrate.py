@@ -23,7 +23,8 @@ for rx in ds["receiver"].values:
             name = f"{rx}/{variant}/{'gate' if gate else 'nogate'}"
             cfg = calibrate(dsr, variant, dep.x_m, dep.offset_m, dep.h_bs_m - dep.h_ut_m,
                             scn.trajectory.dt_s, np.asarray(smk.params.tracker["q_grid"]), gate,
-                            smk.params.selection[str(rx)])
-            out[name] = {"q": cfg.q, "sigma_aod_rad": cfg.sigma_aod_rad, "sigma_toa_s": cfg.sigma_toa_s}
+                            smk.params.selection[str(rx)],
+                            distance_edges_m=tuple(smk.params.tracker.get("w_distance_edges_m") or ()))
+            out[name] = cfg.record()
             log.info("%s: %s", name, out[name])
 write_json(smk.output[0], out)

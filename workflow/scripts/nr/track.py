@@ -32,9 +32,8 @@ for i, rx in enumerate(receivers):
     for j, variant in enumerate(variants):
         for g, gate in enumerate((False, True)):
             c = cal[f"{rx}/{variant}/{'gate' if gate else 'nogate'}"]
-            cfg = TrackerConfig(variant=variant, q=c["q"], sigma_aod_rad=c["sigma_aod_rad"],
-                                sigma_toa_s=c["sigma_toa_s"], gate=gate,
-                                gate_prob=smk.params.tracker["gate_prob"])
+            cfg = TrackerConfig.from_record(c, variant=variant, gate=gate,
+                                            gate_prob=smk.params.tracker["gate_prob"])
             out = track(dsr, dep.x_m, dep.offset_m, dep.h_bs_m - dep.h_ut_m, scn.trajectory.dt_s, cfg,
                         strength=smk.params.selection[str(rx)], snapshot=(g == 0))
             err[i, j, g] = np.hypot(out["state"][:, 0] - x_true, out["state"][:, 1])

@@ -28,8 +28,7 @@ if rx not in [str(r) for r in ds["receiver"].values]:
     raise ValueError(f"nr.imm.receiver = {rx!r} is not among the simulated receivers {ds['receiver'].values.tolist()}")
 ds = ds.sel(receiver=rx)
 c = json.loads(open(smk.input.calibration, encoding="utf-8").read())[f"{rx}/aod_toa/gate"]
-cfg = TrackerConfig(variant="aod_toa", q=c["q"], sigma_aod_rad=c["sigma_aod_rad"], sigma_toa_s=c["sigma_toa_s"],
-                    gate=True, gate_prob=smk.params.tracker["gate_prob"])
+cfg = TrackerConfig.from_record(c, variant="aod_toa", gate=True, gate_prob=smk.params.tracker["gate_prob"])
 q_quiet = c["q"] if p["q_quiet"] is None else float(p["q_quiet"])
 q_man = q_for_jump(p["delta_a_m_s2"], traj.dt_s)
 imm = ImmConfig(q=(q_quiet, q_man), sojourn_s=tuple(p["sojourn_s"]))
