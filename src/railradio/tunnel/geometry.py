@@ -11,10 +11,13 @@ isotropic radiator whose EIRP is set so that the along-cable mean of the incoher
 free-space sum of all slots, at distance d_ref from the cable, equals the cable's
 specified coupling loss L_c(d_ref) = 85 + 10 log10(d_ref / 1 m) dB [seed 2.2.2]:
 
-    P_s = P_c - L_c(d_ref) + 10 log10(d_ref s / pi) + 20 log10(4 pi / lambda)     (1)
+    P_s = P_c - L_c(d_ref) + 10 log10(d_ref s / pi) + 20 log10(4 pi / lambda) - G_ref   (1)
 
 (the mean over x of sum_i lambda^2 / ((4 pi)^2 (d_ref^2 + (x - x_i)^2)) is
-lambda^2 / (16 pi d_ref s) for a long chain).  The coupling loss is thereby used once, to
+lambda^2 / (16 pi d_ref s) for a long chain).  G_ref = 2.15 dBi is the gain of the
+lambda/2 dipole with which IEC 61196-4 measures the coupling loss: the received power
+P_c - L_c includes that gain, so the slot EIRP is G_ref below the isotropic-receiver value,
+and the train antenna (0 dBi in this study) then reads P_c - L_c - G_ref at d_ref.  The coupling loss is thereby used once, to
 set the slot power; every ray then carries free-space spreading and wall reflections only,
 never coupling loss *and* free-space loss (the seed's eq. 2.4.1 applies both).
 """
@@ -139,6 +142,7 @@ class Cable:
     velocity_factor: float = 0.88
     coupling_loss_db: float = 85.0
     coupling_ref_m: float = 2.0
+    coupling_ref_gain_dbi: float = 2.15
 
     def __post_init__(self) -> None:
         for name in ("frequency_hz", "feed_spacing_m", "coupling_ref_m"):
@@ -160,11 +164,12 @@ class Cable:
         return self.coupling_loss_db + 10.0 * np.log10(d)
 
     def slot_eirp_offset_db(self, slot_spacing_m: float) -> float:
-        """P_s - P_c of eq. (1): slot EIRP relative to the local cable power [dB]."""
+        """P_s - P_c of eq. (1): slot EIRP relative to the local cable power [dB]
+        (calibrated for the IEC reference dipole of ``coupling_ref_gain_dbi``)."""
         d = self.coupling_ref_m
         lam = self.wavelength_m
         return float(-self.coupling_loss_at_db(d) + 10.0 * math.log10(d * slot_spacing_m / math.pi)
-                     + 20.0 * math.log10(4.0 * math.pi / lam))
+                     + 20.0 * math.log10(4.0 * math.pi / lam) - self.coupling_ref_gain_dbi)
 
     def feed_x_m(self, length_m: float) -> np.ndarray:
         """Feed/amplifier points: one in the middle of every ``feed_spacing_m`` section [ours]."""

@@ -33,7 +33,7 @@ def cable_from_config(cfg: dict[str, Any]) -> Cable:
     c = cfg["cable"]
     return Cable(c["frequency_hz"], c["feed_power_dbm"], c["feed_spacing_m"],
                  c["loss_db_per_100m"] / 100.0, c["velocity_factor"], c["coupling_loss_db"],
-                 c["coupling_ref_m"])
+                 c["coupling_ref_m"], c["coupling_ref_gain_dbi"])
 
 
 def eps_from_config(cfg: dict[str, Any]) -> complex:
