@@ -124,3 +124,27 @@ def test_policy_registry_and_bad_values():
         scn = Scenario()
         kin = kinematics(scn, 300.0)
         make_policy("joint").command(build_context(scn, kin, draw_block(1, 300.0, 0, 1, kin, 8)))
+
+
+@pytest.mark.parametrize("speed", [150.0, 350.0, 500.0])
+def test_zero_noise_l3_filtered_joint_band_has_no_filter_lag(speed):
+    """Noise-free with the k = 4 filter: the band fit is exact (â = 0, n̂ = n) and every node
+    triggers within one sample of Xm = Xc − v·T0 (the fit regresses filtered gaps against the
+    identically filtered regressor, so the filter delay does not shift the band)."""
+    scn = _quiet()
+    assert scn.radio.l3_k == 4
+    kin = kinematics(scn, speed)
+    ctx = build_context(scn, kin, draw_block(1, speed, 0, 2, kin, scn.train.n_nodes))
+    out = run_policy(make_policy("joint"), ctx)
+    np.testing.assert_allclose(out["fit_offset_db"][1], 0.0, atol=1e-6)
+    np.testing.assert_allclose(out["fit_exponent"][1], scn.radio.pathloss_exponent, atol=1e-6)
+    xm = scn.radio.overlap_centre_m - kin.speed_m_s * scn.execution.t0_s
+    _, gaph = sigma0_and_gaph(scn.radio, scn.joint)
+    pl, pr = band_edges_m(gaph, 0.0, scn.radio.pathloss_exponent, scn.radio)
+    assert abs(0.5 * (pl + pr) - kin.speed_m_s * scn.execution.t0_s - xm) < 0.05  # h ~ 0: Xm = Xc - vT0
+    step = kin.speed_m_s * kin.period_s
+    cmd = out["command_x_m"][1]
+    assert np.all(np.abs(cmd - xm) <= step + 1e-6), (cmd - xm, step)
+    assert np.all(out["success"][1] == 1)
+    # the completion gap is the one-sample quantization only, as for the distance trigger
+    assert np.all(np.abs(out["rsrp_gap_db"][1]) < 10 * 3.5 / np.log(10) * 4 * step / 1500 + 0.05)

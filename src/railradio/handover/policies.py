@@ -26,12 +26,12 @@ from railradio.handover.band import (
     fit_from_sums,
     geometric_weights,
     log_ratio,
-    model_gap_db,
     position_correction_m,
     sigma0_and_gaph,
     wslr_predict,
 )
 from railradio.handover.model import BlockContext, execute
+from railradio.handover.radio import l3_filter
 
 
 @dataclass
@@ -174,12 +174,31 @@ def joint_gaps(ctx: BlockContext) -> np.ndarray:
     return ctx._cache[key]
 
 
+def joint_regressors(ctx: BlockContext) -> np.ndarray:
+    """Regressor r = log10((x_t − x̂)/(x̂ − x_s)) of every node's estimated position, passed
+    through the same L3 filter as the gaps when the policy uses filtered gaps, [B, N, K].
+
+    The model gap is linear in r (Ĝ = â + 10 n̂ r), and the L3 filter is linear with
+    F_1 = M_1, so filtering r exactly as the measurements are filtered gives
+    F(G) = â + 10 n̂ F(r): a fit of filtered gaps against F(r) carries no filter delay.
+    Fitting them against the current r instead lags by (1 − a)/a samples (0.27 s at
+    k = 4, 40 ms) and biases â by the gap's slope times that lag (review finding 1).
+    """
+    key = "joint_regressors"
+    if key not in ctx._cache:
+        xhat = ctx.xhat_head_m[:, None, :] - ctx.kin.node_offsets_m[None, :, None]
+        r = log_ratio(xhat, ctx.scn.radio)
+        ctx._cache[key] = l3_filter(r, ctx.l3_a) if ctx.scn.joint.measurements == "l3" else r
+    return ctx._cache[key]
+
+
 def head_band(ctx: BlockContext) -> Band:
     """Band estimate of the head and its trigger (reconstruction eq. 5–8).
 
     At every sample in the preparation zone (|x̂ − Xc| ≤ zone) the head refits
     Ĝ(x) = â + 10 n̂ log10((x_t − x)/(x − x_s)) to all its gap measurements since entering
-    the zone (running least squares), recomputes the execution band [PL, PR] (the completion
+    the zone (running least squares; with L3-filtered gaps the regressor is filtered alike,
+    :func:`joint_regressors`), recomputes the execution band [PL, PR] (the completion
     band shifted back by v·T0) and triggers at the first sample with x̂ ≥ Xm = (PL + PR)/2.
     """
     sc = ctx.scn
@@ -189,7 +208,7 @@ def head_band(ctx: BlockContext) -> Band:
     g = joint_gaps(ctx)[:, 0, :]                                    # [B, K]
     xhat = ctx.xhat_head_m
     zone = np.abs(xhat - rd.overlap_centre_m) <= sc.train.prep_zone_m
-    r = np.where(zone, log_ratio(xhat, rd), 0.0)
+    r = np.where(zone, joint_regressors(ctx)[:, 0, :], 0.0)
     gz = np.where(zone, g, 0.0)
     s1 = np.cumsum(zone, axis=1, dtype=float)
     sr, srr = np.cumsum(r, axis=1), np.cumsum(r * r, axis=1)
@@ -232,7 +251,7 @@ def joint_nodes(ctx: BlockContext, band: Band, weights: np.ndarray, method: str)
     b_n, n_n = ctx.n_runs, ctx.n_nodes
     rows = np.arange(b_n)
     gaps = joint_gaps(ctx)
-    xhat0 = ctx.xhat_head_m
+    reg = joint_regressors(ctx)
     offs = ctx.kin.node_offsets_m
     pr_retry = band.pr_m - v * (sc.execution.t0_s + sc.execution.tz_s)
     k = np.zeros((n_a, b_n, n_n), dtype=np.intp)
@@ -255,9 +274,9 @@ def joint_nodes(ctx: BlockContext, band: Band, weights: np.ndarray, method: str)
         k[:, :, i] = k_i
         x_trig[:, :, i] = x_i
         dp_i = gaps[rows, i, k_i]                                       # [A, B]
-        xhat_i = xhat0[rows, k_i] - offs[i]
         dp[:, :, i] = dp_i
-        dev[:, :, i] = dp_i - model_gap_db(xhat_i, band.a_db, band.n_hat, rd)
+        # deviation from the fitted model seen through the same filter (no filter lag)
+        dev[:, :, i] = dp_i - (band.a_db + 10.0 * band.n_hat * reg[rows, i, k_i])
     converged = np.abs(dp) < jt.convergence_db
     conv_price = np.where(converged.any(axis=-1), np.argmax(converged, axis=-1) + 1, n_n + 1)
     width = np.maximum(band.pr_m - band.pl_m, 1e-9)

@@ -215,13 +215,22 @@ def _joint(run: _Run) -> list[dict]:
         pl_e, pr_e = L / (1 + q * r), L * q / (q + r)
         return pl_e - v * ex.t0_s, pr_e - v * ex.t0_s
 
+    # regressor of every node's estimated position, L3-filtered like the gaps
+    freg = []
+    for i in range(tr.n_nodes):
+        f_i = []
+        for k in range(run.k_n):
+            r = reg(run.x_hat(i, k))
+            f_i.append(r if (k == 0 or jt.measurements == "raw") else (1 - a_l3) * f_i[-1] + a_l3 * r)
+        freg.append(f_i)
+
     # head: running least squares in the zone, trigger at x_hat >= Xm
     s1 = sr = srr = sg = srg = 0.0
     k_head, fit = run.k_n - 1, None
     for k in range(run.k_n):
         xh = run.x_hat(0, k)
         if abs(xh - xc) <= tr.prep_zone_m:
-            r, g = reg(xh), gap(0, k)
+            r, g = freg[0][k], gap(0, k)
             s1 += 1
             sr += r
             srr += r * r
@@ -282,7 +291,7 @@ def _joint(run: _Run) -> list[dict]:
             k_i = max(k_i, ks[i - 1])
         ks.append(k_i)
         xs.append(x_i)
-        devs.append(gap(i, k_i) - model(run.x_hat(i, k_i)))
+        devs.append(gap(i, k_i) - (a_hat + 10 * n_hat * freg[i][k_i]))
     out = []
     for i in range(tr.n_nodes):
         x_cmd_hat = run.x_hat(i, ks[i])
