@@ -75,3 +75,16 @@ def test_schema_rejects_bad_handover_values(path, value):
     cfg["handover"][path[0]][path[1]] = value
     with pytest.raises(ConfigError, match=f"config key 'handover.{path[0]}.{path[1]}"):
         validate_config(cfg, schema)
+
+
+def test_pingpong_claim_is_strict_and_can_fail():
+    import xarray as xr
+
+    from railradio.handover.keys import pingpong_strictly_lowest
+
+    # speeds: A3 and distance clearly above joint; distance zero (a tie); overlapping intervals
+    hi = np.array([[0.001, 0.001, 0.001], [0.05, 0.05, 0.05], [0.03, 0.0005, 0.004]])
+    lo = np.array([[0.0, 0.0, 0.0], [0.04, 0.04, 0.04], [0.02, 0.0, 0.0005]])
+    ds = xr.Dataset({"pingpong_hi": (("policy", "speed_kmh"), hi), "pingpong_lo": (("policy", "speed_kmh"), lo)},
+                    coords={"policy": ["joint", "a3", "distance"], "speed_kmh": [100.0, 250.0, 350.0]})
+    np.testing.assert_array_equal(pingpong_strictly_lowest(ds), [True, False, False])

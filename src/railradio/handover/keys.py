@@ -37,7 +37,12 @@ SPECS = {s.name: s for s in [
     _spec("handover.a3.pingpong.v350", "1", "A3: ping-pong rate at 350 km/h"),
     _spec("handover.distance.pingpong.v350", "1", "distance trigger: ping-pong rate at 350 km/h"),
     _spec("handover.claim.joint_pingpong_lowest_frac", "1",
-          "share of speeds where the joint ping-pong rate is the lowest of the three", 1.0, "="),
+          "share of speeds where the joint ping-pong rate is strictly the lowest of the three: the "
+          "upper 95% bound of joint below the lower 95% bound of both A3 and distance (a tie is not lower)",
+          1.0, "="),
+    _spec("handover.claim.pingpong_tie_frac", "1",
+          "share of speeds where the joint ping-pong rate is not separable from another policy's "
+          "(95% intervals overlap)"),
     _spec("handover.claim.joint_gap_lowest_frac", "1",
           "share of speeds where the joint mean |RSRP-GAP| is the lowest of the three", 1.0, "="),
     _spec("handover.joint.rsrp_gap_db.v350", "dB", "joint decision: mean |RSRP-GAP| at completion, 350 km/h"),
@@ -54,6 +59,15 @@ SPECS = {s.name: s for s in [
 def _pick(summary: xr.Dataset, policy: str, name: str, speed: float):
     da = summary[name].sel(policy=policy, speed_kmh=speed)
     return float(da)
+
+
+def pingpong_strictly_lowest(summary: xr.Dataset) -> np.ndarray:
+    """bool per speed: the joint ping-pong rate is strictly below A3's and distance's — its
+    upper 95% bound below both lower 95% bounds (STUDY.md §7 'proposed < A3, distance'; a
+    policy with zero ping-pong ties with joint's zero and does not count)."""
+    hi = summary["pingpong_hi"].sel(policy=list(POLICIES)).values
+    lo = summary["pingpong_lo"].sel(policy=list(POLICIES)).values
+    return hi[0] < lo[1:].min(axis=0)
 
 
 def sens_specs(sens: xr.Dataset) -> dict[str, KeySpec]:
@@ -107,8 +121,9 @@ def key_numbers(summary: xr.Dataset, cost: xr.Dataset, sens: xr.Dataset, gaph_db
         vals = [_pick(summary, "joint", "success", s) for s in hs]
         i = int(np.argmin(vals))
         put("handover.joint.success.min_v300_380", vals[i], _pick(summary, "joint", "success_se", hs[i]))
-    pp = summary["pingpong"].sel(policy=list(POLICIES)).values
-    put("handover.claim.joint_pingpong_lowest_frac", float(np.mean(pp[0] <= pp[1:].min(axis=0))))
+    lower = pingpong_strictly_lowest(summary)
+    put("handover.claim.joint_pingpong_lowest_frac", float(np.mean(lower)))
+    put("handover.claim.pingpong_tie_frac", float(np.mean(~lower)))
     gap = summary["rsrp_gap_db"].sel(policy=list(POLICIES)).values
     put("handover.claim.joint_gap_lowest_frac", float(np.mean(gap[0] < gap[1:].min(axis=0))))
     put("handover.gaph_db", gaph_db)
