@@ -2,7 +2,7 @@
 # Chain: ray families -> tabulated slot-to-receiver channel per engine (NetCDF) ->
 # RSSI map, delay spread, coverage (NetCDF) -> one run per train type and channel /
 # measurement variant (snapshot fixes, KF, PF; NetCDF) -> figures + key numbers.
-from railradio.tunnel.study import TABLES, VARIANTS
+from railradio.tunnel.study import TABLES, VARIANTS, sensitivity_cases
 
 TUNNEL = config["tunnel"]
 TUNNEL_TABLES = list(TABLES)  # image (square), sbr (circle), seed (the seed's model)
@@ -112,7 +112,7 @@ rule tunnel_run:
         "results/tunnel/runs/{train}/{variant}.nc",
     params:
         cfg=lambda w: TUNNEL_CHANNEL
-        | {k: TUNNEL[k] for k in ("measurement", "trains", "positioning", "tracking")},
+        | {k: TUNNEL[k] for k in ("measurement", "trains", "positioning", "tracking", "realizations")},
         seed=config["seed"],
         code=CODE_TUNNEL_RUN,
     wildcard_constraints:
@@ -129,6 +129,33 @@ rule tunnel_run:
         "../envs/railradio.yaml"
     script:
         "../scripts/tunnel/run.py"
+
+
+rule tunnel_sensitivity:
+    """One train type through the sensitivity cases (shadowing and delay-error sigma swept
+    over the seed's ranges, delay-error models), R realizations each, KF only."""
+    input:
+        lambda w: "results/tunnel/table_{}.nc".format(TUNNEL["engine"]),
+    output:
+        "results/tunnel/sens/{train}.nc",
+    params:
+        cfg=TUNNEL_CHANNEL
+        | {k: TUNNEL[k] for k in ("measurement", "trains", "positioning", "tracking", "realizations", "sensitivity")},
+        seed=config["seed"],
+        code=CODE_TUNNEL_RUN,
+    wildcard_constraints:
+        train="metro|hst|freight",
+    log:
+        "results/logs/tunnel/sens_{train}.log",
+    benchmark:
+        "results/benchmarks/tunnel/sens_{train}.tsv"
+    resources:
+        mem_mb=3000,
+        runtime=20,
+    conda:
+        "../envs/railradio.yaml"
+    script:
+        "../scripts/tunnel/sensitivity.py"
 
 
 rule tunnel_figures:
@@ -161,12 +188,14 @@ rule tunnel_key_numbers:
         tables=expand("results/tunnel/table_{name}.nc", name=TUNNEL_TABLES),
         runs=expand("results/tunnel/runs/{run}.nc", run=TUNNEL_RUNS),
         engines="results/tunnel/engines.nc",
+        sens=expand("results/tunnel/sens/{train}.nc", train=TUNNEL_TRAINS),
     output:
         "results/tunnel/key_numbers.json",
     params:
         cfg=TUNNEL,
         tables=TUNNEL_TABLES,
         runs=TUNNEL_RUNS,
+        trains=TUNNEL_TRAINS,
         code=code_hash("railradio.tunnel.keys", "railradio.tunnel.materials", "railradio.keynumbers"),
     log:
         "results/logs/tunnel/key_numbers.log",

@@ -73,7 +73,7 @@ def tabulate(fam: Families, tunnel: Tunnel, cable: Cable, offsets_m: np.ndarray,
     The reflection product of each family is evaluated on ``n_sin_grid`` elevations
     (uniform in sin b, in which the Fresnel coefficients are smooth) and interpolated;
     spreading and phase are exact at every offset.  ``rng`` draws the seed model's
-    multipath losses (one per reflected ray).
+    multipath losses (one per reflected ray and offset: every slot-receiver pair its own).
     """
     if propagation not in PROPAGATIONS:
         raise ValueError(f"propagation must be one of {PROPAGATIONS}, got {propagation!r}")
@@ -93,8 +93,7 @@ def tabulate(fam: Families, tunnel: Tunnel, cable: Cable, offsets_m: np.ndarray,
         sm = seed_model or SeedModel()
         if rng is None:
             raise ValueError("rng is required for propagation='seed' (random multipath loss)")
-        mp_db = np.where(fam.n_refl > 0, rng.uniform(0.0, sm.multipath_max_db, n_f), 0.0)
-        fixed_db = -sm.reflection_loss_db * fam.n_refl - mp_db
+        fixed_db = -sm.reflection_loss_db * fam.n_refl
     taps = np.zeros((n_d, n_delay_bins), dtype=complex)
     p_mean = np.zeros(n_d)
     m1 = np.zeros(n_d)
@@ -107,8 +106,11 @@ def tabulate(fam: Families, tunnel: Tunnel, cable: Cable, offsets_m: np.ndarray,
             amp = _interp_rows(g_grid, ell / d) * (eirp * lam / (4.0 * math.pi)) / d
         else:
             d_direct = np.sqrt(h * h + dx**2)
+            # the seed's random 0-10 dB multipath loss, drawn per reflected ray and per offset,
+            # i.e. independently for every slot-receiver pair (seed 2.4.2)
+            mp_db = np.where(fam.n_refl[:, None] > 0, rng.uniform(0.0, sm.multipath_max_db, d.shape), 0.0)
             loss_db = (cable.coupling_loss_at_db(d_direct) + 20.0 * np.log10(4.0 * math.pi * d / lam)
-                       + sm.tunnel_att_db_per_m * d) - fixed_db[:, None]
+                       + sm.tunnel_att_db_per_m * d) - fixed_db[:, None] + mp_db
             amp = 10.0 ** (-loss_db / 20.0)
         amp = amp * np.exp(-1j * k * d)
         tau = d / SPEED_OF_LIGHT_M_S

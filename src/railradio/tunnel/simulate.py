@@ -8,7 +8,11 @@ Measurement models (STUDY.md §4, both reported):
   tunnel, correlated over ``shadow_corr_m``, the same for every train: it belongs to the
   place), and the line-of-sight delay plus Gaussian error; the ``n_slots`` strongest
   measured slots within ``window_m`` are used.  Fix: RSSI ranging + linearized LS, then
-  TDOA Gauss-Newton from it.
+  TDOA Gauss-Newton from it.  The delay error is ``white`` (independent per epoch and
+  slot, the seed's assumption, which a 20 Hz filter averages away), ``ar1`` (per slot an
+  AR(1) field along the track, correlated over ``delay_corr_m``: a multipath bias that
+  changes with position) or ``slot_bias`` (per slot one constant bias: a calibration error
+  of the slot's delay); same sigma in all three.
 * ``wideband`` - what a receiver of bandwidth B actually sees: the sum of all slots'
   rays with their cable delays (velocity factor v), sampled on ``n_tones`` tones across
   B with thermal noise, transformed to a channel impulse response; its strongest peak
@@ -36,7 +40,7 @@ from railradio.tunnel.geometry import Cable, Tunnel
 from railradio.tunnel.positioning import (gain_to_offset_m, gdop_seed, gdop_tdoa_along,
                                           monotone_gain_db, range_diff_from_delays, rssi_ls,
                                           tdoa_gauss_newton)
-from railradio.tunnel.tracking import kf_track, pf_track, robust_variance
+from railradio.tunnel.tracking import kf_track, kf_track_batch, pf_track, robust_variance
 
 BOLTZMANN_DBM_HZ = -174.0
 TRAIN_IDS = {"metro": 1, "hst": 2, "freight": 3}
@@ -44,6 +48,8 @@ MEASUREMENTS = ("separable", "wideband")
 VARIANT_IDS = {("physical", "separable"): 1, ("physical", "wideband"): 2, ("seed", "separable"): 3,
                ("seed", "wideband"): 4}
 SHADOW_KEY = {"evaluation": 100, "calibration": 101}
+DELAY_KEY = {"evaluation": 102, "calibration": 103}
+DELAY_ERRORS = ("white", "ar1", "slot_bias")
 
 
 @dataclass(frozen=True)
@@ -56,8 +62,14 @@ class MeasurementModel:
     bandwidth_hz: float = 5e6
     n_tones: int = 64
     noise_figure_db: float = 7.0
+    delay_error: str = "white"
+    delay_corr_m: float = 20.0
 
     def __post_init__(self) -> None:
+        if self.delay_error not in DELAY_ERRORS:
+            raise ValueError(f"delay_error must be one of {DELAY_ERRORS}, got {self.delay_error!r}")
+        if not self.delay_corr_m > 0:
+            raise ValueError(f"delay_corr_m must be positive, got {self.delay_corr_m!r}")
         if self.n_slots < 3:
             raise ValueError(f"n_slots must be >= 3, got {self.n_slots!r}")
         for name in ("shadow_corr_m", "delay_sigma_s", "window_m", "bandwidth_hz"):
@@ -97,6 +109,17 @@ def shadow_field(rng: np.random.Generator, n_slots: int, length_m: float, sigma_
     return sigma_db * lfilter([1.0], [1.0, -rho], w, axis=1)
 
 
+def delay_error_field(rng: np.random.Generator, n_slots: int, length_m: float,
+                      mm: MeasurementModel) -> np.ndarray | None:
+    """Per-slot delay error along the tunnel [slot, x on a 1 m grid] [s]; None if white."""
+    if mm.delay_error == "white":
+        return None
+    if mm.delay_error == "ar1":
+        return shadow_field(rng, n_slots, length_m, mm.delay_sigma_s, mm.delay_corr_m)
+    n = int(math.ceil(length_m)) + 1
+    return np.repeat(mm.delay_sigma_s * rng.standard_normal((n_slots, 1)), n, axis=1)
+
+
 def _field_at(field: np.ndarray, slots: np.ndarray, x_m: np.ndarray, step_m: float = 1.0) -> np.ndarray:
     pos = np.clip(x_m / step_m, 0, field.shape[1] - 1.000001)
     i0 = pos.astype(np.int64)
@@ -106,8 +129,10 @@ def _field_at(field: np.ndarray, slots: np.ndarray, x_m: np.ndarray, step_m: flo
 
 def separable_measurements(table: xr.Dataset, tunnel: Tunnel, cable: Cable, x_rx_m: np.ndarray,
                            shadow: np.ndarray, rng: np.random.Generator, mm: MeasurementModel,
-                           propagation: str) -> dict[str, np.ndarray]:
-    """Per-slot RSSI and delay of the ``n_slots`` strongest measured slots [epoch, n]."""
+                           propagation: str, delay_field: np.ndarray | None = None) -> dict[str, np.ndarray]:
+    """Per-slot RSSI and delay of the ``n_slots`` strongest measured slots [epoch, n];
+    the delay error is white from ``rng`` or read from ``delay_field`` (see
+    :func:`delay_error_field`)."""
     xs, pc_dbm, _ = slot_powers(tunnel, cable)
     x = np.asarray(x_rx_m, dtype=float)
     sl, ok = window_slots(tunnel, x, mm.window_m)
@@ -124,8 +149,11 @@ def separable_measurements(table: xr.Dataset, tunnel: Tunnel, cable: Cable, x_rx
     if not np.all(np.isfinite(rssi)):
         raise ValueError(f"fewer than n_slots={mm.n_slots} slots within window_m={mm.window_m}")
     h = tunnel.cross_distance_m
-    delay = np.sqrt((x[:, None] - xs[pick]) ** 2 + h * h) / SPEED_OF_LIGHT_M_S \
-        + mm.delay_sigma_s * rng.standard_normal(pick.shape)
+    delay = np.sqrt((x[:, None] - xs[pick]) ** 2 + h * h) / SPEED_OF_LIGHT_M_S
+    if delay_field is None:
+        delay = delay + mm.delay_sigma_s * rng.standard_normal(pick.shape)
+    else:
+        delay = delay + _field_at(delay_field, pick, np.broadcast_to(x[:, None], pick.shape))
     return {"slot": pick, "slot_x_m": xs[pick], "rssi_dbm": rssi, "cable_power_dbm": pc_dbm[pick],
             "delay_s": delay}
 
@@ -217,13 +245,15 @@ def epochs(tunnel: Tunnel, train: Train, rate_hz: float, head_range_m: tuple[flo
 
 
 def snapshot_fixes(table, tunnel, cable, train, x_head, mm, propagation, measurement, shadow, rng,
-                   tones=None, bias_s: float = 0.0):
+                   tones=None, bias_s: float = 0.0, delay_field=None, cols=None):
     """Per receiver snapshot measurements and fixes [epoch, receiver].
 
     ``fix`` is the snapshot position (separable: TDOA from the RSSI fix; wideband: the
     cable-ranging candidate nearest the truth, i.e. with the +- ambiguity resolved - the
     tracker resolves it itself from ``candidates``); ``scale`` is each fix's relative
     standard deviation from its geometry (separable: the TDOA dilution; wideband: 1).
+    Every receiver draws from its own child of ``rng``, so ``cols`` (the receivers to
+    compute, default all) does not change any receiver's numbers.
     """
     x_rx = x_head[:, None] - train.receiver_offsets_m[None, :]
     n_e, k = x_rx.shape
@@ -231,15 +261,17 @@ def snapshot_fixes(table, tunnel, cable, train, x_head, mm, propagation, measure
            ("fix", "fix_rssi", "sigma_tdoa", "gdop_seed", "gdop_tdoa", "tau", "scale")}
     res["candidates"] = None
     cands = []
-    for j in range(k):
+    rngs = rng.spawn(k)
+    for j in (range(k) if cols is None else cols):
         if measurement == "separable":
-            meas = separable_measurements(table, tunnel, cable, x_rx[:, j], shadow, rng, mm, propagation)
+            meas = separable_measurements(table, tunnel, cable, x_rx[:, j], shadow, rngs[j], mm, propagation,
+                                          delay_field)
             xr_, xt, st, gs, gt = separable_fix(meas, table, tunnel, mm)
             res["fix"][:, j], res["fix_rssi"][:, j], res["sigma_tdoa"][:, j] = xt, xr_, st
             res["gdop_seed"][:, j], res["gdop_tdoa"][:, j] = gs, gt
             res["scale"][:, j] = gt
         elif measurement == "wideband":
-            tau = wideband_delays(table, tunnel, cable, x_rx[:, j], rng, mm, tones=tones)
+            tau = wideband_delays(table, tunnel, cable, x_rx[:, j], rngs[j], mm, tones=tones)
             c = wideband_candidates(tau, tunnel, cable, bias_s)
             cands.append(c)
             res["tau"][:, j] = tau
@@ -252,8 +284,63 @@ def snapshot_fixes(table, tunnel, cable, train, x_head, mm, propagation, measure
     return x_rx, res
 
 
+def environment(seed: int, which: str, realization: int, tunnel: Tunnel, mm: MeasurementModel):
+    """The place's shadowing field and delay-error field (None if white) of one Monte Carlo
+    realization; ``which`` is 'evaluation' or 'calibration'.  The same for every train."""
+    n_sl = tunnel.slot_x_m.size
+    shadow = shadow_field(make_rng(seed, spawn_key("tunnel", SHADOW_KEY[which], realization)),
+                          n_sl, tunnel.length_m, mm.shadow_sigma_db, mm.shadow_corr_m)
+    delay = delay_error_field(make_rng(seed, spawn_key("tunnel", DELAY_KEY[which], realization)),
+                              n_sl, tunnel.length_m, mm)
+    return shadow, delay
+
+
+def _noise_rng(seed: int, train: Train, propagation: str, measurement: str, realization: int):
+    return make_rng(seed, spawn_key("tunnel", 200, TRAIN_IDS.get(train.name, 9),
+                                    VARIANT_IDS[(propagation, measurement)], realization))
+
+
+def calibrate_separable(table, tunnel, cable, train, mm, propagation, tracking, seed) -> float:
+    """r0 of a separable receiver from its calibration run (see :func:`run_train`) [m^2]."""
+    vid = VARIANT_IDS[(propagation, "separable")]
+    lo = train.length_m
+    _, xh_cal = epochs(tunnel, train, tracking["rate_hz"],
+                       (lo, min(tunnel.length_m, lo + tracking["calibration_m"])))
+    shadow, delay = environment(seed, "calibration", 0, tunnel, mm)
+    rng_cal = make_rng(seed, spawn_key("tunnel", 300, TRAIN_IDS.get(train.name, 9), vid))
+    xrx_cal, cal = snapshot_fixes(table, tunnel, cable, train, xh_cal, mm, propagation, "separable",
+                                  shadow, rng_cal, delay_field=delay)
+    return robust_variance(((cal["fix"] - xrx_cal) / cal["scale"]).ravel())
+
+
+def kf_realizations(table, tunnel, cable, train, mm, propagation, tracking, seed, r0: float,
+                    realizations) -> tuple[np.ndarray, np.ndarray]:
+    """Head and tail errors of the head and tail receivers' KF [realization, epoch] [m] for
+    the given Monte Carlo realizations of a separable receiver (each its own shadowing,
+    delay-error field and noise); the vectorized KF, equal to :func:`kf_track`."""
+    t, x_head = epochs(tunnel, train, tracking["rate_hz"])
+    k = train.n_receivers
+    ends = (0, k - 1)
+    z, r_t, truth = [], [], []
+    for r in realizations:
+        shadow, delay = environment(seed, "evaluation", r, tunnel, mm)
+        x_rx, res = snapshot_fixes(table, tunnel, cable, train, x_head, mm, propagation, "separable",
+                                   shadow, _noise_rng(seed, train, propagation, "separable", r),
+                                   delay_field=delay, cols=ends)
+        for j in ends:
+            z.append(res["fix"][:, j])
+            r_t.append(r0 * res["scale"][:, j] ** 2)
+            truth.append(x_rx[:, j])
+    z, r_t, truth = np.stack(z, 1), np.stack(r_t, 1), np.stack(truth, 1)
+    est = kf_track_batch(z, r_t, 1.0 / tracking["rate_hz"], tracking["accel_sigma_m_s2"], truth[0],
+                         (r0, tracking["max_speed_m_s"] ** 2))
+    err = np.abs(est - truth)
+    return err[:, 0::2].T, err[:, 1::2].T
+
+
 def run_train(table: xr.Dataset, tunnel: Tunnel, cable: Cable, train: Train, mm: MeasurementModel,
-              propagation: str, measurement: str, tracking: dict, seed: int) -> xr.Dataset:
+              propagation: str, measurement: str, tracking: dict, seed: int,
+              realizations: int = 1) -> xr.Dataset:
     """Calibration run, then the evaluation run: snapshot fixes, KF on the head and on
     the tail receiver, rigid-train KF on all receivers, PF on head and tail; errors.
 
@@ -262,22 +349,26 @@ def run_train(table: xr.Dataset, tunnel: Tunnel, cable: Cable, train: Train, mm:
     s_t the fix's geometric dilution and r0 the robust variance of error / s on that run;
     for the wideband receiver also the median delay bias of its peak.  Nothing is taken
     from the evaluation run.
+
+    Realization 0 is the full run (filterpy KF, rigid KF, PF); for a separable receiver,
+    realizations 1 .. R-1 repeat the head and tail KF with their own shadowing,
+    delay-error field and noise (:func:`kf_realizations`): ``rep_err*`` [realization,
+    epoch] hold all R for the pooled key numbers and their Monte Carlo spread.
     """
+    if realizations < 1:
+        raise ValueError(f"realizations must be >= 1, got {realizations!r}")
     vid = VARIANT_IDS[(propagation, measurement)]
     tid = TRAIN_IDS.get(train.name, 9)
     dt = 1.0 / tracking["rate_hz"]
-    n_sl = tunnel.slot_x_m.size
-    shadow_cal = shadow_field(make_rng(seed, spawn_key("tunnel", SHADOW_KEY["calibration"])),
-                              n_sl, tunnel.length_m, mm.shadow_sigma_db, mm.shadow_corr_m)
-    shadow_eval = shadow_field(make_rng(seed, spawn_key("tunnel", SHADOW_KEY["evaluation"])),
-                               n_sl, tunnel.length_m, mm.shadow_sigma_db, mm.shadow_corr_m)
+    shadow_cal, delay_cal = environment(seed, "calibration", 0, tunnel, mm)
+    shadow_eval, delay_eval = environment(seed, "evaluation", 0, tunnel, mm)
     tones = tone_response(table, mm) if measurement == "wideband" else None
     lo = train.length_m
     _, xh_cal = epochs(tunnel, train, tracking["rate_hz"],
                        (lo, min(tunnel.length_m, lo + tracking["calibration_m"])))
     rng_cal = make_rng(seed, spawn_key("tunnel", 300, tid, vid))
     xrx_cal, cal = snapshot_fixes(table, tunnel, cable, train, xh_cal, mm, propagation, measurement,
-                                  shadow_cal, rng_cal, tones)
+                                  shadow_cal, rng_cal, tones, delay_field=delay_cal)
     bias_s = 0.0
     if measurement == "wideband":
         bias_s = float(np.median(cal["tau"] - cable_model_delay_s(xrx_cal, tunnel, cable)))
@@ -287,9 +378,9 @@ def run_train(table: xr.Dataset, tunnel: Tunnel, cable: Cable, train: Train, mm:
             for j in range(xrx_cal.shape[1])], axis=1)
     r0 = robust_variance(((cal["fix"] - xrx_cal) / cal["scale"]).ravel())
     t, x_head = epochs(tunnel, train, tracking["rate_hz"])
-    rng = make_rng(seed, spawn_key("tunnel", 200, tid, vid))
     x_rx, res = snapshot_fixes(table, tunnel, cable, train, x_head, mm, propagation, measurement,
-                               shadow_eval, rng, tones, bias_s)
+                               shadow_eval, _noise_rng(seed, train, propagation, measurement, 0), tones,
+                               bias_s, delay_field=delay_eval)
     meas = res["candidates"] if res["candidates"] is not None else res["fix"][..., None]
     r_t = r0 * res["scale"] ** 2
     q = tracking["accel_sigma_m_s2"]
@@ -348,6 +439,17 @@ def run_train(table: xr.Dataset, tunnel: Tunnel, cable: Cable, train: Train, mm:
         ds[f"{est}_err_tail"] = ("time_s", et, {**m, "long_name": f"{est} tail error"})
         ds[f"{est}_err"] = ("time_s", np.sqrt((eh**2 + et**2) / 2.0),
                             {**m, "long_name": f"{est} train error sqrt((e_head^2 + e_tail^2)/2) (seed 4.4.3)"})
+    rep_h, rep_t = ds["kf_err_head"].values[None, :], ds["kf_err_tail"].values[None, :]
+    if measurement == "separable" and realizations > 1:
+        eh, et = kf_realizations(table, tunnel, cable, train, mm, propagation, tracking, seed, r0,
+                                 range(1, realizations))
+        rep_h, rep_t = np.concatenate([rep_h, eh]), np.concatenate([rep_t, et])
+    rt = ("realization", "time_s")
+    ds = ds.assign_coords(realization=("realization", np.arange(rep_h.shape[0]),
+                                       {"units": "1", "long_name": "Monte Carlo realization"}))
+    ds["rep_err_head"] = (rt, rep_h, {**m, "long_name": "KF head error per realization"})
+    ds["rep_err_tail"] = (rt, rep_t, {**m, "long_name": "KF tail error per realization"})
+    ds["rep_err"] = (rt, np.sqrt((rep_h**2 + rep_t**2) / 2.0), {**m, "long_name": "KF train error per realization"})
     ds["snapshot_err"] = (tr, np.abs(res["fix"] - x_rx), {**m, "long_name": "snapshot error"})
     ds["snapshot_rssi_err"] = (tr, np.abs(res["fix_rssi"] - x_rx), {**m, "long_name": "RSSI-LS snapshot error"})
     return ds

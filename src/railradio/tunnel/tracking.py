@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import numpy as np
 from filterpy.kalman import KalmanFilter
-import filterpy.monte_carlo.resampling as _resampling
 
 
 def _cv_model(dt_s: float, accel_sigma: float) -> tuple[np.ndarray, np.ndarray]:
@@ -86,11 +85,50 @@ def kf_track(z_m: np.ndarray, r_m2, dt_s: float, accel_sigma: float,
     return out[:, 0], out[:, 1], out[:, 2], nis
 
 
+def kf_track_batch(z_m: np.ndarray, r_m2: np.ndarray, dt_s: float, accel_sigma: float,
+                   x0_m: np.ndarray, p0: tuple[float, float], gate_sigma: float | None = 4.0) -> np.ndarray:
+    """The single-receiver :func:`kf_track` (initial speed 0, one candidate per epoch) for B
+    independent tracks at once, vectorized over the batch: ``z_m``, ``r_m2`` [T, B],
+    ``x0_m`` [B].  Same model, same gate, same NaN handling; covariance update in the
+    standard form (filterpy uses Joseph's, equal for the optimal gain; the test checks the
+    two agree).  Used for the Monte Carlo realizations and the sensitivity sweeps.
+    Returns the position estimates [T, B]."""
+    z = np.asarray(z_m, dtype=float)
+    if z.ndim != 2:
+        raise ValueError("z_m must be [T, B]")
+    r = np.broadcast_to(np.asarray(r_m2, dtype=float), z.shape)
+    if np.any(r <= 0):
+        raise ValueError("r_m2 must be positive")
+    f, q = _cv_model(dt_s, accel_sigma)
+    dt = f[0, 1]
+    n, b = z.shape
+    x = np.array(np.broadcast_to(np.asarray(x0_m, dtype=float), (b,)))
+    v = np.zeros(b)
+    p00, p01, p11 = np.full(b, float(p0[0])), np.zeros(b), np.full(b, float(p0[1]))
+    out = np.empty((n, b))
+    for t in range(n):
+        x = x + dt * v
+        p00, p01, p11 = (p00 + 2.0 * dt * p01 + dt * dt * p11 + q[0, 0], p01 + dt * p11 + q[0, 1],
+                         p11 + q[1, 1])
+        s = p00 + r[t]
+        y = z[t] - x
+        use = np.isfinite(y)
+        if gate_sigma is not None:
+            use &= np.abs(np.where(use, y, 0.0)) <= gate_sigma * np.sqrt(s)
+        k0 = np.where(use, p00 / s, 0.0)
+        k1 = np.where(use, p01 / s, 0.0)
+        y = np.where(use, y, 0.0)
+        x, v = x + k0 * y, v + k1 * y
+        p00, p01, p11 = p00 - k0 * p00, p01 - k0 * p01, p11 - k1 * p01
+        out[t] = x
+    return out
+
+
 def pf_track(z_m: np.ndarray, r_m2, dt_s: float, accel_sigma: float,
              x0: tuple[float, float], p0: tuple[float, float], n_particles: int,
              rng: np.random.Generator, outlier_prob: float = 0.02, outlier_width_m: float = 200.0,
              inject_frac: float = 0.01):
-    """Bootstrap particle filter with filterpy's systematic resampling.
+    """Bootstrap particle filter with systematic resampling (:func:`systematic_resample_with`).
 
     ``z_m`` [T] or [T, C] candidate fixes; likelihood: the sum over candidates of
     N(z; x, R), mixed with a uniform outlier density of weight ``outlier_prob`` over
@@ -142,19 +180,19 @@ def pf_track(z_m: np.ndarray, r_m2, dt_s: float, accel_sigma: float,
 
 
 def systematic_resample_with(weights: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-    """filterpy's systematic resampling with its random offset drawn from ``rng``.
-
-    ``filterpy.monte_carlo.systematic_resample`` takes its offset from the module-level
-    ``random`` (numpy's global state); it is swapped for one draw of ``rng`` during the call,
-    so the global state is neither used nor changed.
-    """
-    u = float(rng.random())
-    orig = _resampling.random
-    _resampling.random = lambda: u
-    try:
-        return _resampling.systematic_resample(weights)
-    finally:
-        _resampling.random = orig
+    """Systematic resampling (Kitagawa 1996) with its one random offset drawn from ``rng``:
+    particle i is copied for every point (u + j) / N, j = 0 .. N-1, that falls in its
+    interval of the cumulative weights.  The same algorithm as filterpy's
+    ``systematic_resample`` (which draws from numpy's global state; the test checks the
+    two agree for the same offset), thread-safe and reproducible."""
+    w = np.asarray(weights, dtype=float)
+    if w.ndim != 1 or w.size == 0 or np.any(w < 0) or not np.isfinite(w).all():
+        raise ValueError("weights must be a non-empty 1-D array of finite non-negative numbers")
+    n = w.size
+    points = (float(rng.random()) + np.arange(n)) / n
+    cum = np.cumsum(w / w.sum())
+    cum[-1] = 1.0
+    return np.minimum(np.searchsorted(cum, points, side="right"), n - 1)
 
 
 def robust_variance(errors_m: np.ndarray) -> float:

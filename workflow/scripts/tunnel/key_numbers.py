@@ -10,8 +10,9 @@ cov = smk.params.cfg["coverage"]
 maps = {n: read_dataset(p) for n, p in zip(smk.params.tables, smk.input.maps, strict=True)}
 tables = {n: read_dataset(p) for n, p in zip(smk.params.tables, smk.input.tables, strict=True)}
 runs = {tuple(k.split("/")): read_dataset(p) for k, p in zip(smk.params.runs, smk.input.runs, strict=True)}
+sens = {n: read_dataset(p) for n, p in zip(smk.params.trains, smk.input.sens, strict=True)}
 write_json(smk.output[0], key_numbers(runs, maps, tables, read_dataset(smk.input.engines),
                                       cov["threshold_dbm"], cov["blind_spot_dbm"], cov["min_rays"],
                                       cable_from_config(smk.params.cfg).wavelength_m,
                                       tunnel_from_config(smk.params.cfg, "rect").width_m,
-                                      eps_from_config(smk.params.cfg)))
+                                      eps_from_config(smk.params.cfg), sens=sens))

@@ -14,7 +14,7 @@ table = read_dataset(smk.input[0])
 tunnel = tunnel_from_config(cfg, table.attrs["shape"])
 train = train_from_config(cfg, smk.wildcards.train)
 ds = run_train(table, tunnel, cable_from_config(cfg), train, measurement_from_config(cfg), prop, meas,
-               cfg["tracking"], smk.params.seed)
+               cfg["tracking"], smk.params.seed, realizations=cfg["realizations"])
 log.info("%s %s: KF p95 %.3f m", smk.wildcards.train, smk.wildcards.variant,
          float(ds["kf_err"].quantile(0.95)))
 write_dataset(ds, smk.output[0], cfg, spawn_key("tunnel", 200, TRAIN_IDS[train.name], VARIANT_IDS[(prop, meas)]),
