@@ -107,3 +107,24 @@ def test_position_correction_piecewise():
     assert dx > 0
     assert float(model_gap_db(xm + dx, a, n, RADIO)) + 2.0 == pytest.approx(
         float(model_gap_db(xm, a, n, RADIO)), abs=1e-9)
+
+
+def test_first_attempt_bound_closed_form_against_sampling():
+    """Φ(9/8.49) − Φ(−11/8.49) = 0.758 at the defaults, against sampled gaps through the full
+    SINR rule (noise included) at X_c."""
+    from railradio.handover.bounds import first_attempt_success_at_centre, gap_window_db
+    from railradio.handover.params import Radio
+    from railradio.handover.radio import mean_rsrp_dbm, sinr_db
+
+    rd = Radio()
+    lo, hi = gap_window_db(rd)
+    assert lo == pytest.approx(-11.01, abs=0.01) and hi == pytest.approx(9.01, abs=0.01)
+    p = first_attempt_success_at_centre(rd)
+    assert p == pytest.approx(0.758, abs=0.001)
+    rng = np.random.default_rng(3)
+    p_s, p_t = mean_rsrp_dbm(rd.overlap_centre_m, rd)
+    z = rng.normal(0.0, rd.shadow_sigma_db, size=(2, 400_000))
+    ok = (sinr_db(p_s - z[0], p_t - z[1], rd) >= rd.q_out_db) & (sinr_db(p_t - z[1], p_s - z[0], rd) >= rd.q_in_db)
+    assert ok.mean() == pytest.approx(p, abs=0.004)
+    with pytest.raises(ValueError, match="load_factor"):
+        gap_window_db(Radio(load_factor=0.0))

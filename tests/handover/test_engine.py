@@ -30,6 +30,9 @@ def _scn(**joint):
     (120.0, _scn(wslr="mean", retry_rule="completed")),
     (460.0, _scn(band_fit="offset", measurements="raw", gaph_variant="narrow")),
     (250.0, replace(Scenario().with_weights(1, 0.5), a3=replace(Scenario().a3, ttt_s=0.04))),
+    (350.0, replace(_scn(), execution=replace(Scenario().execution, failure_rule="rlf"))),
+    (150.0, replace(_scn(), execution=replace(Scenario().execution, failure_rule="rlf", rlf_t310_s=0.4,
+                                               rlf_eval_s=0.12))),
 ])
 def test_vectorized_engine_equals_the_per_step_loop(speed, scn):
     kin = kinematics(scn, speed)
@@ -148,3 +151,26 @@ def test_zero_noise_l3_filtered_joint_band_has_no_filter_lag(speed):
     assert np.all(out["success"][1] == 1)
     # the completion gap is the one-sample quantization only, as for the distance trigger
     assert np.all(np.abs(out["rsrp_gap_db"][1]) < 10 * 3.5 / np.log(10) * 4 * step / 1500 + 0.05)
+
+
+def test_rlf_rule_fails_only_after_a_t310_run_of_out_of_sync():
+    """Hand-made SINR trace: the serving link fails under ``rlf`` only if every 200 ms mean
+    ending within T310 before the command is below Q_out; ``instant`` looks at H_b alone."""
+    from railradio.handover.model import rlf_window_samples, serving_ok
+
+    base = _quiet()
+    scn = replace(base, execution=replace(base.execution, failure_rule="rlf"))
+    assert rlf_window_samples(scn.execution, 0.04) == (5, 25)
+    kin = kinematics(scn, 360.0)  # 4 m per sample
+    ctx = build_context(scn, kin, draw_block(1, 360.0, 0, 3, kin, scn.train.n_nodes))
+    # shadowing field: serving link 30 dB down over [hb - L, hb] (target 0): out of sync there
+    hb = 700.0
+    x = kin.grid.x_m
+    for run, length in enumerate((4.0 * 29 + 1, 4.0 * 24 + 1, -1.0)):  # all 30 samples, j = 0..24, none
+        ctx.zeta_db[run, 0, :] = np.where((x <= hb + 0.1) & (x >= hb - length), 30.0, 0.0)
+        ctx.zeta_db[run, 1, :] = 0.0
+    ok = serving_ok(ctx, np.arange(3), np.full(3, hb))
+    np.testing.assert_array_equal(ok, [False, True, True])
+    inst = replace(scn, execution=replace(scn.execution, failure_rule="instant"))
+    ctx.scn = inst
+    np.testing.assert_array_equal(serving_ok(ctx, np.arange(3), np.full(3, hb)), [False, False, True])

@@ -23,7 +23,8 @@ HO_FIGURES = {
     "handover_sensitivity": "results/handover/sensitivity.nc",
 }
 CODE_HO_SIM = (
-    code_hash("railradio.handover", exclude=("figures.py", "keys.py", "summary.py", "stats.py", "reference.py"))
+    code_hash("railradio.handover", exclude=("figures.py", "keys.py", "summary.py", "stats.py", "reference.py",
+                                      "bounds.py"))
     + CODE_SHARED
 )
 CODE_HO_SUMMARY = code_hash("railradio.handover.summary", "railradio.handover.stats")
@@ -194,7 +195,8 @@ rule handover_key_numbers:
         "results/handover/key_numbers.json",
     params:
         sim=HO_SIM,
-        code=code_hash("railradio.handover.keys", "railradio.handover.band", "railradio.keynumbers"),
+        code=code_hash("railradio.handover.keys", "railradio.handover.band", "railradio.handover.bounds",
+                       "railradio.keynumbers"),
     log:
         "results/logs/handover/key_numbers.log",
     conda:

@@ -7,6 +7,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+from railradio.handover.bounds import first_attempt_success_at_centre, gap_sigma_db, gap_window_db
 from railradio.keynumbers import KeySpec
 
 POLICIES = ("joint", "a3", "distance")
@@ -51,6 +52,14 @@ SPECS = {s.name: s for s in [
     _spec("handover.joint.success.v100", "1", "joint decision: success rate at 100 km/h", digits=4),
     _spec("handover.a3.success.v100", "1", "A3: success rate at 100 km/h", digits=4),
     _spec("handover.gaph_db", "dB", "handover threshold GapH(sigma0)"),
+    _spec("handover.bound.first_attempt_success_xc", "1",
+          "closed form: first-attempt success at the overlap centre, Phi(hi/sigma_G) - Phi(lo/sigma_G), "
+          "interference-limited, from the config's eta, Q_out, Q_in, sigma", digits=3),
+    _spec("handover.bound.gap_lo_db", "dB", "closed form: lowest true gap at which an attempt succeeds, "
+          "Q_out + 10 log10 eta"),
+    _spec("handover.bound.gap_hi_db", "dB", "closed form: highest true gap at which an attempt succeeds, "
+          "-(Q_in + 10 log10 eta)"),
+    _spec("handover.bound.gap_sigma_db", "dB", "closed form: std of the shadowing gap sigma sqrt(2(1 - rho_st))"),
     _spec("handover.sigma0_db", "dB", "std of the filtered gap-measurement error sigma0"),
     _spec("handover.n_handovers_per_speed", "1", "node handovers simulated per speed point", digits=6),
 ]}
@@ -90,7 +99,7 @@ def sens_specs(sens: xr.Dataset) -> dict[str, KeySpec]:
 
 
 def key_numbers(summary: xr.Dataset, cost: xr.Dataset, sens: xr.Dataset, gaph_db: float,
-                sigma0_db: float, wslr: str) -> dict[str, Any]:
+                sigma0_db: float, wslr: str, radio=None) -> dict[str, Any]:
     """All handover.* key numbers (mc_stderr from the clustered standard errors)."""
     out: dict[str, Any] = {}
 
@@ -128,6 +137,12 @@ def key_numbers(summary: xr.Dataset, cost: xr.Dataset, sens: xr.Dataset, gaph_db
     put("handover.claim.joint_gap_lowest_frac", float(np.mean(gap[0] < gap[1:].min(axis=0))))
     put("handover.gaph_db", gaph_db)
     put("handover.sigma0_db", sigma0_db)
+    if radio is not None:
+        lo, hi = gap_window_db(radio)
+        put("handover.bound.first_attempt_success_xc", first_attempt_success_at_centre(radio), 0.0)
+        put("handover.bound.gap_lo_db", lo, 0.0)
+        put("handover.bound.gap_hi_db", hi, 0.0)
+        put("handover.bound.gap_sigma_db", gap_sigma_db(radio), 0.0)
     put("handover.n_handovers_per_speed", float(summary["n_handovers"].min()))
     specs = sens_specs(sens)
     for name, spec in specs.items():

@@ -159,10 +159,41 @@ class Execution:
     gap_db: np.ndarray         # true RSRP_s − RSRP_t at completion_x_m [dB]
 
 
+def rlf_window_samples(ex, period_s: float) -> tuple[int, int]:
+    """(samples per out-of-sync evaluation, evaluations ending within T310 after the first)
+    of the ``rlf`` failure rule on the T_m grid: round(rlf_eval_s/T_m) ≥ 1 and
+    round(rlf_t310_s/T_m)."""
+    return max(1, int(round(ex.rlf_eval_s / period_s))), int(round(ex.rlf_t310_s / period_s))
+
+
+def serving_ok(ctx: BlockContext, run: np.ndarray, hb_m: np.ndarray) -> np.ndarray:
+    """bool: the serving link has not failed at a command at true position ``hb_m``.
+
+    ``instant`` (STUDY.md §5): SINR_serving(H_b) ≥ Q_out.  ``rlf``: radio-link failure only
+    after a T310-long run of out-of-sync evaluations — the link has failed iff every
+    n_eval-sample mean (dB) of the serving SINR at the positions H_b − j·v·T_m, whose windows
+    end at j = 0…n_t310, is below Q_out.
+    """
+    sc = ctx.scn
+    rd, ex = sc.radio, sc.execution
+    if ex.failure_rule == "instant":
+        r_s, r_t = ctx.true_rsrp_dbm(run, hb_m)
+        return sinr_db(r_s, r_t, rd) >= rd.q_out_db
+    n_eval, n_t = rlf_window_samples(ex, ctx.kin.period_s)
+    step = ctx.kin.speed_m_s * ctx.kin.period_s
+    x = hb_m[:, None] - step * np.arange(n_eval + n_t)[None, :]          # [n, J], j = 0 at H_b
+    r_s, r_t = ctx.true_rsrp_dbm(run[:, None], x)
+    s = sinr_db(r_s, r_t, rd)
+    c = np.concatenate([np.zeros((s.shape[0], 1)), np.cumsum(s, axis=1)], axis=1)
+    avg = (c[:, n_eval:] - c[:, :-n_eval]) / n_eval                       # window ending at j = 0…n_t
+    return np.any(avg >= rd.q_out_db, axis=1)
+
+
 def execute(ctx: BlockContext, run: np.ndarray, hb_m: np.ndarray, retry_allowed) -> Execution:
     """Execute handovers commanded at true positions ``hb_m`` (flat arrays, one per crossing).
 
-    Attempt a succeeds iff SINR_serving(Hb_a) ≥ Q_out and SINR_target(He_a) ≥ Q_in, with
+    Attempt a succeeds iff the serving link holds at Hb_a (:func:`serving_ok`: by default
+    SINR_serving(Hb_a) ≥ Q_out) and SINR_target(He_a) ≥ Q_in, with
     He_a = Hb_a + v·T0 [seed eq. 2]; a failed attempt is followed by another at
     Hb_{a+1} = He_a + v·TZ when ``retry_allowed(a, serving_ok, hb_next_m)`` (bool array)
     says so.  Delay of a success at attempt a: a·T0 + (a−1)·TZ.
@@ -182,9 +213,8 @@ def execute(ctx: BlockContext, run: np.ndarray, hb_m: np.ndarray, retry_allowed)
         if not act.any():
             break
         he = hb + v * ex.t0_s
-        r_s_b, r_t_b = ctx.true_rsrp_dbm(run, hb)
         r_s_e, r_t_e = ctx.true_rsrp_dbm(run, he)
-        s_ok = sinr_db(r_s_b, r_t_b, rd) >= rd.q_out_db
+        s_ok = serving_ok(ctx, run, hb)
         t_ok = sinr_db(r_t_e, r_s_e, rd) >= rd.q_in_db
         ok = act & s_ok & t_ok
         hb_next = he + v * ex.tz_s

@@ -166,12 +166,25 @@ class Execution:
         attempts of the A3 and distance policies while the serving link holds [ours].
     pingpong_window_s
         a return to the previous cell within this time of completion is a ping-pong [ours].
+    failure_rule
+        when the serving link counts as failed at a command: ``instant`` (STUDY.md §5, the
+        default): its local-mean SINR at H_b is below Q_out; ``rlf`` (radio-link failure,
+        N310/T310-like, TS 36.331 §5.3.11 with TS 36.133 §7.6 evaluation): every
+        ``rlf_eval_s`` average of the serving SINR (in dB, on the T_m samples the train
+        crossed) ending within the last ``rlf_t310_s`` before the command is below Q_out [ours].
+    rlf_t310_s, rlf_eval_s
+        T310-like window (the out-of-sync time until radio-link failure) and the evaluation
+        period of one out-of-sync indication [3GPP: T310 1 s is a common setting; 200 ms
+        Qout evaluation, TS 36.133 §7.6].
     """
 
     t0_s: float = 0.030
     tz_s: float = 0.050
     max_attempts: int = 10
     pingpong_window_s: float = 1.0
+    failure_rule: str = "instant"
+    rlf_t310_s: float = 1.0
+    rlf_eval_s: float = 0.2
 
     def __post_init__(self) -> None:
         _check("t0_s", self.t0_s, 0.0, 1.0)
@@ -179,6 +192,9 @@ class Execution:
         if not isinstance(self.max_attempts, int) or not 1 <= self.max_attempts <= 100:
             raise ValueError(f"max_attempts must be an integer in 1..100, got {self.max_attempts!r}")
         _check("pingpong_window_s", self.pingpong_window_s, 0.0, 60.0)
+        _choice("failure_rule", self.failure_rule, ("instant", "rlf"))
+        _check("rlf_t310_s", self.rlf_t310_s, 0.0, 10.0)
+        _check("rlf_eval_s", self.rlf_eval_s, 0.0, 2.0, lo_open=True)
 
 
 @dataclass(frozen=True)

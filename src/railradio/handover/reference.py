@@ -101,6 +101,20 @@ class _Run:
         i_mw = rd.load_factor * 10 ** (self.true_rsrp(other, x) / 10) + self.noise_mw
         return self.true_rsrp(wanted, x) - 10 * math.log10(i_mw)
 
+    def serving_ok(self, hb: float) -> bool:
+        """Serving link not failed at a command at hb (instant rule, or RLF after T310)."""
+        ex, rd = self.scn.execution, self.scn.radio
+        if ex.failure_rule == "instant":
+            return self.sinr(0, hb) >= rd.q_out_db
+        n_eval = max(1, round(ex.rlf_eval_s / self.tm))
+        n_t = round(ex.rlf_t310_s / self.tm)
+        step = self.v * self.tm
+        sinrs = [self.sinr(0, hb - step * j) for j in range(n_eval + n_t)]
+        for end in range(n_t + 1):  # out-of-sync windows ending j = end samples before hb
+            if sum(sinrs[end:end + n_eval]) / n_eval >= rd.q_out_db:
+                return True  # an in-sync evaluation within T310: no radio-link failure
+        return False
+
     # --- execution ----------------------------------------------------------------------
     def execute(self, hb: float, retry_ok) -> tuple[int, bool, float]:
         """(attempts, success, completion position) from a first command at hb."""
@@ -109,7 +123,7 @@ class _Run:
         a = 1
         while True:
             he = hb + self.v * ex.t0_s
-            s_ok = self.sinr(0, hb) >= rd.q_out_db
+            s_ok = self.serving_ok(hb)
             t_ok = self.sinr(1, he) >= rd.q_in_db
             if s_ok and t_ok:
                 return a, True, he

@@ -10,4 +10,5 @@ setup_script(smk.log[0])
 scn = scenario_from_config(smk.params.sim)
 sigma0, gaph = sigma0_and_gaph(scn.radio, scn.joint)
 write_json(smk.output[0], key_numbers(read_dataset(smk.input.summary), read_dataset(smk.input.cost),
-                                      read_dataset(smk.input.sensitivity), gaph, sigma0, scn.joint.wslr))
+                                      read_dataset(smk.input.sensitivity), gaph, sigma0, scn.joint.wslr,
+                                      scn.radio))
