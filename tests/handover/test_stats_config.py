@@ -88,3 +88,20 @@ def test_pingpong_claim_is_strict_and_can_fail():
     ds = xr.Dataset({"pingpong_hi": (("policy", "speed_kmh"), hi), "pingpong_lo": (("policy", "speed_kmh"), lo)},
                     coords={"policy": ["joint", "a3", "distance"], "speed_kmh": [100.0, 250.0, 350.0]})
     np.testing.assert_array_equal(pingpong_strictly_lowest(ds), [True, False, False])
+
+
+def test_sensitivity_variant_values_print_as_configured():
+    import xarray as xr
+
+    from railradio.handover.keys import sens_values
+    from railradio.keynumbers import format_number
+
+    ds = xr.Dataset({"switch": ("variant", ["none", "a3.ttt_s", "radio.load_factor", "joint.wslr"]),
+                     "value": ("variant", ["reference", "0.64", "0.3", "mean"])},
+                    coords={"variant": ["reference", "ttt_s_0p64", "load_factor_0p3", "wslr_mean"]})
+    out = sens_values(ds)
+    assert set(out) == {"handover.sens.ttt_s_0p64.value", "handover.sens.load_factor_0p3.value"}
+    e = out["handover.sens.ttt_s_0p64.value"]
+    assert e["unit"] == "s" and format_number(e["value"], e["digits"]) == "0.64"
+    assert format_number(out["handover.sens.load_factor_0p3.value"]["value"],
+                         out["handover.sens.load_factor_0p3.value"]["digits"]) == "0.3"

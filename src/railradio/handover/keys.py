@@ -79,6 +79,32 @@ def pingpong_strictly_lowest(summary: xr.Dataset) -> np.ndarray:
     return hi[0] < lo[1:].min(axis=0)
 
 
+def _sig_digits(v: float) -> int:
+    """Significant digits of v as written (0.64 -> 2, 0.3 -> 1), so it prints as in the config."""
+    mant = f"{abs(v):.6e}".split("e")[0].replace(".", "").rstrip("0")
+    return max(1, len(mant))
+
+
+def sens_values(sens: xr.Dataset) -> dict[str, Any]:
+    """handover.sens.<variant>.value: the numeric value a variant sets (for the paper's table;
+    exact, from the config via the sensitivity dataset)."""
+    out = {}
+    for var in sens["variant"].values:
+        if var == "reference":
+            continue
+        sw = str(sens["switch"].sel(variant=var).values)
+        try:
+            val = float(str(sens["value"].sel(variant=var).values))
+        except ValueError:
+            continue
+        name = f"handover.sens.{var}.value"
+        short = sw.split(".")[-1]
+        unit = next((u for suf, u in (("_db", "dB"), ("_s", "s"), ("_m", "m")) if short.endswith(suf)), "1")
+        out[name] = KeySpec(name, unit, f"value of {sw} in the sensitivity variant {var}",
+                            digits=_sig_digits(val)).entry(val, 0.0)
+    return out
+
+
 def sens_specs(sens: xr.Dataset) -> dict[str, KeySpec]:
     """Specs of the sensitivity keys handover.sens.<variant>.<policy>.<metric>."""
     out = {}
@@ -144,6 +170,7 @@ def key_numbers(summary: xr.Dataset, cost: xr.Dataset, sens: xr.Dataset, gaph_db
         put("handover.bound.gap_hi_db", hi, 0.0)
         put("handover.bound.gap_sigma_db", gap_sigma_db(radio), 0.0)
     put("handover.n_handovers_per_speed", float(summary["n_handovers"].min()))
+    out.update(sens_values(sens))
     specs = sens_specs(sens)
     for name, spec in specs.items():
         _, _, var, pol, metric = name.split(".")
