@@ -150,11 +150,12 @@ def test_intermediates_are_self_explaining(ci_run_j2):
     paths = sorted((ci_run_j2 / "results/fusion").rglob("*.nc"))
     assert len(paths) == 4 + 4 + 4 + 1 + 3
     nr_paths = sorted(p for p in (ci_run_j2 / "results/nr").rglob("*.nc") if "cases" not in p.parts)
-    # trajectory, samples, 2 calibration + 2 evaluation shards, 1 track, 1 bounds
-    assert len(nr_paths) == 1 + 1 + 2 + 2 + 1 + 1
+    # trajectory, samples, 2 calibration + 2 evaluation shards, 1 track, 1 bounds, 1 IMM/RTS
+    assert len(nr_paths) == 1 + 1 + 2 + 2 + 1 + 1 + 1
     case_paths = sorted((ci_run_j2 / "results/nr/cases").rglob("*.nc"))
-    # 3 sensitivity cases: 2 calibration + 1 evaluation shard, 1 track each
-    assert len(case_paths) == 3 * (2 + 1 + 1)
+    # 3 simulated sensitivity cases: 2 calibration + 1 evaluation shard, 1 track each;
+    # 1 tracker-only case (w_distance): its track only (it reads the main run's shards)
+    assert len(case_paths) == 3 * (2 + 1 + 1) + 1
     paths += nr_paths + case_paths
     for study, n_min in (("handover", 10), ("tunnel", 10)):
         found = sorted((ci_run_j2 / "results" / study).rglob("*.nc"))
@@ -168,7 +169,7 @@ def test_intermediates_are_self_explaining(ci_run_j2):
                 assert attr in ds.attrs, (p, attr)
     for name in ("fusion_rmse_vs_distance", "fusion_rmse_vs_tdoa_error", "fusion_rmse_vs_aoa_error",
                  "nr_trajectory", "nr_burst_correlation", "nr_measurement_error_cdf",
-                 "nr_position_error_cdf", "nr_position_error_vs_time", "nr_sensitivity",
+                 "nr_position_error_cdf", "nr_position_error_vs_time", "nr_sensitivity", "nr_imm_lag",
                  "handover_cost_vs_m", "handover_pingpong_vs_speed", "handover_rsrp_gap_vs_speed",
                  "handover_delay_vs_speed", "handover_interruption_vs_speed",
                  "tunnel_rssi_map", "tunnel_delay_spread", "tunnel_gdop", "tunnel_position_error_cdf",
