@@ -7,6 +7,7 @@ import pytest
 from railradio.constants import SPEED_OF_LIGHT_M_S
 from railradio.tunnel.channel import converged_order, offset_grid_m, power_by_order, tabulate
 from railradio.tunnel.geometry import Cable, Tunnel
+from railradio.tunnel.keys import ENGINE_TOL_COHERENT_DB, ENGINE_TOL_MEAN_DB
 from railradio.tunnel.materials import CONCRETE_900MHZ
 from railradio.tunnel.rays import image_families, lift, reflection_product, sbr_families, trace
 
@@ -51,9 +52,9 @@ def test_engines_agree_in_a_rectangular_tunnel(order):
     a_img = lift(img, OFFSETS, LAM, CONCRETE_900MHZ, "paraxial").amplitude
     a_sbr = lift(sbr, OFFSETS, LAM, CONCRETE_900MHZ, "paraxial").amplitude
     p_img, p_sbr = (np.sum(np.abs(a) ** 2, axis=0) for a in (a_img, a_sbr))
-    assert np.max(np.abs(10 * np.log10(p_sbr / p_img))) < 0.05
+    assert np.max(np.abs(10 * np.log10(p_sbr / p_img))) < ENGINE_TOL_MEAN_DB
     c_img, c_sbr = (np.abs(a.sum(axis=0)) for a in (a_img, a_sbr))
-    assert np.max(np.abs(20 * np.log10(c_sbr / c_img))) < 0.3
+    assert np.max(np.abs(20 * np.log10(c_sbr / c_img))) < ENGINE_TOL_COHERENT_DB
     a_vec = lift(sbr, OFFSETS, LAM, CONCRETE_900MHZ, "vector").amplitude
     far = OFFSETS >= 20
     p_vec = np.sum(np.abs(a_vec) ** 2, axis=0)
