@@ -69,6 +69,24 @@ def test_sbr_circle_finds_the_line_of_sight_and_spreads_correctly():
     assert fam.stats["n_families"] > 10
 
 
+def test_sbr_circle_converges_in_ray_count_and_reception_radius():
+    """One slot's local-mean gain in the circle (order 16, vector rule) does not depend on
+    the number of launched rays (50 000 vs 200 000: < 0.02 dB; measured 0.001 dB) and only
+    weakly on the reception circle (radius 0.025 / 0.05 / 0.1 m: < 0.25 dB to 1000 m;
+    measured 0.15 dB at 1000 m, where the family count changes)."""
+    offs = np.array([0.0, 20.0, 100.0, 300.0, 1000.0])
+
+    def gain_db(n_rays, radius_m):
+        fam = sbr_families(CIRCLE, n_rays, 16, radius_m)
+        a = lift(fam, offs, LAM, CONCRETE_900MHZ, "vector").amplitude
+        return 10 * np.log10(np.sum(np.abs(a) ** 2, axis=0))
+
+    ref = gain_db(200_000, 0.05)
+    assert np.max(np.abs(gain_db(50_000, 0.05) - ref)) < 0.02
+    for radius in (0.025, 0.1):
+        assert np.max(np.abs(gain_db(100_000, radius) - ref)) < 0.25
+
+
 def test_energy_never_increases_with_reflections():
     # every reflection of the vector-tracked field can only lose energy
     fam = sbr_families(CIRCLE, 50_000, 20, 0.05)
