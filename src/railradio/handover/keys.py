@@ -54,7 +54,7 @@ SPECS = {s.name: s for s in [
     _spec("handover.gaph_db", "dB", "handover threshold GapH(sigma0)"),
     _spec("handover.bound.first_attempt_success_xc", "1",
           "closed form: first-attempt success at the overlap centre, Phi(hi/sigma_G) - Phi(lo/sigma_G), "
-          "interference-limited, from the config's eta, Q_out, Q_in, sigma", digits=3),
+          "interference-limited, from the config's eta, Q_out, Q_in, sigma", digits=4),
     _spec("handover.bound.gap_lo_db", "dB", "closed form: lowest true gap at which an attempt succeeds, "
           "Q_out + 10 log10 eta"),
     _spec("handover.bound.gap_hi_db", "dB", "closed form: highest true gap at which an attempt succeeds, "
