@@ -38,5 +38,6 @@ def test_ci_tunnel_overrides_valid():
     cfg = _paper()
     with open(ROOT / "config/ci.yaml") as fh:
         ci = yaml.safe_load(fh)
-    cfg["tunnel"].update(ci["tunnel"])
-    validate_config(cfg, SCHEMA)
+    from railradio.config import deep_merge
+
+    validate_config(deep_merge(cfg, {"tunnel": ci["tunnel"]}), SCHEMA)  # Snakemake merges recursively
