@@ -34,6 +34,10 @@ def _specs() -> dict[str, KeySpec]:
         add(f"tunnel.{tr}.rssi.err_m.p95", "m", f"{tr}: 95th pct of the head receiver's RSSI-ranging LS error")
         add(f"tunnel.{tr}.wideband.err_m.p95", "m", f"{tr}: 95th pct of the train error, KF, wideband receiver")
         add(f"tunnel.{tr}.seed_channel.err_m.p95", "m", f"{tr}: 95th pct of the train error, KF, the seed's channel")
+        add(f"tunnel.{tr}.length_err_m.p95", "m",
+            f"{tr}: 95th pct of |estimated head-tail distance - train length|, KF (the observable "
+            "part of the attitude: with collinear slots the lateral offset, hence the seed's "
+            "attitude angle, is not observable)")
     add("tunnel.coverage_frac", "1", "share of the tunnel with local-mean RSSI >= -95 dBm (physical, image)", 0.96, "≥")
     add("tunnel.coverage_frac.coherent", "1", "same with the coherent RSSI (fading included)")
     add("tunnel.coverage_frac.sbr_circle", "1", "same, SBR in the circular cross-section")
@@ -75,6 +79,13 @@ def sens_spec(case: str, train: str) -> KeySpec:
     """Key of one sensitivity case and train type (names follow the config's cases)."""
     return KeySpec(f"tunnel.sens.{case}.{train}.err_m.p95", "m",
                    f"{train}: 95th pct of the train error, KF, sensitivity case {case} (pooled over realizations)")
+
+
+def length_error_m(ds: xr.Dataset) -> np.ndarray:
+    """|x̂_head - x̂_tail - L| per epoch [m] of a run's KF (realization 0): the train's
+    along-track extent, all that remains of the seed's attitude θ = arctan(Δy/Δx)
+    (seed 3.3.2) when the slots are collinear and only along-track positions are solved."""
+    return np.abs(ds["kf_head"].values - ds["kf_tail"].values - float(ds.attrs["length_m"]))
 
 
 def pooled_p95(rep: np.ndarray) -> tuple[float, float | None]:
@@ -120,6 +131,7 @@ def key_numbers(runs: dict[tuple[str, str], xr.Dataset], maps: dict[str, xr.Data
         put(f"tunnel.{tr}.head_err_m.p95", *pooled_p95(ds["rep_err_head"].values))
         put(f"tunnel.{tr}.tail_err_m.p95", *pooled_p95(ds["rep_err_tail"].values))
         put(f"tunnel.{tr}.rigid.err_m.p95", p95(ds["rigid_err"]))
+        put(f"tunnel.{tr}.length_err_m.p95", p95(length_error_m(ds)))
         put(f"tunnel.{tr}.pf.err_m.p95", p95(ds["pf_err"]))
         put(f"tunnel.{tr}.snapshot.err_m.p95", p95(ds["snapshot_err"].values[:, 0]))
         put(f"tunnel.{tr}.rssi.err_m.p95", p95(ds["snapshot_rssi_err"].values[:, 0]))
