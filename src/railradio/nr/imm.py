@@ -32,18 +32,16 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.stats import chi2
 
-from railradio.constants import SPEED_OF_LIGHT_M_S
 from railradio.nr.tracking import (
     VARIANTS,
     TrackerConfig,
     distances_m,
+    track_setup,
     hx,
     jacobian,
     process_noise,
     residual_fn,
     run_ekf,
-    select_measurements,
-    snapshot_ls,
     transition,
 )
 
@@ -233,39 +231,6 @@ def run_imm(select, dt_s: float, dh_m: float, cfg: TrackerConfig, imm: ImmConfig
     return out
 
 
-def _setup(ds, rrh_x: NDArray, rrh_y: float, dh_m: float, cfg: TrackerConfig, strength: str, n_use: int):
-    """Measurement selection, first epoch k0 and initial state of
-    :func:`railradio.nr.tracking.track` (same rules, restated here so that the EKF of
-    ``track`` and the filters below start alike; a test checks the EKF is identical)."""
-    rrh = ds["rrh"].values
-    aod = ds["aod_hat"].values
-    toa = ds["toa_hat"].values
-    ok = np.isfinite(aod) & np.isfinite(toa)
-    stren = np.nan_to_num(ds[strength].values, nan=-np.inf)
-
-    def pick(k: int, x_pred: float):
-        cols = select_measurements(rrh[k], ok[k], stren[k], rrh_x, x_pred, rrh.shape[1], n_use)
-        xy = np.stack([rrh_x[rrh[k, cols]], np.full(cols.size, rrh_y)], axis=1) if cols.size else np.zeros((0, 2))
-        return xy, aod[k, cols], toa[k, cols]
-
-    k0 = int(np.argmax(ok.any(axis=1)))
-    xy0, a0, t0 = pick(k0, float(rrh_x[rrh[k0, 0]]))
-    p_fix, cov = snapshot_ls(xy0, a0, t0, dh_m, cfg, np.array([rrh_x[rrh[k0, 0]] + 1.0, 0.0]))
-    s0 = np.array([p_fix[0], p_fix[1], 0.0, 0.0, 0.0, 0.0])
-    p0 = np.diag([cov[0, 0], cov[1, 1], 1.0, 1.0, 1.0, 1.0])
-    p0[0, 1] = p0[1, 0] = cov[0, 1]
-
-    def snapshot_fix(k: int, x_pred: float):
-        xy, a_k, t_k = pick(k, x_pred)
-        if xy.shape[0] == 0:
-            return None
-        rho = np.sqrt(max((SPEED_OF_LIGHT_M_S * t_k[0]) ** 2 - dh_m**2, 1.0))
-        guess = np.array([xy[0, 0] + rho * np.cos(a_k[0]), xy[0, 1] + rho * np.sin(a_k[0])])
-        return snapshot_ls(xy, a_k, t_k, dh_m, cfg, guess)
-
-    return pick, snapshot_fix, k0, s0, p0, rrh.shape[0]
-
-
 def track_filters(ds, rrh_x: NDArray, rrh_y: float, dh_m: float, dt_s: float, cfg: TrackerConfig,
                   imm: ImmConfig | None, strength: str = "peak", n_use: int = 3) -> dict[str, dict[str, NDArray]]:
     """Track one realization with the EKF of :func:`railradio.nr.tracking.track` (q =
@@ -274,7 +239,7 @@ def track_filters(ds, rrh_x: NDArray, rrh_y: float, dh_m: float, dt_s: float, cf
     ``cov`` [n, 6, 6] (NaN before the first measured epoch ``k0``), ``reacquired`` [n]
     and, for the IMM, ``mu`` [n, models]; plus ``k0``.
     """
-    pick, snapshot_fix, k0, s0, p0, n = _setup(ds, rrh_x, rrh_y, dh_m, cfg, strength, n_use)
+    pick, snapshot_fix, k0, s0, p0, n = track_setup(ds, rrh_x, rrh_y, dh_m, cfg, strength, n_use)
     out: dict = {"k0": k0}
     runs = {"ekf": None} | ({"imm": imm} if imm is not None else {})
     for name, model in runs.items():

@@ -274,6 +274,40 @@ def select_measurements(cand_rrh: NDArray, cand_ok: NDArray, cand_strength: NDAr
     return np.array(cols[:n_use], dtype=np.int64)
 
 
+def track_setup(ds, rrh_x: NDArray, rrh_y: float, dh_m: float, cfg: TrackerConfig, strength: str, n_use: int):
+    """Measurement selection ``pick(k, x_pred)``, the snapshot re-acquisition fix
+    ``snapshot_fix(k, x_pred)``, the first epoch with measurements k0, the initial state and
+    P0 (snapshot LS position at rest; speed and acceleration σ 1 m/s and 1 m/s² [ours]) and
+    the number of epochs: the set-up shared by :func:`track` and the IMM."""
+    rrh = ds["rrh"].values
+    aod = ds["aod_hat"].values
+    toa = ds["toa_hat"].values
+    ok = np.isfinite(aod) & np.isfinite(toa)
+    stren = np.nan_to_num(ds[strength].values, nan=-np.inf)
+
+    def pick(k: int, x_pred: float):
+        cols = select_measurements(rrh[k], ok[k], stren[k], rrh_x, x_pred, rrh.shape[1], n_use)
+        xy = np.stack([rrh_x[rrh[k, cols]], np.full(cols.size, rrh_y)], axis=1) if cols.size else np.zeros((0, 2))
+        return xy, aod[k, cols], toa[k, cols]
+
+    k0 = int(np.argmax(ok.any(axis=1)))
+    xy0, a0, t0 = pick(k0, float(rrh_x[rrh[k0, 0]]))
+    p_fix, cov = snapshot_ls(xy0, a0, t0, dh_m, cfg, np.array([rrh_x[rrh[k0, 0]] + 1.0, 0.0]))
+    s0 = np.array([p_fix[0], p_fix[1], 0.0, 0.0, 0.0, 0.0])
+    p0 = np.diag([cov[0, 0], cov[1, 1], 1.0, 1.0, 1.0, 1.0])
+    p0[0, 1] = p0[1, 0] = cov[0, 1]
+
+    def snapshot_fix(k: int, x_pred: float):
+        xy, a_k, t_k = pick(k, x_pred)
+        if xy.shape[0] == 0:
+            return None
+        rho = np.sqrt(max((SPEED_OF_LIGHT_M_S * t_k[0]) ** 2 - dh_m**2, 1.0))
+        guess = np.array([xy[0, 0] + rho * np.cos(a_k[0]), xy[0, 1] + rho * np.sin(a_k[0])])
+        return snapshot_ls(xy, a_k, t_k, dh_m, cfg, guess)
+
+    return pick, snapshot_fix, k0, s0, p0, rrh.shape[0]
+
+
 def track(ds, rrh_x: NDArray, rrh_y: float, dh_m: float, dt_s: float, cfg: TrackerConfig,
           strength: str = "peak", n_use: int = 3, snapshot: bool = True) -> dict[str, NDArray]:
     """Track one realization from a :func:`railradio.nr.simulate.simulate_epochs` dataset.
@@ -283,32 +317,8 @@ def track(ds, rrh_x: NDArray, rrh_y: float, dh_m: float, dt_s: float, cfg: Track
     acceleration standard deviations 1 m/s and 1 m/s² [ours]). Also returns (``snapshot``) the snapshot
     LS fix of every epoch (no tracking) as a baseline.
     """
+    pick, snapshot_fix, k0, s0, p0, n = track_setup(ds, rrh_x, rrh_y, dh_m, cfg, strength, n_use)
     rrh = ds["rrh"].values
-    aod = ds["aod_hat"].values
-    toa = ds["toa_hat"].values
-    ok = np.isfinite(aod) & np.isfinite(toa)
-    stren = np.nan_to_num(ds[strength].values, nan=-np.inf)
-    n = rrh.shape[0]
-
-    def pick(k: int, x_pred: float):
-        cols = select_measurements(rrh[k], ok[k], stren[k], rrh_x, x_pred, rrh.shape[1], n_use)
-        xy = np.stack([rrh_x[rrh[k, cols]], np.full(cols.size, rrh_y)], axis=1) if cols.size else np.zeros((0, 2))
-        return xy, aod[k, cols], toa[k, cols]
-
-    # initial fix: the first epoch with >= 1 measurement, linearized around the nearest RRH
-    k0 = int(np.argmax(ok.any(axis=1)))
-    xy0, a0, t0 = pick(k0, float(rrh_x[rrh[k0, 0]]))
-    p_fix, cov = snapshot_ls(xy0, a0, t0, dh_m, cfg, np.array([rrh_x[rrh[k0, 0]] + 1.0, 0.0]))
-    s0 = np.array([p_fix[0], p_fix[1], 0.0, 0.0, 0.0, 0.0])
-    p0 = np.diag([cov[0, 0], cov[1, 1], 1.0, 1.0, 1.0, 1.0])
-    p0[0, 1] = p0[1, 0] = cov[0, 1]
-    def snapshot_fix(k: int, x_pred: float):
-        xy, a_k, t_k = pick(k, x_pred)
-        if xy.shape[0] == 0:
-            return None
-        rho = np.sqrt(max((SPEED_OF_LIGHT_M_S * t_k[0]) ** 2 - dh_m**2, 1.0))
-        guess = np.array([xy[0, 0] + rho * np.cos(a_k[0]), xy[0, 1] + rho * np.sin(a_k[0])])
-        return snapshot_ls(xy, a_k, t_k, dh_m, cfg, guess)
 
     state_now = {"x": s0[0]}
 
