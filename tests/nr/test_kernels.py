@@ -105,11 +105,22 @@ def test_at_offsets_is_the_band_limited_interpolant():
     freqs = np.fft.fftfreq(n, 1.0 / n)
     offsets = np.arange(-d, d + 1) / d
     k0 = np.array([0, 17, 63])
+    rows = np.array([2, 0, 1])  # rows of p, in any order
+    theta = 2 * np.pi * np.outer(offsets[d:], freqs) / n  # the non-negative offsets
     got = kernels.at_offsets(p, k0, np.round(freqs).astype(np.int64),
                              np.exp(2j * np.pi * np.arange(n) / n).astype(np.complex64),
-                             np.exp(2j * np.pi * np.outer(offsets, freqs) / n).astype(np.complex64))
+                             np.cos(theta).astype(np.float32), np.sin(theta).astype(np.float32), rows)
     lam = k0[:, None] + offsets[None, :]  # [3, J]
-    want = np.abs(np.einsum("rf,rjf->rj", p, np.exp(2j * np.pi * lam[:, :, None] * freqs / n))) / n
+    want = np.abs(np.einsum("rf,rjf->rj", p[rows], np.exp(2j * np.pi * lam[:, :, None] * freqs / n))) / n
     np.testing.assert_allclose(got, want, rtol=1e-4)
     # at integer lags it equals the inverse FFT
-    np.testing.assert_allclose(got[:, d], np.abs(np.fft.ifft(p, axis=1))[np.arange(3), k0], rtol=1e-4)
+    np.testing.assert_allclose(got[:, d], np.abs(np.fft.ifft(p[rows], axis=1))[np.arange(3), k0], rtol=1e-4)
+
+
+def test_cross_spectra_is_the_broadcast_product():
+    rng = np.random.default_rng(7)
+    zf = (rng.standard_normal((5, 16)) + 1j * rng.standard_normal((5, 16))).astype(np.complex64)
+    bs = (rng.standard_normal((3, 16)) + 1j * rng.standard_normal((3, 16))).astype(np.complex64)
+    out = np.empty((3, 5, 16), dtype=np.complex64)
+    kernels.cross_spectra(zf, bs, out)
+    np.testing.assert_allclose(out, zf[None, :, :] * bs[:, None, :], rtol=1e-6)

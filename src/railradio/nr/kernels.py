@@ -184,25 +184,52 @@ def local_mean_argmax(r: np.ndarray, window: int, guard: int) -> tuple:
 
 @njit(cache=True, nogil=True, fastmath=True)
 def at_offsets(p: np.ndarray, k0: np.ndarray, freq_int: np.ndarray, roots: np.ndarray,
-               offset_phasors_t: np.ndarray) -> np.ndarray:
-    """Band-limited |c(k0 + δ)| = |(1/N) Σ_f p[f] e^{j2π f (k0 + δ)/N}| for each row of
-    the cross-spectra p [R, N] and the offsets δ_j encoded in offset_phasors_t [J, N]
-    (e^{j2π f δ_j/N}); ``roots[q] = e^{j2π q/N}``. Single-precision sums (relative error
-    ~1e-6). Returns [R, J]."""
-    n_r, n = p.shape
-    n_j = offset_phasors_t.shape[0]
-    out = np.empty((n_r, n_j))
+               cos_t: np.ndarray, sin_t: np.ndarray, rows: np.ndarray) -> np.ndarray:
+    """Band-limited |c(k0 + δ)| = |(1/N) Σ_f p[f] e^{j2π f (k0 + δ)/N}| at the symmetric
+    offsets δ = -δ_{H-1} … -δ_1, 0, δ_1 … δ_{H-1} for the rows ``rows`` [R] of the
+    cross-spectra p [M, N] (row i of the result: p[rows[i]], k0[i]).
+
+    ``cos_t``/``sin_t`` [H, N] hold cos/sin(2π f δ_h/N) of the non-negative offsets
+    (δ_0 = 0); ``roots[q] = e^{j2π q/N}``. With q[f] = p[f] e^{j2π f k0/N},
+    A = Σ q cos θ and S = Σ q sin θ give c(k0 ± δ) = (A ± jS)/N: one pass per offset
+    pair. Single-precision sums (relative error ~1e-6). Returns [R, 2H - 1].
+    """
+    n = p.shape[1]
+    n_r = rows.shape[0]
+    n_h = cos_t.shape[0]
+    out = np.empty((n_r, 2 * n_h - 1))
     base = np.empty(n, dtype=np.complex64)
     for i in range(n_r):
         kk = k0[i]
+        row = rows[i]
         for f in range(n):
-            base[f] = p[i, f] * roots[(freq_int[f] * kk) % n]
-        for j in range(n_j):
-            re = np.float32(0.0)
-            im = np.float32(0.0)
+            base[f] = p[row, f] * roots[(freq_int[f] * kk) % n]
+        for h in range(n_h):
+            a_re = np.float32(0.0)
+            a_im = np.float32(0.0)
+            s_re = np.float32(0.0)
+            s_im = np.float32(0.0)
             for f in range(n):
-                v = base[f] * offset_phasors_t[j, f]
-                re += v.real
-                im += v.imag
-            out[i, j] = np.sqrt(np.float64(re) ** 2 + np.float64(im) ** 2) / n
+                b = base[f]
+                c = cos_t[h, f]
+                sn = sin_t[h, f]
+                a_re += b.real * c
+                a_im += b.imag * c
+                s_re += b.real * sn
+                s_im += b.imag * sn
+            # c(k0 + δ) = A + jS, c(k0 - δ) = A - jS
+            out[i, n_h - 1 + h] = np.sqrt(np.float64(a_re - s_im) ** 2 + np.float64(a_im + s_re) ** 2) / n
+            out[i, n_h - 1 - h] = np.sqrt(np.float64(a_re + s_im) ** 2 + np.float64(a_im - s_re) ** 2) / n
     return out
+
+
+@njit(cache=True, nogil=True)
+def cross_spectra(zf: np.ndarray, bspec: np.ndarray, out: np.ndarray) -> None:
+    """out[c, b, :] = zf[b, :] · bspec[c, :]: the per-candidate, per-block cross-spectra
+    (complex64, written into a reused buffer)."""
+    n_c, n = bspec.shape
+    n_b = zf.shape[0]
+    for c in range(n_c):
+        for b in range(n_b):
+            for f in range(n):
+                out[c, b, f] = zf[b, f] * bspec[c, f]

@@ -260,41 +260,47 @@ class Synthesizer:
         x = np.empty((symbols.size, n), dtype=np.complex64)
         no_h = np.ones((1, 1), dtype=np.complex64)
         amp_l = np.sqrt(prof.powers / self.n_sinusoids)
+        # per-RRH quantities, vectorized over RRHs: delay τ0 = (n_c - ε)/F_s is placed at
+        # n_c, the rest (and the CP start) is a per-symbol phase ramp: sample m of symbol s
+        # is x(t_m - τ0) at m - cp_s + n_c
+        n_cs = np.ceil(links.tau_s * fs - 1e-9).astype(np.int64)  # [R]
+        frac = links.tau_s * fs - n_cs  # [R] in (-1, 0]
+        ramps = np.exp(-2j * np.pi * np.outer(frac + sp["cp0"], self.k) / n).astype(np.complex64)  # [R, n]
+        is_ss = sp["block_of"] >= 0
+        ss_amp = links.beam_amp[:, np.maximum(sp["block_of"], 0)]  # [R, S]
+        if self.data_beam == "random":  # "none": the data are zero anyway (zero pool)
+            data_amp = np.stack([links.beam_amp[r][draws[r]["data_beam"]] for r in range(links.n)]) \
+                if links.n else np.zeros((0, symbols.size))
+        else:
+            data_amp = np.broadcast_to(links.data_amp[:, None], ss_amp.shape)
+        g_syms = (np.where(is_ss[None, :], ss_amp, data_amp)
+                  * (links.amp * n)[:, None]).astype(np.float32)  # × n: unnormalized IFFT
+        t_firsts = (num.symbol_start(sp["s_min"]) + n_cs) / fs + t0_s  # [R]
+        full = np.ones(links.n, dtype=bool) if d2d_m is None else np.asarray(d2d_m) <= self.full_channel_range_m
         for r in range(links.n):
-            # delay τ0 = (n_c - ε)/F_s: placement at n_c, the rest (and the CP start) as a
-            # per-symbol phase ramp: sample m of symbol s is x(t_m - τ0) at m - cp_s + n_c
-            n_c = int(np.ceil(links.tau_s[r] * fs - 1e-9))
+            n_c = int(n_cs[r])
             if n_c >= total:
                 continue
             mask, vals = self.overlay(links.n_id1[r], links.n_id2[r])
-            if self.data_beam == "random":
-                data_amp = links.beam_amp[r][draws[r]["data_beam"]]
-            else:  # "none": the data are zero anyway (zero pool)
-                data_amp = links.data_amp[r]
-            g_sym = np.where(sp["block_of"] >= 0, links.beam_amp[r][np.maximum(sp["block_of"], 0)],
-                             data_amp) * (links.amp[r] * n)  # × n: unnormalized IFFT
-            frac = links.tau_s[r] * fs - n_c  # in (-1, 0]
-            ramp = np.exp(-2j * np.pi * (frac + sp["cp0"]) * self.k / n).astype(np.complex64)  # [n]
-            full = d2d_m is None or d2d_m[r] <= self.full_channel_range_m
-            if full and prof.powers.size:
+            if full[r] and prof.powers.size:
                 f_lm = links.doppler_hz * np.cos(draws[r]["alpha"])
                 taps = kernels.sos_taps(amp_l, f_lm, draws[r]["phi"], t_sym)
                 taps *= np.exp(-1j * (2 * np.pi * links.f_los_hz[r] * t_sym + links.phase0[r]))[:, None]
                 h = taps.astype(np.complex64) @ self.basis
                 h += np.float32(np.sqrt(prof.los_power))
                 kernels.fill_grid(x, self.pool_band, draws[r]["pool_idx"], mask, vals, h, True,
-                                  ramp, g_sym.astype(np.float32), sp["long_of"], sp["long_ramp"])
+                                  ramps[r], g_syms[r], sp["long_of"], sp["long_ramp"])
             else:  # far interferer: one tap with the profile's total power, LOS Doppler
                 kernels.fill_grid(x, self.pool_band, draws[r]["pool_idx"], mask, vals, no_h, False,
-                                  ramp, g_sym.astype(np.float32), sp["long_of"], sp["long_ramp"])
+                                  ramps[r], g_syms[r], sp["long_of"], sp["long_ramp"])
             y = sfft.ifft(x, axis=1, workers=1, overwrite_x=True)
             # LOS phase e^{j(2π f t + φ0)} at receive times, applied while placing
-            t_first = (num.symbol_start(sp["s_min"]) + n_c) / fs + t0_s
             kernels.place(z, y, sp["starts"], sp["cps"], n_c, 2 * np.pi * links.f_los_hz[r],
-                          t_first, links.phase0[r], 1.0 / fs)
+                          float(t_firsts[r]), links.phase0[r], 1.0 / fs)
         if noise:
             var = links.noise_psd_w_hz * fs * links.n_chains
-            z += (np.sqrt(var / 2) * (rng.standard_normal(total) + 1j * rng.standard_normal(total))).astype(np.complex64)
+            # complex AWGN: interleaved (re, im) float32 draws, variance var/2 each
+            z += np.float32(np.sqrt(var / 2)) * rng.standard_normal(2 * total, dtype=np.float32).view(np.complex64)
         return z, sp["s_min"]
 
 
@@ -364,8 +370,9 @@ class Correlator:
         d = cfg.decimation
         # e^{j2π f δ/N} for the full-rate offsets δ = -1 ... +1 (decimated units, step 1/D)
         self.offsets = np.arange(-d, d + 1) / d
-        self.offset_phasors_t = np.ascontiguousarray(np.exp(
-            2j * np.pi * np.outer(self.offsets, self.freqs) / self.n_win).astype(np.complex64))  # [J, N]
+        theta = 2 * np.pi * np.outer(self.offsets[d:], self.freqs) / self.n_win  # δ >= 0: [d + 1, N]
+        self.offset_cos_t = np.ascontiguousarray(np.cos(theta).astype(np.float32))
+        self.offset_sin_t = np.ascontiguousarray(np.sin(theta).astype(np.float32))
         self.freq_int = np.round(self.freqs).astype(np.int64)
         self.roots = np.exp(2j * np.pi * np.arange(self.n_win) / self.n_win).astype(np.complex64)
         self.cfar_factor = cfar_threshold(cfg.lags_full / Numerology(1).sample_rate_hz, pfa) / np.sqrt(np.pi / 2)
@@ -378,11 +385,12 @@ class Correlator:
             self._spectra[key] = np.conj(sfft.fft(b, self.n_win)).astype(np.complex64)
         return self._spectra[key]
 
-    def _at_offsets(self, p: NDArray[np.complex64], k0: NDArray[np.int64]) -> NDArray[np.float64]:
-        """|c(k0 + δ)| for δ in ``self.offsets`` from cross-spectra p [n, N] (band-limited
-        evaluation: c(λ) = (1/N) Σ_f p[f] e^{j2π f λ/N})."""
-        return kernels.at_offsets(np.ascontiguousarray(p), np.asarray(k0, dtype=np.int64),
-                                  self.freq_int, self.roots, self.offset_phasors_t)
+    def _at_offsets(self, p: NDArray[np.complex64], rows: NDArray[np.int64],
+                    k0: NDArray[np.int64]) -> NDArray[np.float64]:
+        """|c(k0 + δ)| for δ in ``self.offsets`` from the rows ``rows`` of the cross-spectra
+        p [M, N] (band-limited evaluation: c(λ) = (1/N) Σ_f p[f] e^{j2π f λ/N})."""
+        return kernels.at_offsets(p, np.asarray(k0, dtype=np.int64), self.freq_int, self.roots,
+                                  self.offset_cos_t, self.offset_sin_t, np.asarray(rows, dtype=np.int64))
 
     def window_spectra(self, z: NDArray[np.complex64], s_min: int) -> NDArray[np.complex64]:
         """FFT of the received burst over each SS block's window (v_i ... v_i + N - 1),
@@ -408,8 +416,10 @@ class Correlator:
         n_c = len(n_id1)
         n_b = zf.shape[0]
         bspec = np.stack([self.spectrum(a, b) for a, b in zip(n_id1, n_id2, strict=True)])  # [C, N]
-        p = zf[None, :, :] * bspec[:, None, :]  # [C, B, N]
+        p = np.empty((n_c, n_b, self.n_win), dtype=np.complex64)
+        kernels.cross_spectra(np.ascontiguousarray(zf, dtype=np.complex64), bspec, p)  # [C, B, N]
         xc = sfft.ifft(p, axis=2, workers=1).reshape(n_c * n_b, self.n_win)
+        p2 = p.reshape(n_c * n_b, self.n_win)  # row c·B + b
         r, mu, sigma, eta, k_lo = kernels.magnitude_stats(xc, cfg.lags)  # one pass over |r|
         r = r.reshape(n_c, n_b, cfg.lags)
         mu, sigma = mu.reshape(n_c, n_b), sigma.reshape(n_c, n_b)
@@ -429,7 +439,7 @@ class Correlator:
         cand = eta > pre
         if d > 1 and np.any(cand):  # η at full-rate lags around promising peaks
             ci, bi = np.nonzero(cand)
-            vals = self._at_offsets(p[ci, bi], k_lo[ci, bi])
+            vals = self._at_offsets(p2, ci * n_b + bi, k_lo[ci, bi])
             eta[ci, bi] = np.maximum(eta[ci, bi], vals.max(axis=1))
         detected = eta > threshold
         toa = np.full(n_c, np.nan)
@@ -445,7 +455,7 @@ class Correlator:
             comb = r[c, det].sum(axis=0)  # seed eq. 8 (decimated lags)
             kc = int(comb.argmax())
             if d > 1:  # eq. 9 at full-rate lags d·kc - d ... d·kc + d
-                vals = self._at_offsets(p[c, det], np.full(det.size, kc)).sum(axis=0)
+                vals = self._at_offsets(p2, c * n_b + det, np.full(det.size, kc)).sum(axis=0)
                 full = d * kc + np.round(self.offsets * d).astype(int)
             else:
                 full = np.arange(max(kc - 1, 0), min(kc + 2, cfg.lags))
