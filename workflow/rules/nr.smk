@@ -288,7 +288,7 @@ rule nr_case_calibrate:
     """Calibration of a sensitivity case (its own calibration run, the main run's key)."""
     input:
         lambda w: case_shard_paths(
-            w.case, NR_CASES[w.case], NR, "cal", NR_CAL_SHARDS, NR_SENS["n_shards"]
+            w.case, NR_CASES[w.case], NR, "cal", NR_CAL_SHARDS, NR_SENS["n_shards"], NR_CASES
         ),
     output:
         "results/nr/cases/{case}/calibration.json",
@@ -309,7 +309,7 @@ rule nr_case_track:
     """EKF tracks of a sensitivity case."""
     input:
         shards=lambda w: case_shard_paths(
-            w.case, NR_CASES[w.case], NR, "r0", NR_CAL_SHARDS, NR_SENS["n_shards"]
+            w.case, NR_CASES[w.case], NR, "r0", NR_CAL_SHARDS, NR_SENS["n_shards"], NR_CASES
         ),
         calibration="results/nr/cases/{case}/calibration.json",
     output:

@@ -76,18 +76,51 @@ class RrhArray:
 
 @dataclass(frozen=True)
 class TrainArray:
-    """The train's two panels (forward 0°, backward 180°), beams fixed along the track,
-    co-located at the reference point by default; their chains are summed (power gains
-    add, noise of both chains) [ours]."""
+    """The train's two panels (head: boresight 0°, forward; tail: 180°, backward), beams
+    fixed along the track [seed]; their chains are summed (power gains add, noise of both
+    chains) [ours].
+
+    ``panel_x_m`` = (head, tail): the panels' along-track positions relative to the train's
+    reference point [m], head >= 0 >= tail (the train runs toward +x). (0, 0), the default,
+    co-locates them at the reference point, as the seed's eq. 14 treats the train as a
+    point; otherwise every RRH reaches each panel over its own path (:func:`link_budget`)
+    and the tracker's measurement model carries the lever arm [ours, STUDY.md §2.1].
+    """
 
     n_elements: int = 8
     n_chains: int = 2
+    panel_x_m: tuple[float, float] = (0.0, 0.0)
+
+    BORESIGHTS_RAD = (0.0, np.pi)
+
+    def __post_init__(self) -> None:
+        head, tail = (float(v) for v in self.panel_x_m)
+        if not (head >= 0.0 >= tail):
+            raise ValueError(f"panel_x_m must be (head >= 0, tail <= 0), got {self.panel_x_m!r}")
+
+    @property
+    def co_located(self) -> bool:
+        return all(float(v) == 0.0 for v in self.panel_x_m)
+
+    def panel_gain_db(self, aoa_rad: NDArray, panel: int) -> NDArray[np.float64]:
+        """Receive gain [dBi] of one panel (0 head, 1 tail) toward azimuth ``aoa_rad``."""
+        phi = wrap_rad(np.asarray(aoa_rad) - self.BORESIGHTS_RAD[panel])
+        return element_gain_db(phi) + 10 * np.log10(ula_gain(phi, 0.0 * phi, self.n_elements))
 
     def gain_db(self, aoa_rad: NDArray) -> NDArray[np.float64]:
-        """Total receive gain [dBi] toward azimuth ``aoa_rad`` (both panels)."""
+        """Total receive gain [dBi] toward azimuth ``aoa_rad`` (both panels, co-located)."""
         total = np.zeros(np.shape(aoa_rad))
-        for bore in (0.0, np.pi):
-            phi = wrap_rad(np.asarray(aoa_rad) - bore)
-            g = element_gain_db(phi) + 10 * np.log10(ula_gain(phi, 0.0 * phi, self.n_elements))
-            total = total + 10 ** (g / 10)
+        for panel in (0, 1):
+            total = total + 10 ** (self.panel_gain_db(aoa_rad, panel) / 10)
         return 10 * np.log10(total)
+
+
+def facing_panel(x_m: NDArray, rrh_x_m: NDArray, offset_m: float,
+                 panel_x_m: tuple[float, float]) -> NDArray[np.int64]:
+    """The panel (0 head, 1 tail) that sees each RRH closer to its boresight: the one a
+    receiver with the train's geometry expects to measure it (the tracker's rule) [ours]."""
+    x = np.asarray(x_m, float)
+    rx = np.asarray(rrh_x_m, float)
+    off_head = np.abs(np.arctan2(offset_m, rx - (x + panel_x_m[0])))  # from +x
+    off_tail = np.abs(np.arctan2(offset_m, (x + panel_x_m[1]) - rx))  # from -x
+    return (off_tail < off_head).astype(np.int64)

@@ -81,7 +81,12 @@ class ShadowingMap:
 
 @dataclass
 class LinkBudget:
-    """Per-epoch large-scale quantities of the RRHs in range (arrays over RRHs)."""
+    """Per-epoch large-scale quantities of the RRHs in range (arrays over RRHs; with
+    separate train panels, the panel that receives each RRH more strongly — ``panel``).
+
+    ``links`` holds the synthesis inputs: one link per RRH (co-located panels) or one per
+    RRH and panel, RRH-major (``link_rrh``, ``link_d2d_m``, ``link_panel_x_m``: the RRH
+    index, the 2-D distance and the receiving panel's along-track offset of each link)."""
 
     rrh: NDArray[np.int64]
     d3d_m: NDArray[np.float64]
@@ -92,6 +97,10 @@ class LinkBudget:
     beam_gain_db: NDArray[np.float64]  # [R, n_beams]
     rx_gain_db: NDArray[np.float64]
     links: Links
+    panel: NDArray[np.int64] | None = None
+    link_rrh: NDArray[np.int64] | None = None
+    link_d2d_m: NDArray[np.float64] | None = None
+    link_panel_x_m: NDArray[np.float64] | None = None
 
     @cached_property
     def rx_power_dbm(self) -> NDArray[np.float64]:
@@ -102,26 +111,65 @@ class LinkBudget:
 
 def link_budget(x_m: float, speed_m_s: float, dep: Deployment, radio: RadioParams, rrh_array: RrhArray,
                 train: TrainArray, shadow: ShadowingMap, shadowing: bool = True) -> LinkBudget:
-    """Large-scale parameters and the synthesis inputs of every RRH within ``radio.range_m``."""
+    """Large-scale parameters and the synthesis inputs of every RRH within ``radio.range_m``
+    of the train's reference point ``x_m``."""
     d2d_all = np.hypot(dep.x_m - x_m, dep.offset_m)
     rrh = np.flatnonzero(d2d_all <= radio.range_m)
-    d3d = dep.distance_3d_m(x_m, rrh)
-    d2d = dep.distance_2d_m(x_m, rrh)
-    pl = pathloss_umi_los_db(d3d, d2d, radio.carrier_hz, dep.h_bs_m, dep.h_ut_m)
-    sh = shadow.at(x_m, rrh) if shadowing else np.zeros(rrh.size)
-    aod = dep.aod_rad(np.full(rrh.size, x_m), rrh)
-    aoa = dep.aoa_rad(np.full(rrh.size, x_m), rrh)
-    gt = rrh_array.beam_gains_db(aod)
-    gr = train.gain_db(aoa)
-    amp = np.sqrt(radio.epre_w * 10 ** ((-pl + sh + gr) / 10))
     n1, n2 = dep.n_id()
     lam = radio.wavelength_m
+    if train.co_located:
+        d3d = dep.distance_3d_m(x_m, rrh)
+        d2d = dep.distance_2d_m(x_m, rrh)
+        pl = pathloss_umi_los_db(d3d, d2d, radio.carrier_hz, dep.h_bs_m, dep.h_ut_m)
+        sh = shadow.at(x_m, rrh) if shadowing else np.zeros(rrh.size)
+        aod = dep.aod_rad(np.full(rrh.size, x_m), rrh)
+        aoa = dep.aoa_rad(np.full(rrh.size, x_m), rrh)
+        gt = rrh_array.beam_gains_db(aod)
+        gr = train.gain_db(aoa)
+        amp = np.sqrt(radio.epre_w * 10 ** ((-pl + sh + gr) / 10))
+        links = Links(
+            n_id1=n1[rrh], n_id2=n2[rrh], tau_s=d3d / SPEED_OF_LIGHT_M_S, amp=amp,
+            beam_amp=10 ** (gt / 20), data_amp=10 ** (gt.max(axis=1) / 20),
+            f_los_hz=speed_m_s / lam * (dep.x_m[rrh] - x_m) / d3d,
+            phase0=(-2 * np.pi * d3d / lam) % (2 * np.pi),
+            doppler_hz=abs(speed_m_s) / lam, noise_psd_w_hz=radio.noise_psd_w_hz,
+            n_chains=train.n_chains, extra={"tx_power_dbm": radio.tx_power_dbm},
+        )
+        return LinkBudget(rrh, d3d, pl, sh, aod, aoa, gt, gr, links, link_rrh=rrh, link_d2d_m=d2d,
+                          link_panel_x_m=np.zeros(rrh.size))
+    # separate panels: each RRH reaches the head panel at x + panel_x[0] and the tail panel
+    # at x + panel_x[1] over its own path (delay, path loss, shadowing, angles, fading)
+    per = []
+    for panel, dx_panel in enumerate(train.panel_x_m):
+        xp = x_m + float(dx_panel)
+        d3d = dep.distance_3d_m(xp, rrh)
+        d2d = dep.distance_2d_m(xp, rrh)
+        pl = pathloss_umi_los_db(d3d, d2d, radio.carrier_hz, dep.h_bs_m, dep.h_ut_m)
+        sh = shadow.at(xp, rrh) if shadowing else np.zeros(rrh.size)
+        aod = dep.aod_rad(np.full(rrh.size, xp), rrh)
+        aoa = dep.aoa_rad(np.full(rrh.size, xp), rrh)
+        gt = rrh_array.beam_gains_db(aod)
+        gr = train.panel_gain_db(aoa, panel)
+        per.append(dict(xp=xp, d3d=d3d, d2d=d2d, pl=pl, sh=sh, aod=aod, aoa=aoa, gt=gt, gr=gr,
+                        power=-pl + sh + gr + gt.max(axis=1)))
+    panel = np.argmax(np.stack([p["power"] for p in per]), axis=0)  # [R] the stronger panel
+    pick = {k: np.choose(panel, [p[k] for p in per]) for k in ("d3d", "pl", "sh", "aod", "aoa", "gr")}
+    gt_serv = np.where(panel[:, None] == 0, per[0]["gt"], per[1]["gt"])
+    # one data beam per RRH: its best beam toward the stronger panel, seen by both panels
+    b_data = gt_serv.argmax(axis=1)
+    cols = {k: np.stack([p[k] for p in per], axis=1).ravel() for k in ("d3d", "d2d", "pl", "sh", "gr")}
+    gt_l = np.stack([p["gt"] for p in per], axis=1).reshape(-1, rrh_array.n_beams)  # [2R, beams]
+    x_rrh_l = np.repeat(dep.x_m[rrh], 2)
+    xp_l = np.tile([per[0]["xp"], per[1]["xp"]], rrh.size)
     links = Links(
-        n_id1=n1[rrh], n_id2=n2[rrh], tau_s=d3d / SPEED_OF_LIGHT_M_S, amp=amp,
-        beam_amp=10 ** (gt / 20), data_amp=10 ** (gt.max(axis=1) / 20),
-        f_los_hz=speed_m_s / lam * (dep.x_m[rrh] - x_m) / d3d,
-        phase0=(-2 * np.pi * d3d / lam) % (2 * np.pi),
+        n_id1=np.repeat(n1[rrh], 2), n_id2=np.repeat(n2[rrh], 2), tau_s=cols["d3d"] / SPEED_OF_LIGHT_M_S,
+        amp=np.sqrt(radio.epre_w * 10 ** ((-cols["pl"] + cols["sh"] + cols["gr"]) / 10)),
+        beam_amp=10 ** (gt_l / 20), data_amp=10 ** (gt_l[np.arange(gt_l.shape[0]), np.repeat(b_data, 2)] / 20),
+        f_los_hz=speed_m_s / lam * (x_rrh_l - xp_l) / cols["d3d"],
+        phase0=(-2 * np.pi * cols["d3d"] / lam) % (2 * np.pi),
         doppler_hz=abs(speed_m_s) / lam, noise_psd_w_hz=radio.noise_psd_w_hz,
         n_chains=train.n_chains, extra={"tx_power_dbm": radio.tx_power_dbm},
     )
-    return LinkBudget(rrh, d3d, pl, sh, aod, aoa, gt, gr, links)
+    return LinkBudget(rrh, pick["d3d"], pick["pl"], pick["sh"], pick["aod"], pick["aoa"], gt_serv,
+                      pick["gr"], links, panel=panel, link_rrh=np.repeat(rrh, 2), link_d2d_m=cols["d2d"],
+                      link_panel_x_m=np.tile(np.asarray(train.panel_x_m, float), rrh.size))

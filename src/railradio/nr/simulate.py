@@ -97,24 +97,28 @@ def simulate_epochs(scn: Scenario, epochs: np.ndarray, seed: int, key: tuple[int
     out = {name: np.full((n_e, n_c), np.nan) for name in ("d3d_m", "aod_true_rad", "rx_power_dbm")}
     est = {name: np.full((n_r, n_e, n_c), np.nan) for name in ("aod_hat_rad", "toa_hat_s", "peak", "best_score")}
     out["rrh"] = np.zeros((n_e, n_c), dtype=np.int64)
+    out["panel"] = np.zeros((n_e, n_c), dtype=np.int64)
     est["n_detected"] = np.zeros((n_r, n_e, n_c), dtype=np.int64)
     sinr_proxy = np.full(n_e, np.nan)
+    n_id1, n_id2 = dep.n_id()
     corr_keep = {}
     for i, (e, xe, ve) in enumerate(zip(epochs, x, v, strict=True)):
         lb = link_budget(float(xe), float(ve), dep, radio, scn.rrh_array, scn.train_array, shadow, scn.shadowing)
         rng = make_rng(seed, key + (KEY_EPOCH, int(e)))
-        z, s_min = syn(lb.links, rng, t0_s=float(t[i]), d2d_m=np.hypot(dep.x_m[lb.rrh] - xe, dep.offset_m))
+        z, s_min = syn(lb.links, rng, t0_s=float(t[i]), d2d_m=lb.link_d2d_m)
         cand = dep.nearest(float(xe), n_c)
         pos = np.searchsorted(lb.rrh, cand)
         out["rrh"][i] = cand
         out["d3d_m"][i] = lb.d3d_m[pos]
         out["aod_true_rad"][i] = lb.aod_rad[pos]
         out["rx_power_dbm"][i] = lb.rx_power_dbm[pos]
+        if lb.panel is not None:
+            out["panel"][i] = lb.panel[pos]
         spectra = {}  # window FFTs shared by receivers with the same window length
         for j, cor in enumerate(cors):
             if cor.n_win not in spectra:
                 spectra[cor.n_win] = cor.window_spectra(z, s_min)
-            res = cor.correlate(z, s_min, lb.links.n_id1[pos], lb.links.n_id2[pos],
+            res = cor.correlate(z, s_min, n_id1[cand], n_id2[cand],
                                 keep_corr=(j == 0 and int(e) in keep_corr_epochs), zf=spectra[cor.n_win])
             est["aod_hat_rad"][j, i] = res.aod_rad
             est["toa_hat_s"][j, i] = res.toa_samples / SAMPLE_RATE_HZ
@@ -139,6 +143,9 @@ def simulate_epochs(scn: Scenario, epochs: np.ndarray, seed: int, key: tuple[int
             "toa_true": (cd, out["d3d_m"] / SPEED_OF_LIGHT_M_S, {"units": "s", "long_name": "true propagation delay"}),
             "aod_true": (cd, out["aod_true_rad"], {"units": "rad", "long_name": "true azimuth of departure at the RRH"}),
             "rx_power": (cd, out["rx_power_dbm"], {"units": "dBm", "long_name": "received power with the best beam"}),
+            "panel": (cd, out["panel"], {"units": "1", "long_name": "train panel receiving the RRH more strongly (0 head, 1 tail); distance, delay and angles are to it"}),
+            "train_panel_x": (("panel_id",), np.asarray(scn.train_array.panel_x_m, float),
+                              {"units": "m", "long_name": "along-track position of the head (0) and tail (1) panels from the train's reference point"}),
             "aod_hat": (rd, est["aod_hat_rad"], {"units": "rad", "long_name": "AOD estimate (seed eq. 7), NaN if nothing detected"}),
             "toa_hat": (rd, est["toa_hat_s"], {"units": "s", "long_name": "TOA estimate (seed eq. 9), NaN if nothing detected"}),
             "peak": (rd, est["peak"], {"units": "1", "long_name": "combined correlation peak (decimated-rate units)"}),
@@ -150,6 +157,7 @@ def simulate_epochs(scn: Scenario, epochs: np.ndarray, seed: int, key: tuple[int
             "epoch": ("epoch", epochs, {"units": "1", "long_name": "measurement epoch index (dt apart)"}),
             "cand": ("cand", np.arange(n_c), {"units": "1", "long_name": "candidate rank by distance"}),
             "receiver": ("receiver", [name for name, _, _ in receivers], {"units": "1", "long_name": "receiver variant"}),
+            "panel_id": ("panel_id", [0, 1], {"units": "1", "long_name": "train panel: 0 head, 1 tail"}),
         },
     )
     if corr_keep:
@@ -175,7 +183,8 @@ def scenario_from_config(c: dict) -> Scenario:
         deployment=Deployment(**{k: float(v) for k, v in c["deployment"].items()}),
         radio=RadioParams(**{k: float(v) for k, v in c["radio"].items()}),
         rrh_array=RrhArray(n_elements=int(c["antenna"]["rrh_elements"]), n_beams=int(c["antenna"]["n_beams"])),
-        train_array=TrainArray(n_elements=int(c["antenna"]["train_elements"])),
+        train_array=TrainArray(n_elements=int(c["antenna"]["train_elements"]),
+                               panel_x_m=tuple(float(v) for v in c["antenna"].get("train_panels_x_m", (0.0, 0.0)))),
         receiver=ReceiverConfig(decimation=int(rx["decimation"]), ssb_pattern=rx["ssb_pattern"],
                                 n_blocks=int(c["antenna"]["n_beams"]), toa_blocks=rx["toa_blocks"],
                                 subsample=bool(rx["subsample"]), template=rx["template"],

@@ -274,11 +274,22 @@ def select_measurements(cand_rrh: NDArray, cand_ok: NDArray, cand_strength: NDAr
     return np.array(cols[:n_use], dtype=np.int64)
 
 
-def track_setup(ds, rrh_x: NDArray, rrh_y: float, dh_m: float, cfg: TrackerConfig, strength: str, n_use: int):
+def track_setup(ds, rrh_x: NDArray, rrh_y: float, dh_m: float, cfg: TrackerConfig, strength: str, n_use: int,
+                lever_arm: bool = True):
     """Measurement selection ``pick(k, x_pred)``, the snapshot re-acquisition fix
     ``snapshot_fix(k, x_pred)``, the first epoch with measurements k0, the initial state and
     P0 (snapshot LS position at rest; speed and acceleration σ 1 m/s and 1 m/s² [ours]) and
-    the number of epochs: the set-up shared by :func:`track` and the IMM."""
+    the number of epochs: the set-up shared by :func:`track` and the IMM.
+
+    Separate head/tail panels (``ds["train_panel_x"]`` nonzero): each measurement is taken
+    at the panel facing its RRH at the predicted position (:func:`railradio.nr.antenna.facing_panel`),
+    whose along-track lever arm ℓ enters h(x) as an RRH shifted by -ℓ (on the straight
+    track, x + ℓ - x_k = x - (x_k - ℓ); the Jacobian is unchanged). ``lever_arm=False``
+    ignores it: the seed's point model [ours]."""
+    from railradio.nr.antenna import facing_panel
+
+    panel_x = (tuple(float(v) for v in ds["train_panel_x"].values)
+               if lever_arm and "train_panel_x" in ds else (0.0, 0.0))
     rrh = ds["rrh"].values
     aod = ds["aod_hat"].values
     toa = ds["toa_hat"].values
@@ -287,7 +298,10 @@ def track_setup(ds, rrh_x: NDArray, rrh_y: float, dh_m: float, cfg: TrackerConfi
 
     def pick(k: int, x_pred: float):
         cols = select_measurements(rrh[k], ok[k], stren[k], rrh_x, x_pred, rrh.shape[1], n_use)
-        xy = np.stack([rrh_x[rrh[k, cols]], np.full(cols.size, rrh_y)], axis=1) if cols.size else np.zeros((0, 2))
+        x_k = rrh_x[rrh[k, cols]]
+        if panel_x != (0.0, 0.0):  # lever arm of the panel facing each RRH
+            x_k = x_k - np.asarray(panel_x)[facing_panel(x_pred, x_k, rrh_y, panel_x)]
+        xy = np.stack([x_k, np.full(cols.size, rrh_y)], axis=1) if cols.size else np.zeros((0, 2))
         return xy, aod[k, cols], toa[k, cols]
 
     k0 = int(np.argmax(ok.any(axis=1)))
@@ -309,7 +323,8 @@ def track_setup(ds, rrh_x: NDArray, rrh_y: float, dh_m: float, cfg: TrackerConfi
 
 
 def track(ds, rrh_x: NDArray, rrh_y: float, dh_m: float, dt_s: float, cfg: TrackerConfig,
-          strength: str = "peak", n_use: int = 3, snapshot: bool = True) -> dict[str, NDArray]:
+          strength: str = "peak", n_use: int = 3, snapshot: bool = True,
+          lever_arm: bool = True) -> dict[str, NDArray]:
     """Track one realization from a :func:`railradio.nr.simulate.simulate_epochs` dataset.
 
     The first epoch with measurements gives the initial state (snapshot LS position, at
@@ -317,7 +332,7 @@ def track(ds, rrh_x: NDArray, rrh_y: float, dh_m: float, dt_s: float, cfg: Track
     acceleration standard deviations 1 m/s and 1 m/s² [ours]). Also returns (``snapshot``) the snapshot
     LS fix of every epoch (no tracking) as a baseline.
     """
-    pick, snapshot_fix, k0, s0, p0, n = track_setup(ds, rrh_x, rrh_y, dh_m, cfg, strength, n_use)
+    pick, snapshot_fix, k0, s0, p0, n = track_setup(ds, rrh_x, rrh_y, dh_m, cfg, strength, n_use, lever_arm)
     rrh = ds["rrh"].values
 
     state_now = {"x": s0[0]}

@@ -20,14 +20,18 @@ def receiver_selection(c: dict) -> dict[str, str]:
 
 
 def case_shard_paths(case: str, case_cfg: dict, main_cfg: dict, real: str, n_cal_shards: int,
-                     n_case_shards: int) -> list[str]:
+                     n_case_shards: int, cases: dict | None = None) -> list[str]:
     """Estimate shards a sensitivity case's calibration (``real="cal"``) or track
     (``real="r0"``) reads: the main run's own when the case changes nothing that the
-    bursts or the calibration run depend on (a tracker-only case), else the case's."""
-    same = (sim_config(case_cfg) == sim_config(main_cfg)
-            and case_cfg["calibration"] == main_cfg["calibration"])
-    if same:
+    bursts or the calibration run depend on (a tracker-only case), else those of the first
+    case in ``cases`` (config order) with the same bursts, else the case's own."""
+
+    def same(a: dict, b: dict) -> bool:
+        return sim_config(a) == sim_config(b) and a["calibration"] == b["calibration"]
+
+    if same(case_cfg, main_cfg):
         n = n_cal_shards if real == "cal" else int(main_cfg["n_shards"])
         return [f"results/nr/estimates/{real}/s{k}.nc" for k in range(n)]
+    owner = next((name for name, cfg in (cases or {}).items() if same(cfg, case_cfg)), case)
     n = n_cal_shards if real == "cal" else n_case_shards
-    return [f"results/nr/cases/{case}/estimates/{real}/s{k}.nc" for k in range(n)]
+    return [f"results/nr/cases/{owner}/estimates/{real}/s{k}.nc" for k in range(n)]

@@ -36,7 +36,8 @@ for k in range(n):
     lb = link_budget(float(x[k]), float(v[k]), dep, scn.radio, scn.rrh_array, scn.train_array, shadow)
     s_tau = toa_crb_s(burst_e_over_n0(lb.links))
     best = np.argsort(s_tau)[:3]
-    xy = np.stack([dep.x_m[lb.rrh[best]], np.full(best.size, dep.offset_m)], axis=1)
+    # the best links' RRHs, shifted by the receiving panel's lever arm (0: co-located panels)
+    xy = np.stack([dep.x_m[lb.link_rrh[best]] - lb.link_panel_x_m[best], np.full(best.size, dep.offset_m)], axis=1)
     s_r = SPEED_OF_LIGHT_M_S * s_tau[best]
     crb_best[k] = s_r[0]
     peb_crb[k] = peb_m(xy, float(x[k]), dh, s_r, cal["sigma_aod_rad"])

@@ -15,6 +15,8 @@ log = setup_script(smk.log[0])
 scn = scenario(smk)
 dep = scn.deployment
 ds = read_shards(smk.input)
+if not smk.params.tracker.get("lever_arm", True):  # the point model: panels' lever arm ignored
+    ds = ds.drop_vars("train_panel_x", errors="ignore")
 out = {}
 for rx in ds["receiver"].values:
     dsr = ds.sel(receiver=rx)

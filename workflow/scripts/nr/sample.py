@@ -28,9 +28,8 @@ x, v, _ = scn.trajectory.state(np.array([t]))
 shadow = ShadowingMap(smk.params.seed, key + (KEY_SHADOWING,), dep, scn.radio)
 lb = link_budget(float(x[0]), float(v[0]), dep, scn.radio, scn.rrh_array, scn.train_array, shadow)
 syn = Synthesizer(scn.receiver, scn.profile, qpsk_pool(make_rng(smk.params.seed, key + (KEY_POOL,)), scn.pool_size),
-                  scn.n_sinusoids, scn.full_channel_range_m)
-z, s_min = syn(lb.links, make_rng(smk.params.seed, key + (KEY_EPOCH, e)), t0_s=t,
-               d2d_m=np.hypot(dep.x_m[lb.rrh] - x[0], dep.offset_m))
+                  scn.n_sinusoids, scn.full_channel_range_m, scn.data_beam)
+z, s_min = syn(lb.links, make_rng(smk.params.seed, key + (KEY_EPOCH, e)), t0_s=t, d2d_m=lb.link_d2d_m)
 fs = scn.receiver.num.sample_rate_hz
 start = scn.receiver.num.symbol_start(s_min) / fs
 ds["iq"] = (("sample",), z.astype(np.complex64),
