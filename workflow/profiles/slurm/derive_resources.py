@@ -7,8 +7,9 @@ wall time and peak resident memory of its jobs in the last paper-scale run:
   ``results/benchmarks/**/*.tsv`` (columns ``s`` and ``max_rss``), each attributed to its
   rule by the rule's benchmark pattern and wildcard constraints;
 * the other rules (figures, merges, key numbers, paper): a one-off re-run of those rules on
-  the paper-scale intermediates, recording each job script's wall time and peak RSS
-  (``getrusage``) to a JSON-lines file (``--extra``).
+  the paper-scale intermediates (``--forcerun <rules>``, -j1) with ``rss_hook/`` on
+  PYTHONPATH and ``SCALE_MEMLOG=memlog.jsonl``, which records each job script's wall time
+  and peak RSS (``getrusage``, an upper bound) as JSON lines (``--extra``).
 
 From the table, with a stated margin (the measuring machine was a loaded 2-core box, so
 wall times are already pessimistic for a dedicated cluster core):
@@ -144,7 +145,13 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--extra", type=Path, help="JSON-lines records of the rules without benchmark files")
     a = ap.parse_args(argv)
     if a.command == "measure":
-        write_table(measure(ROOT, a.extra))
+        # rows measured now replace the table's; rules not measured now keep their row
+        # (a rule added by hand before its first measurement: source 'estimate'); rules
+        # gone from the workflow are dropped
+        rows = {r["rule"]: r for r in (read_table() if TABLE.exists() else [])}
+        rows.update({r["rule"]: r for r in measure(ROOT, a.extra)})
+        live = rules_in_workflow(ROOT)
+        write_table([rows[r] for r in sorted(rows) if r in live])
     print(set_resources_yaml(derive(read_table())))
     return 0
 
