@@ -47,6 +47,16 @@ def _ci(section: str) -> dict:
     return deep_merge(_yaml(ROOT / "config/config.yaml"), _yaml(ROOT / "config/ci.yaml"))[section]
 
 
+def _copy_workflow(dest: Path) -> Path:
+    for name in ("Snakefile", "workflow", "config", "paper", "src"):
+        src = ROOT / name
+        if src.is_dir():
+            shutil.copytree(src, dest / name, ignore=shutil.ignore_patterns("__pycache__", "*.egg-info"))
+        else:
+            shutil.copy2(src, dest / name)
+    return dest
+
+
 def _limit(value: str) -> int:
     m = re.fullmatch(r"(\d+) \* attempt", str(value))
     assert m, f"resource {value!r} is not '<int> * attempt'"
@@ -121,12 +131,7 @@ def _dry_run_jobs(out: str) -> list[tuple[str, dict[str, str]]]:
 
 @pytest.mark.slow
 def test_slurm_dry_run_gives_every_job_its_rule_resources_and_cluster_shards(tmp_path):
-    for name in ("Snakefile", "workflow", "config", "paper", "src"):
-        src = ROOT / name
-        if src.is_dir():
-            shutil.copytree(src, tmp_path / name, ignore=shutil.ignore_patterns("__pycache__", "*.egg-info"))
-        else:
-            shutil.copy2(src, tmp_path / name)
+    _copy_workflow(tmp_path)
     run = subprocess.run([SNAKEMAKE, "all", "paper", "nr_imm_all", "-n", "--forceall",
                           "--workflow-profile", "workflow/profiles/slurm"], cwd=tmp_path,
                          env={"PATH": str(Path(sys.executable).parent) + ":/usr/bin:/bin",
@@ -224,6 +229,32 @@ def test_handover_crossings_and_summary_identical_whatever_the_batches():
     other = simulate_blocks(scn, 350.0, 4, range(1), runs, pols)  # another seed
     assert not np.array_equal(other["joint__command_x_m"].values,
                               whole["joint__command_x_m"].values[:runs])
+
+
+@pytest.mark.slow
+def test_handover_workflow_identical_for_one_and_two_batches(tmp_path):
+    """The CI-scale workflow (adapters, params, NetCDF round trip, summary) gives the same
+    per-crossing outcomes and summary with handover.sweep.n_batches = 1 and 2 (~17 s)."""
+    from railradio.io import read_dataset
+
+    wd = _copy_workflow(tmp_path)
+    env = {"PATH": str(Path(sys.executable).parent) + ":/usr/bin:/bin", "HOME": str(tmp_path),
+           "PYTHONPATH": str(wd / "src"), "MPLBACKEND": "Agg"}
+    speeds = _ci("handover")["sweep"]["speeds_kmh"]
+    out = {}
+    for n_batches in (1, 2):
+        (wd / "batches.yaml").write_text(f"handover:\n  sweep:\n    n_batches: {n_batches}\n")
+        run = subprocess.run([SNAKEMAKE, "results/handover/summary.nc", "-j1", "--workflow-profile",
+                              "workflow/profiles/default", "--configfile", "config/ci.yaml", "batches.yaml"],
+                             cwd=wd, env=env, capture_output=True, text=True, check=False)
+        assert run.returncode == 0, (run.stdout + run.stderr)[-3000:]
+        shards = {v: xr.concat([read_dataset(wd / f"results/handover/shards/v{v}/b{b}.nc")
+                                for b in range(n_batches)], dim="run", data_vars="minimal")
+                  for v in speeds}
+        out[n_batches] = (shards, read_dataset(wd / "results/handover/summary.nc"))
+    for v in speeds:
+        xr.testing.assert_equal(out[2][0][v], out[1][0][v])
+    xr.testing.assert_equal(out[2][1], out[1][1])
 
 
 # ---------------------------------------------------------------- fusion: chunks
