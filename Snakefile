@@ -40,6 +40,7 @@ rule fusion:
     input:
         STUDY_FIGURES["fusion"],
         "results/fusion/key_numbers.json",
+        "results/sens/fusion/key_numbers.json",
 
 
 rule nr:

@@ -11,10 +11,16 @@ FUSION_FIGURE_SWEEP = {
 }
 from railradio.fusion.montecarlo import sweep_points
 
-CODE_FUSION_SIM = code_hash("railradio.fusion", exclude=("figures.py", "keys.py")) + CODE_SHARED
+# the sensitivity modules (issue 7) are left out: they do not change the main sweeps
+FUSION_SENS_MODULES = ("arc.py", "correlated.py", "sensitivity.py", "sensitivity_keys.py",
+                       "sensitivity_figures.py")
+CODE_FUSION_SIM = code_hash(
+    "railradio.fusion", exclude=("figures.py", "keys.py") + FUSION_SENS_MODULES
+) + CODE_SHARED
 
-register_figures("fusion", [f"fusion_rmse_vs_{n}" for n in FUSION_FIGURE_SWEEP])
+register_figures("fusion", [f"fusion_rmse_vs_{n}" for n in FUSION_FIGURE_SWEEP] + ["fusion_sensitivity"])
 KEY_NUMBER_FRAGMENTS.append("results/fusion/key_numbers.json")
+KEY_NUMBER_FRAGMENTS.append("results/sens/fusion/key_numbers.json")
 
 
 wildcard_constraints:
@@ -105,3 +111,108 @@ rule fusion_key_numbers:
         "../envs/railradio.yaml"
     script:
         "../scripts/fusion/key_numbers.py"
+
+
+# --- Sensitivity beyond the source (issue 7): curved track, correlated TDOA errors --------
+from railradio.fusion.sensitivity import sens_points
+
+FUSION_SENS_POINTS = {kind: sens_points(FUSION, kind) for kind in ("curve", "rho")}  # validates radii
+CODE_FUSION_SENS = (
+    code_hash(
+        "railradio.fusion.arc",
+        "railradio.fusion.correlated",
+        "railradio.fusion.sensitivity",
+        "railradio.fusion.geometry",
+        "railradio.fusion.estimators",
+        "railradio.fusion.montecarlo",
+        "railradio.fusion.crlb",
+    )
+    + CODE_SHARED
+)
+
+
+rule fusion_sens_point:
+    """Monte Carlo of one sensitivity point (curved track or correlated TDOAs, NetCDF)."""
+    output:
+        "results/sens/fusion/points/{kind}/p{point}.nc",
+    params:
+        point=lambda w: FUSION_SENS_POINTS[w.kind][int(w.point)],
+        seed=config["seed"],
+        chunk_positions=FUSION["chunk_positions"],
+        code=CODE_FUSION_SENS,
+    log:
+        "results/logs/fusion/sens_point_{kind}_p{point}.log",
+    benchmark:
+        "results/benchmarks/fusion/sens_point_{kind}_p{point}.tsv"
+    wildcard_constraints:
+        kind="curve|rho",
+        point=r"\d+",
+    resources:
+        mem_mb=2000,
+        runtime=10,
+    conda:
+        "../envs/railradio.yaml"
+    script:
+        "../scripts/fusion/sens_point.py"
+
+
+rule fusion_sens_sweep:
+    """Collect one sensitivity sweep: RMSE per estimator, Monte Carlo errors, CRLB (NetCDF)."""
+    input:
+        lambda w: expand(
+            "results/sens/fusion/points/{kind}/p{point}.nc",
+            kind=w.kind,
+            point=range(len(FUSION_SENS_POINTS[w.kind])),
+        ),
+    output:
+        "results/sens/fusion/sweep_{kind}.nc",
+    params:
+        kind="{kind}",
+        code=CODE_FUSION_SENS,
+    log:
+        "results/logs/fusion/sens_sweep_{kind}.log",
+    wildcard_constraints:
+        kind="curve|rho",
+    conda:
+        "../envs/railradio.yaml"
+    script:
+        "../scripts/fusion/sens_sweep.py"
+
+
+rule fusion_sens_figure:
+    """RMSE against the track curvature and against the TDOA error correlation, with CRLBs."""
+    input:
+        curve="results/sens/fusion/sweep_curve.nc",
+        rho="results/sens/fusion/sweep_rho.nc",
+    output:
+        pdf=report(
+            "results/figures/fusion_sensitivity.pdf",
+            caption="../report/fusion_sensitivity.rst",
+            category="fusion",
+        ),
+        png="results/figures/fusion_sensitivity.png",
+    params:
+        code=code_hash("railradio.fusion.sensitivity_figures") + CODE_PLOT,
+    log:
+        "results/logs/fusion/sens_figure.log",
+    conda:
+        "../envs/railradio.yaml"
+    script:
+        "../scripts/fusion/sens_figure.py"
+
+
+rule fusion_sens_key_numbers:
+    """Key numbers sens.fusion.* from the two sensitivity sweeps."""
+    input:
+        curve="results/sens/fusion/sweep_curve.nc",
+        rho="results/sens/fusion/sweep_rho.nc",
+    output:
+        "results/sens/fusion/key_numbers.json",
+    params:
+        code=code_hash("railradio.fusion.sensitivity_keys", "railradio.keynumbers"),
+    log:
+        "results/logs/fusion/sens_key_numbers.log",
+    conda:
+        "../envs/railradio.yaml"
+    script:
+        "../scripts/fusion/sens_key_numbers.py"
