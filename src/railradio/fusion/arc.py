@@ -298,14 +298,18 @@ def tdoa_on_line(delta_m: ArrayLike, d_m: float, bs2_xy_m: tuple[float, float]
     """TDOA ∩ the line y = 0 with BS1 at (0, d) and BS2 at (x2, y2), x2 > 0, in closed form.
 
     r2 = Δ + r1 squared gives A - 2x·x2 = 2Δ·r1 with A = x2² + y2² - d² - Δ²; squared again,
-    4(x2² - Δ²)x² - 4A·x2·x + A² - 4Δ²d² = 0.  Its root on the branch of the measured sign
-    (sign(A - 2x·x2) = sign Δ) is
+    4(x2² - Δ²)x² - 4A·x2·x + A² - 4Δ²d² = 0, with roots
 
-        x = (A·x2 - Δ·sqrt(A² + 4d²(x2² - Δ²))) / (2(x2² - Δ²)),
+        x± = (A·x2 ± Δ·S) / (2(x2² - Δ²)),   S = sqrt(A² + 4d²(x2² - Δ²)).
 
-    unique for |Δ| < x2; Δ → ∓x2 as x → ±∞, so |Δ| >= x2 has no solution (∓inf, to be
-    clipped).  With y2 = d, x2 = D it is the source's closed form
-    (:func:`railradio.fusion.tdoa_on_track`).
+    A root is on the hyperbola branch of the measured sign when sign(A - 2x·x2) = sign Δ.
+    For |Δ| < x2 exactly one is, x-, and Δ → ∓x2 as x → ±∞; with y2 = d, x2 = D this is the
+    source's closed form (:func:`railradio.fusion.tdoa_on_track`).  With y2 ≠ d the range
+    difference on the line is not monotone: for y2 > d it exceeds x2 behind BS1 (a maximum
+    at some x_m < 0), so Δ slightly above x2 has two roots; the one on the branch through
+    the cell (x > x_m, the larger root) is taken — the smaller for y2 < d, mirrored.  No
+    valid root (Δ beyond the extremum) is a trial without solution: ∓inf, to be clipped to
+    the segment as in the source.
     """
     x2, y2 = (float(v) for v in bs2_xy_m)
     if not (d_m > 0 and math.isfinite(d_m)):
@@ -313,11 +317,21 @@ def tdoa_on_line(delta_m: ArrayLike, d_m: float, bs2_xy_m: tuple[float, float]
     if not (x2 > 0 and math.isfinite(x2) and math.isfinite(y2)):
         raise ValueError(f"bs2_xy_m must be finite with x2 > 0, got {bs2_xy_m!r}")
     delta = np.asarray(delta_m, dtype=float)
-    no_solution = np.abs(delta) >= x2
     den = x2 * x2 - delta * delta
     a = x2 * x2 + y2 * y2 - d_m * d_m - delta * delta
+    disc = a * a + 4.0 * d_m * d_m * den
     with np.errstate(divide="ignore", invalid="ignore"):
-        x = (a * x2 - delta * np.sqrt(a * a + 4.0 * d_m * d_m * den)) / (2.0 * den)
+        root = np.sqrt(disc)
+        roots = [(a * x2 - delta * root) / (2.0 * den), (a * x2 + delta * root) / (2.0 * den)]
+        valid = [(disc >= 0) & np.isfinite(r) & (np.sign(a - 2.0 * r * x2) == np.sign(delta))
+                 for r in roots]
+    # unique (x-) when |Δ| < x2; otherwise the valid root nearer the cell's branch
+    prefer_larger = y2 > d_m
+    both = valid[0] & valid[1]
+    pick = np.where(prefer_larger, np.maximum(roots[0], roots[1]), np.minimum(roots[0], roots[1]))
+    x = np.where(den > 0, roots[0],
+                 np.where(both, pick, np.where(valid[0], roots[0], roots[1])))
+    no_solution = (den <= 0) & ~(valid[0] | valid[1])
     x = np.where(no_solution, np.where(delta > 0, -np.inf, np.inf), x)
     return x, no_solution
 
