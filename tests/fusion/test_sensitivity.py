@@ -2,6 +2,7 @@
 geometry and root finding, the correlated-noise generator, the CRLBs against numerical
 Fisher information, whitening at ρ = 0, Monte Carlo against the bounds, bad input."""
 import math
+import re
 
 import numpy as np
 import pytest
@@ -398,3 +399,38 @@ def test_key_numbers_names_and_values():
     assert nums["sens.fusion.curve_r4000.sagitta_m"]["value"] == pytest.approx(
         4000.0 * (1 - math.cos(g.half_segment_m / 4000.0)))
     assert all(e["value"] is not None and math.isfinite(e["value"]) for e in nums.values())
+
+
+@pytest.mark.parametrize(("key", "bad", "text"), [
+    ("rho", [0.5, 1.0], "fusion.sensitivity.rho[1]"),
+    ("radii_m", [50.0], "fusion.sensitivity.radii_m[0]"),
+    ("n_trials", 1, "fusion.sensitivity.n_trials"),
+    ("radii", [4000.0], "radii"),
+])
+def test_schema_rejects_bad_sensitivity_config_naming_the_key(key, bad, text):
+    import copy
+
+    import yaml
+
+    from railradio.config import ConfigError, load_schema, validate_config
+    from tests.conftest import ROOT
+
+    schema = load_schema(ROOT / "workflow/schemas/config.schema.yaml")
+    cfg = yaml.safe_load((ROOT / "config/config.yaml").read_text())
+    validate_config(copy.deepcopy(cfg), schema)
+    cfg["fusion"]["sensitivity"][key] = bad
+    with pytest.raises(ConfigError, match=re.escape(text)):
+        validate_config(cfg, schema)
+
+
+def test_sensitivity_figure_is_written(tmp_path):
+    from railradio.fusion.sensitivity_figures import plot_sensitivity
+
+    curve = sens_sweep_dataset([simulate_sens_point(_point("curve", 6, 30, radius_m=r), 1, (2, 4))
+                                for r in (math.inf, 7000.0)], "curve")
+    rho = sens_sweep_dataset([simulate_sens_point(_point("rho", 6, 30, rho=r), 1, (2, 4))
+                              for r in (0.0, 0.9)], "rho")
+    plot_sensitivity(curve, rho, tmp_path / "f.pdf", tmp_path / "f.png")
+    assert (tmp_path / "f.pdf").stat().st_size > 1000 and (tmp_path / "f.png").stat().st_size > 1000
+    with pytest.raises(ValueError, match="curve"):
+        plot_sensitivity(rho, curve, tmp_path / "g.pdf")
