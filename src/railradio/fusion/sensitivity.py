@@ -365,7 +365,8 @@ def sens_sweep_dataset(points: list[xr.Dataset], kind: str) -> xr.Dataset:
         if frac in summaries[0]:
             ds[frac] = ((coord,), np.array([s[frac] for s in summaries]),
                         {"units": "1", "long_name": "share of " + long_name})
-    for other in ("radius_m", "sagitta_m", "rho", "curvature_per_m", "d_m", "sigma_delta_m", "sigma_aoa_rad"):
-        if other != coord and other in points[0]:
+    others = ("radius_m", "sagitta_m") if kind == "curve" else ()
+    for other in others + ("d_m", "sigma_delta_m", "sigma_aoa_rad"):
+        if other in points[0]:
             ds[other] = ((coord,), np.array([float(p[other]) for p in points]), dict(points[0][other].attrs))
     return ds.sortby(coord)
