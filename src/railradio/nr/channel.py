@@ -4,8 +4,10 @@
   d'_BP = 4 (h_BS - 1)(h_UT - 1) f_c / c;
 * shadowing: Gaussian, σ = 4 dB, exp(-Δd/10 m) correlated along the track, independent
   per RRH (a Gauss–Markov field on a 1 m grid, independent of how the track is sharded);
-* TDL-D (TR 38.901 Table 7.7.2-4) normalized to unit power: a LOS tap with the geometric
-  Doppler f_D cos α and Rayleigh taps from a sum-of-sinusoids (Clarke/Jakes) process.
+* TDL-D (TR 38.901 Table 7.7.2-4; A, B, C, E from Tables 7.7.2-1/2/3/5 for the
+  sensitivity cases) normalized to unit power: a LOS tap (D, E; none in the NLOS profiles
+  A–C) with the geometric Doppler f_D cos α and Rayleigh taps from a sum-of-sinusoids
+  (Clarke/Jakes) process.
 """
 
 from __future__ import annotations
@@ -79,7 +81,10 @@ class TdlProfile:
 
     @property
     def rice_k_db(self) -> float:
-        """K-factor of the first tap: LOS vs the Rayleigh tap at the same delay [dB]."""
+        """K-factor of the first tap: LOS vs the Rayleigh tap at the same delay [dB];
+        -inf for an NLOS profile (TDL-A, B, C: no specular component)."""
+        if self.los_power == 0.0:
+            return float("-inf")
         first = self.powers[self.delays_s == self.los_delay_s].sum()
         return float(10 * np.log10(self.los_power / first))
 
