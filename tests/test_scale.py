@@ -77,10 +77,11 @@ def test_every_rule_has_measured_resources_in_the_slurm_profile():
     prof = _yaml(PROFILE / "config.yaml")
     assert prof["executor"] == "slurm" and prof["retries"] >= 1
     setres = prof["set-resources"]
-    assert set(setres) == rules, (f"missing: {sorted(rules - set(setres))}, "
-                                  f"stale: {sorted(set(setres) - rules)}")
+    # every rule covered; an entry may precede its rule (a rule another engineer is adding)
+    assert rules <= set(setres), f"rules without cluster resources: {sorted(rules - set(setres))}"
     table = derive.read_table()
-    assert {r["rule"] for r in table} == rules
+    assert {r["rule"] for r in table} == set(setres)
+    assert {r["source"] for r in table} <= {"benchmark", "rerun", "estimate"}
     want = derive.derive(table)
     for rule, res in setres.items():
         got = {k: _limit(res[k]) for k in ("mem_mb", "runtime")}
@@ -90,7 +91,7 @@ def test_every_rule_has_measured_resources_in_the_slurm_profile():
         assert want[r["rule"]]["mem_mb"] >= 2 * r["max_rss_mb_max"]
         assert want[r["rule"]]["runtime"] * 60 >= 3 * r["wall_s_max"]
     # grouped rules exist and each group has its components setting
-    assert set(prof["groups"]) <= rules
+    assert set(prof["groups"]) <= rules, sorted(set(prof["groups"]) - rules)
     assert set(prof["groups"].values()) == set(prof["group-components"])
 
 
@@ -149,7 +150,7 @@ def test_slurm_dry_run_gives_every_job_its_rule_resources_and_cluster_shards(tmp
         assert int(res["mem_mb"]) == _limit(want["mem_mb"]), (rule, res)
         assert int(res["runtime"]) == _limit(want["runtime"]), (rule, res)
         assert res["cpus_per_task"] == "1"
-    assert set(counts) == set(prof["set-resources"])  # every rule ran in the DAG
+    assert set(counts) == set(derive.rules_in_workflow(tmp_path))  # every rule is in the DAG
     # the profile's configfiles took effect: cluster-sized shards
     shards, base = _yaml(PROFILE / "shards.yaml"), _yaml(ROOT / "config/config.yaml")
     assert counts["nr_shard"] == base["nr"]["realizations"] * shards["nr"]["n_shards"]

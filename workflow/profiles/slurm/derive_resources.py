@@ -11,6 +11,9 @@ wall time and peak resident memory of its jobs in the last paper-scale run:
   PYTHONPATH and ``SCALE_MEMLOG=memlog.jsonl``, which records each job script's wall time
   and peak RSS (``getrusage``, an upper bound) as JSON lines (``--extra``).
 
+A rule not yet measured may carry a hand-written row with source ``estimate`` (a like
+rule's values) until its first paper-scale run.
+
 From the table, with a stated margin (the measuring machine was a loaded 2-core box, so
 wall times are already pessimistic for a dedicated cluster core):
 
