@@ -1,0 +1,6 @@
+"""Study ``chain``: one railway, one chain (STUDY.md §6 item 1).
+
+The ``nr`` study's tracked position error replaces the assumed GNSS/INS error of the
+``handover`` study's position input; a Gauss–Markov sweep of the position error σ tells how
+accurate positioning must be for the joint decision to beat A3.
+"""
