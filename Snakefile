@@ -13,6 +13,7 @@ include: "workflow/rules/fusion.smk"
 include: "workflow/rules/nr.smk"
 include: "workflow/rules/nr_imm.smk"
 include: "workflow/rules/handover.smk"
+include: "workflow/rules/chain.smk"
 include: "workflow/rules/tunnel.smk"
 include: "workflow/rules/paper.smk"
 
@@ -59,6 +60,12 @@ rule handover:
     input:
         STUDY_FIGURES["handover"],
         "results/handover/key_numbers.json",
+
+
+rule chain:
+    input:
+        STUDY_FIGURES["chain"],
+        "results/chain/key_numbers.json",
 
 
 rule tunnel:
