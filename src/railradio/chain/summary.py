@@ -146,6 +146,15 @@ def key_numbers(summ: xr.Dataset, nr_stats: dict[str, dict[str, float]], figure_
                     float(summ["success"].sel(input=lab, policy=p)), float(summ["success_se"].sel(input=lab, policy=p)), 4)
         put(f"chain.{p}.success_drop_fig", "1", f"{p} success at σ = 0 minus at σ = {figure_max_sigma_m:g} m",
             float(ps[0] - ps[in_fig][-1]))
+    in_fig = sig <= figure_max_sigma_m
+    put("chain.distance_minus_joint_min_fig", "1",
+        f"smallest distance-minus-joint success difference over σ ≤ {figure_max_sigma_m:g} m (> 0: distance better everywhere)",
+        float(np.min(gm["success"].sel(policy="distance").values[in_fig] - gm["success"].sel(policy="joint").values[in_fig])))
+    s_star = out["chain.sigma_crossover_m"]["value"]
+    for filt in [str(i)[3:] for i in summ["input"].values if str(i).startswith("nr_")]:
+        eff = float(summ["err_rms_m"].sel(input=f"nr_{filt}"))
+        put(f"chain.nr_{filt}.sigma_margin", "1", f"joint crossover σ over the RMS error of the nr {filt.upper()} input",
+            None if s_star is None or eff <= 0 else s_star / eff)
     put("chain.sigma_max_m", "m", "largest Gauss–Markov σ swept", float(sig[-1]))
     put("chain.n_handovers", "1", "node handovers per (input, policy)", float(summ["n_handovers"]))
     return out
