@@ -67,3 +67,46 @@ def test_train_receivers_and_bad_models():
         MeasurementModel(n_slots=2)
     with pytest.raises(ValueError):
         rssi_ls(np.zeros((3, 1)), np.zeros((3, 1)), H)
+
+
+def _crossing(train_len=200.0, k=4, step=0.5):
+    tun, cab = Tunnel(), Cable()
+    tr = Train("t", train_len, 100.0, k)
+    head = np.arange(train_len, tun.length_m, step)
+    x_rx = head[:, None] - tr.receiver_offsets_m[None, :]
+    tau = cab.cable_delay_s(x_rx, tun.length_m) + tun.cross_distance_m / SPEED_OF_LIGHT_M_S
+    cand = np.stack([wideband_candidates(tau[:, j], tun, cab) for j in range(k)], axis=1)
+    return tun, cab, tr, head, x_rx, cand
+
+
+def test_ambiguity_resolved_from_the_measurements_alone():
+    """Noiseless delays over a whole crossing (every feed, both sides, section ends): the
+    receivers' delay pattern and continuity from the first section give the true side and
+    feed at every epoch, without the truth; a flipped fix is counted as wrong."""
+    from railradio.tunnel.simulate import ambiguity_wrong, resolve_ambiguity
+    tun, cab, tr, head, x_rx, cand = _crossing()
+    h, fix = resolve_ambiguity(cand, tr.receiver_offsets_m, cab.feed_spacing_m, (0.0, cab.feed_spacing_m), 20.0)
+    np.testing.assert_allclose(h, head, atol=1e-6)
+    np.testing.assert_allclose(fix, x_rx, atol=1e-6)
+    assert not ambiguity_wrong(cand, fix, x_rx, 20.0).any()
+    # the mirror image about the feed is a different candidate far from the truth: counted
+    flipped = fix.copy()
+    i = np.argmin(np.abs(head - 800.0))  # head 300 m past the feed at 500 m
+    flipped[i, 0] = 2 * 500.0 - fix[i, 0]
+    assert ambiguity_wrong(cand, flipped, x_rx, 20.0)[i, 0]
+    assert ambiguity_wrong(cand, flipped, x_rx, 20.0).sum() == 1
+
+
+def test_ambiguity_robust_to_one_wrong_peak_and_bad_input():
+    from railradio.tunnel.simulate import resolve_ambiguity
+    tun, cab, tr, head, x_rx, cand = _crossing(step=5.0)
+    bad = cand.copy()
+    bad[:, 1, :] = np.clip(bad[:, 1, :] + 60.0, 0, tun.length_m)  # one receiver's peak 60 m off
+    h, fix = resolve_ambiguity(bad, tr.receiver_offsets_m, cab.feed_spacing_m, (0.0, cab.feed_spacing_m), 20.0)
+    # the other three receivers agree: the head stays right wherever the sides are apart
+    far = np.abs(np.abs(x_rx[:, 0] - 500.0) % 1000.0) > 60.0
+    assert np.all(np.abs(h - head)[far] < 1e-6)  # (without the truncation: 8 % wrong)
+    with pytest.raises(ValueError, match="offsets_m"):
+        resolve_ambiguity(cand, np.zeros(3), 1000.0, (0.0, 1000.0), 20.0)
+    with pytest.raises(ValueError, match="gate_m"):
+        resolve_ambiguity(cand, tr.receiver_offsets_m, 1000.0, (0.0, 1000.0), 0.0)

@@ -47,6 +47,12 @@ def _specs() -> dict[str, KeySpec]:
     add("tunnel.availability.err_lt_5m", "1", "share of epochs with train error < 5 m (KF, all trains)", 0.95, "≥")
     add("tunnel.availability.err_lt_2m", "1", "share of epochs with train error < 2 m (KF, all trains)", 0.85, "≥")
     add("tunnel.availability.wideband.err_lt_5m", "1", "same, < 5 m, wideband receiver")
+    add("tunnel.wideband.ambiguity_wrong_frac", "1",
+        "share of wideband snapshot fixes (all trains and receivers) whose side of the feed (or feed) "
+        "the measurements resolved wrongly (chosen candidate > one slot spacing from the right one)", digits=4)
+    add("tunnel.wideband.snapshot.err_m.p95", "m", "95th pct of the wideband snapshot error (all trains and receivers)")
+    add("tunnel.wideband.peak_bias_ns", "ns",
+        "median CIR-peak delay minus the cable-point model delay on the calibration runs (mean over trains)", digits=2)
     add("tunnel.delay_spread_ns.median", "ns", "median RMS delay spread along the tunnel (physical, image)")
     add("tunnel.delay_spread_ns.median.seed_model", "ns", "median RMS delay spread, the seed's model")
     add("tunnel.rssi_dbm.median", "dBm", "median local-mean RSSI (physical, image)")
@@ -139,13 +145,17 @@ def key_numbers(runs: dict[tuple[str, str], xr.Dataset], maps: dict[str, xr.Data
         wb = runs.get((tr, "physical_wideband"))
         put(f"tunnel.{tr}.wideband.err_m.p95", None if wb is None else p95(wb["kf_err"]))
         if wb is not None:
-            pooled_wb.append(wb["kf_err"].values)
+            pooled_wb.append(wb)
         sd = runs.get((tr, "seed_separable"))
         put(f"tunnel.{tr}.seed_channel.err_m.p95", *((None, None) if sd is None else pooled_p95(sd["rep_err"].values)))
     put("tunnel.availability.err_lt_5m", *pooled_share(pooled, 5.0))
     put("tunnel.availability.err_lt_2m", *pooled_share(pooled, 2.0))
-    put("tunnel.availability.wideband.err_lt_5m",
-        np.mean(np.concatenate(pooled_wb) < 5.0) if pooled_wb else None)
+    cat = (lambda v: np.concatenate([w[v].values.ravel() for w in pooled_wb])) if pooled_wb else None
+    put("tunnel.availability.wideband.err_lt_5m", np.mean(cat("kf_err") < 5.0) if cat else None)
+    put("tunnel.wideband.ambiguity_wrong_frac", np.mean(cat("ambiguity_wrong")) if cat else None)
+    put("tunnel.wideband.snapshot.err_m.p95", p95(cat("snapshot_err")) if cat else None)
+    put("tunnel.wideband.peak_bias_ns",
+        np.mean([w.attrs["wideband_bias_s"] for w in pooled_wb]) * 1e9 if pooled_wb else None)
 
     def blind(m):  # seed 5.1.2: RSSI_max < -100 dBm or fewer than 3 usable rays
         return np.mean((m["rssi_mean_dbm"].values < blind_dbm) | (m["n_strong_rays"].values < min_rays))

@@ -17,8 +17,14 @@ Measurement models (STUDY.md §4, both reported):
   rays with their cable delays (velocity factor v), sampled on ``n_tones`` tones across
   B with thermal noise, transformed to a channel impulse response; its strongest peak
   gives a delay that maps to the cable distance from the feed, x = x_feed +- v c (tau - h/c).
-  The +- (and which feed) is resolved by the previous fix of the same receiver (the train
-  enters at a known place).
+  The +- is resolved from the measurements (:func:`resolve_ambiguity`: the K receivers sit
+  at known offsets along the train, and on the two sides of a feed their delays run in
+  opposite directions); which feed (the cable is periodic, no measurement can tell) by
+  continuity from the tunnel entry (the head is in the first feed section when the whole
+  train has entered), never from the truth.
+
+Every filter starts from the first snapshot fix with its variance (speed 0 +- the maximum
+speed), not from the true position.
 
 The train: K receivers evenly along its length [seed 3.3.1], constant speed, whole train
 inside the tunnel; epochs at ``rate_hz``.
@@ -187,11 +193,13 @@ def tone_response(table: xr.Dataset, mm: MeasurementModel) -> tuple[np.ndarray, 
 
 
 def wideband_delays(table: xr.Dataset, tunnel: Tunnel, cable: Cable, x_rx_m: np.ndarray,
-                    rng: np.random.Generator, mm: MeasurementModel, tones=None, chunk: int = 1024,
-                    oversample: int = 16) -> np.ndarray:
+                    rng: np.random.Generator | None, mm: MeasurementModel, tones=None, chunk: int = 1024,
+                    oversample: int = 16, thermal_noise: bool = True) -> np.ndarray:
     """Delay of the strongest peak of the band-limited CIR at each receiver position [s]:
-    ``n_tones`` tones across the bandwidth, thermal noise kT F B, zero-padded IFFT,
-    parabolic refinement of the peak."""
+    ``n_tones`` tones across the bandwidth, thermal noise kT F B (``rng``; none without
+    ``thermal_noise``), zero-padded IFFT (``oversample`` times), parabolic refinement of the
+    peak.  The parabola's own error on a single path is below
+    2 pi^2 / (45 sqrt(3) B oversample^3) (see :func:`peak_interp_bound_s`)."""
     xs, pc_dbm, tc = slot_powers(tunnel, cable)
     amp_c = 10.0 ** ((pc_dbm - 30.0) / 20.0) * np.exp(-2j * math.pi * cable.frequency_hz * tc)
     f, resp = tones if tones is not None else tone_response(table, mm)
@@ -207,7 +215,8 @@ def wideband_delays(table: xr.Dataset, tunnel: Tunnel, cable: Cable, x_rx_m: np.
         w = (ok & inside)[..., None]
         cab = amp_c[sl][..., None] * np.exp(-2j * math.pi * tc[sl][..., None] * f[None, None, :])
         hf = np.sum(cab * resp[idx] * w, axis=1)
-        hf += math.sqrt(noise_w / 2.0) * (rng.standard_normal(hf.shape) + 1j * rng.standard_normal(hf.shape))
+        if thermal_noise:
+            hf += math.sqrt(noise_w / 2.0) * (rng.standard_normal(hf.shape) + 1j * rng.standard_normal(hf.shape))
         cir = np.abs(np.fft.ifft(hf, n=n_fft, axis=1)) ** 2
         k = np.argmax(cir, axis=1)
         rows = np.arange(x.size)
@@ -216,6 +225,20 @@ def wideband_delays(table: xr.Dataset, tunnel: Tunnel, cable: Cable, x_rx_m: np.
         frac = np.where(den < 0, 0.5 * (y0 - y2) / np.where(den < 0, den, -1.0), 0.0)
         out[a:a + chunk] = (k + frac) / (n_fft * df)
     return out
+
+
+def peak_interp_bound_s(bandwidth_hz: float, oversample: int) -> float:
+    """Largest error of the three-point parabolic peak estimate on a single band-limited
+    path [s].  Near its peak the pulse |sinc(B t)|^2 = 1 - a t^2 + b t^4 with
+    a = pi^2 B^2 / 3, b = 2 pi^4 B^4 / 45; samples at delta + (-D, 0, D), D = 1/(B os),
+    |delta| <= D/2, put the parabola's vertex at -(b/a) delta (4 delta^2 - D^2) to first
+    order in b/a, whose largest magnitude (at delta = D / (2 sqrt 3)) is
+    (b/a) D^3 / (3 sqrt 3) = 2 pi^2 / (45 sqrt(3) B os^3).  (The 64-tone Dirichlet kernel
+    differs from the sinc by O(1/N^2); the next order in b/a D^2 = 2 pi^2/(15 os^2), 0.5 %
+    at os = 16: a 10 % margin covers both.)"""
+    if not bandwidth_hz > 0 or oversample < 2:
+        raise ValueError("bandwidth_hz must be positive and oversample >= 2")
+    return 1.1 * 2.0 * math.pi**2 / (45.0 * math.sqrt(3.0) * bandwidth_hz * oversample**3)
 
 
 def cable_model_delay_s(x_m: np.ndarray, tunnel: Tunnel, cable: Cable) -> np.ndarray:
@@ -235,6 +258,62 @@ def wideband_candidates(tau_s: np.ndarray, tunnel: Tunnel, cable: Cable, bias_s:
     return np.clip(cand, 0.0, tunnel.length_m)
 
 
+def resolve_ambiguity(cand_m: np.ndarray, offsets_m: np.ndarray, feed_spacing_m: float,
+                      start_m: tuple[float, float], gate_m: float) -> tuple[np.ndarray, np.ndarray]:
+    """Resolve the wideband fixes' +- / which-feed ambiguity from the measurements [seed-free].
+
+    ``cand_m`` [epoch, receiver, candidate]: every receiver's cable-ranging candidates
+    (:func:`wideband_candidates`); receiver k sits ``offsets_m[k]`` behind the head.  Every
+    candidate of every receiver proposes a head position h = c + offset_k; each proposal
+    is scored by the truncated squared misfit of all receivers,
+    sum_k min(min_m |c_km + offset_k - h|, gate_m)^2 (robust to one receiver's wrong peak),
+    and the best proposal wins.  On the two sides of a feed the receivers' delays run in
+    opposite directions along the train, so the +- is decided by the measurements; the
+    misfit is periodic in the feed spacing (identical feed sections), so proposals are only
+    taken within half a feed spacing of the previous epoch's head (continuity; a train
+    moves metres per epoch), starting from ``start_m`` = (lo, hi): the head is in that
+    interval at the first epoch (the entry prior: the first feed section).
+    Returns the head proposal [epoch] and each receiver's chosen candidate [epoch, receiver].
+    """
+    c = np.asarray(cand_m, dtype=float)
+    off = np.asarray(offsets_m, dtype=float)
+    n_e, k, n_c = c.shape
+    if off.shape != (k,):
+        raise ValueError("offsets_m must have one entry per receiver")
+    if not gate_m > 0 or not feed_spacing_m > 0:
+        raise ValueError("gate_m and feed_spacing_m must be positive")
+    prop_all = (c + off[None, :, None]).reshape(n_e, k * n_c)  # head proposals
+    head = np.empty(n_e)
+    lo, hi = start_m
+    half = feed_spacing_m / 2.0
+    for t in range(n_e):
+        p = prop_all[t]
+        ok = (p >= lo) & (p <= hi)
+        if not np.any(ok):  # nothing in the window: keep the previous head
+            head[t] = head[t - 1] if t else 0.5 * (lo + hi)
+        else:
+            p = p[ok]
+            mis = np.min(np.abs(prop_all[t].reshape(k, n_c)[None, :, :] - p[:, None, None]), axis=2)
+            cost = np.sum(np.minimum(mis, gate_m) ** 2, axis=1)
+            head[t] = p[np.argmin(cost)]
+        lo, hi = head[t] - half, head[t] + half
+    want = head[:, None] - off[None, :]
+    pick = np.argmin(np.abs(c - want[..., None]), axis=2)
+    fix = np.take_along_axis(c, pick[..., None], axis=2)[..., 0]
+    return head, fix
+
+
+def ambiguity_wrong(cand_m: np.ndarray, fix_m: np.ndarray, x_true_m: np.ndarray,
+                    separation_m: float) -> np.ndarray:
+    """Whether each fix took the wrong candidate [epoch, receiver]: not the candidate nearest
+    the truth, while that one lies more than ``separation_m`` away from the chosen one (near
+    a feed or a section end the two sides coincide and the choice does not matter)."""
+    c = np.asarray(cand_m, dtype=float)
+    best = np.take_along_axis(c, np.argmin(np.abs(c - np.asarray(x_true_m)[..., None]), axis=2)[..., None],
+                              axis=2)[..., 0]
+    return np.abs(best - np.asarray(fix_m)) > separation_m
+
+
 def epochs(tunnel: Tunnel, train: Train, rate_hz: float, head_range_m: tuple[float, float] | None = None):
     """Times [s] and head positions [m] while the whole train is inside the tunnel."""
     v = train.speed_kmh / 3.6
@@ -249,8 +328,9 @@ def snapshot_fixes(table, tunnel, cable, train, x_head, mm, propagation, measure
     """Per receiver snapshot measurements and fixes [epoch, receiver].
 
     ``fix`` is the snapshot position (separable: TDOA from the RSSI fix; wideband: the
-    cable-ranging candidate nearest the truth, i.e. with the +- ambiguity resolved - the
-    tracker resolves it itself from ``candidates``); ``scale`` is each fix's relative
+    cable-ranging candidate chosen by :func:`resolve_ambiguity` from all receivers'
+    measurements, the head starting in the first feed section; the tracker associates
+    ``candidates`` with its own prediction); ``scale`` is each fix's relative
     standard deviation from its geometry (separable: the TDOA dilution; wideband: 1).
     Every receiver draws from its own child of ``rng``, so ``cols`` (the receivers to
     compute, default all) does not change any receiver's numbers.
@@ -275,12 +355,17 @@ def snapshot_fixes(table, tunnel, cable, train, x_head, mm, propagation, measure
             c = wideband_candidates(tau, tunnel, cable, bias_s)
             cands.append(c)
             res["tau"][:, j] = tau
-            res["fix"][:, j] = c[np.arange(n_e), np.argmin(np.abs(c - x_rx[:, j:j + 1]), axis=1)]
             res["scale"][:, j] = 1.0
         else:
             raise ValueError(f"measurement must be one of {MEASUREMENTS}, got {measurement!r}")
     if cands:
         res["candidates"] = np.stack(cands, axis=1)  # [epoch, receiver, candidate]
+        if cols is not None and len(cols) != k:
+            raise ValueError("the wideband ambiguity is resolved with all receivers: cols must be None")
+        res["head"], res["fix"] = resolve_ambiguity(
+            res["candidates"], train.receiver_offsets_m, cable.feed_spacing_m,
+            (0.0, cable.feed_spacing_m), tunnel.slot_spacing_m)
+        res["ambiguity_wrong"] = ambiguity_wrong(res["candidates"], res["fix"], x_rx, tunnel.slot_spacing_m)
     return x_rx, res
 
 
@@ -332,8 +417,8 @@ def kf_realizations(table, tunnel, cable, train, mm, propagation, tracking, seed
             r_t.append(r0 * res["scale"][:, j] ** 2)
             truth.append(x_rx[:, j])
     z, r_t, truth = np.stack(z, 1), np.stack(r_t, 1), np.stack(truth, 1)
-    est = kf_track_batch(z, r_t, 1.0 / tracking["rate_hz"], tracking["accel_sigma_m_s2"], truth[0],
-                         (r0, tracking["max_speed_m_s"] ** 2))
+    est = kf_track_batch(z, r_t, 1.0 / tracking["rate_hz"], tracking["accel_sigma_m_s2"], z[0],
+                         (r_t[0], tracking["max_speed_m_s"] ** 2))  # start: the first fix
     err = np.abs(est - truth)
     return err[:, 0::2].T, err[:, 1::2].T
 
@@ -347,8 +432,10 @@ def run_train(table: xr.Dataset, tunnel: Tunnel, cable: Cable, train: Train, mm:
     The calibration run (another tunnel realization of the shadowing, its own noise, the
     first ``calibration_m`` of travel) sets the measurement variance: R_t = r0 s_t^2 with
     s_t the fix's geometric dilution and r0 the robust variance of error / s on that run;
-    for the wideband receiver also the median delay bias of its peak.  Nothing is taken
-    from the evaluation run.
+    for the wideband receiver also the median delay bias of its peak.  The calibration run
+    is a survey with known positions (its wideband fixes take the candidate nearest the
+    truth); nothing is taken from the evaluation run, whose filters start from its first
+    snapshot fix and whose ambiguity is resolved from its measurements.
 
     Realization 0 is the full run (filterpy KF, rigid KF, PF); for a separable receiver,
     realizations 1 .. R-1 repeat the head and tail KF with their own shadowing,
@@ -391,15 +478,18 @@ def run_train(table: xr.Dataset, tunnel: Tunnel, cable: Cable, train: Train, mm:
     kf = np.empty((t.size, 2))
     kf_var = np.empty((t.size, 2))
     nis = np.empty((t.size, 2))
-    x_start = x_rx[0]  # the train enters at a known place
+    # every filter starts from the first snapshot fix with its variance (not the truth)
+    z0, p0 = res["fix"][0], r_t[0]
     for c, j in enumerate(ends):
         kf[:, c], _, kf_var[:, c], nis[:, c] = kf_track(meas[:, j:j + 1], r_t[:, j:j + 1], dt, q,
-                                                        (x_start[j], 0.0), (r0, vmax**2))
-    rigid, _, rigid_var, _ = kf_track(meas, r_t, dt, q, (x_start[0], 0.0), (r0, vmax**2), offsets_m=offs)
+                                                        (z0[j], 0.0), (p0[j], vmax**2))
+    w0 = 1.0 / p0  # rigid train: the precision-weighted head from all receivers' first fixes
+    rigid, _, rigid_var, _ = kf_track(meas, r_t, dt, q, (float(np.sum(w0 * (z0 + offs)) / np.sum(w0)), 0.0),
+                                      (float(1.0 / np.sum(w0)), vmax**2), offsets_m=offs)
     rng_pf = make_rng(seed, spawn_key("tunnel", 400, tid, vid))
     pf = np.empty((t.size, 2))
     for c, j in enumerate(ends):
-        pf[:, c], _ = pf_track(meas[:, j], r_t[:, j], dt, q, (x_start[j], 0.0), (r0, vmax**2),
+        pf[:, c], _ = pf_track(meas[:, j], r_t[:, j], dt, q, (z0[j], 0.0), (p0[j], vmax**2),
                                tracking["n_particles"], rng_pf)
     head, tail = x_head, x_head - train.length_m
     m = {"units": "m"}
@@ -450,6 +540,9 @@ def run_train(table: xr.Dataset, tunnel: Tunnel, cable: Cable, train: Train, mm:
     ds["rep_err_head"] = (rt, rep_h, {**m, "long_name": "KF head error per realization"})
     ds["rep_err_tail"] = (rt, rep_t, {**m, "long_name": "KF tail error per realization"})
     ds["rep_err"] = (rt, np.sqrt((rep_h**2 + rep_t**2) / 2.0), {**m, "long_name": "KF train error per realization"})
+    if measurement == "wideband":
+        ds["ambiguity_wrong"] = (tr, res["ambiguity_wrong"].astype(np.int8),
+                                 {"units": "1", "long_name": "1 where the snapshot fix took the wrong side of the feed (or feed)"})
     ds["snapshot_err"] = (tr, np.abs(res["fix"] - x_rx), {**m, "long_name": "snapshot error"})
     ds["snapshot_rssi_err"] = (tr, np.abs(res["fix_rssi"] - x_rx), {**m, "long_name": "RSSI-LS snapshot error"})
     return ds

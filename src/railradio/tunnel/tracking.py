@@ -91,7 +91,7 @@ def kf_track_batch(z_m: np.ndarray, r_m2: np.ndarray, dt_s: float, accel_sigma: 
     independent tracks at once, vectorized over the batch: ``z_m``, ``r_m2`` [T, B],
     ``x0_m`` [B].  Same model, same gate, same NaN handling; covariance update in the
     standard form (filterpy uses Joseph's, equal for the optimal gain; the test checks the
-    two agree).  Used for the Monte Carlo realizations and the sensitivity sweeps.
+    two agree); ``p0`` = (position variance, scalar or [B], speed variance).  Used for the Monte Carlo realizations and the sensitivity sweeps.
     Returns the position estimates [T, B]."""
     z = np.asarray(z_m, dtype=float)
     if z.ndim != 2:
@@ -104,7 +104,8 @@ def kf_track_batch(z_m: np.ndarray, r_m2: np.ndarray, dt_s: float, accel_sigma: 
     n, b = z.shape
     x = np.array(np.broadcast_to(np.asarray(x0_m, dtype=float), (b,)))
     v = np.zeros(b)
-    p00, p01, p11 = np.full(b, float(p0[0])), np.zeros(b), np.full(b, float(p0[1]))
+    p00 = np.array(np.broadcast_to(np.asarray(p0[0], dtype=float), (b,)))
+    p01, p11 = np.zeros(b), np.full(b, float(p0[1]))
     out = np.empty((n, b))
     for t in range(n):
         x = x + dt * v
