@@ -44,6 +44,7 @@ bench: $(STAMP)  ## benchmarks -> results/benchmarks/*.json
 	$(BIN)/python benchmarks/bench_fusion.py --out results/benchmarks/fusion_bench.json
 	OPENBLAS_NUM_THREADS=1 $(BIN)/python benchmarks/bench_nr.py --out results/benchmarks/nr_bench.json
 	$(BIN)/python benchmarks/bench_handover.py --out results/benchmarks/handover_bench.json
+	$(BIN)/python benchmarks/bench_chain.py --out results/benchmarks/chain_bench.json
 	OPENBLAS_NUM_THREADS=1 $(BIN)/python benchmarks/bench_tunnel.py --out results/benchmarks/tunnel_bench.json
 
 reproduce: $(STAMP)  ## paper scale from nothing, compared with paper/numbers.json
