@@ -49,7 +49,7 @@ def test_sigma0_chain_equals_handover_with_zero_gnss_error():
             np.testing.assert_array_equal(chained[p][name], np.asarray(ref[p][name][1], dtype=float))
 
 
-def test_gm_input_with_handover_bound_reproduces_handover_default():
+def test_gm_input_equals_handover_engine_with_an_unreachable_bound():
     """At sigma = 2 m the chain's untruncated error differs from the handover's only where the
     handover clips at 5 m: with an unreachable bound the handover run equals the chain's."""
     base = _scn(2.0)
