@@ -5,7 +5,7 @@ from railradio.config import deep_merge, load_schema, validate_config
 from railradio.nr.workflow import receiver_selection as nr_selection
 from railradio.nr.simulate import scenario_from_config
 from railradio.nr.workflow import sim_config as nr_sim
-from railradio.nr.workflow import case_shard_paths
+from railradio.nr import cases as nr_cases
 
 NR = config["nr"]
 NR_SCN = scenario_from_config(NR)
@@ -32,10 +32,17 @@ NR_CASES = {
     for case, override in NR_SENS["cases"].items()
 }
 NR_CASE_EPOCHS = min(NR_SENS["epochs"], NR_SCN.trajectory.n_epochs)
+if any(NR.get("sync", {}).values()):
+    raise ValueError("nr.sync must stay 0 in the main run: clock errors are a sensitivity case's "
+                     "(nr.sensitivity.cases.<case>.sync)")
+NR_SWEEPS = NR_SENS.get("sweeps", {})
+nr_cases.check_sweeps(NR_SWEEPS, NR_CASES)
+NR_CASE_N = {c: nr_cases.case_epochs(NR_CASES[c], NR_SENS) for c in NR_CASES}
+NR_CASE_N_CAL = {c: nr_cases.case_cal_epochs(NR_CASES[c], NR) for c in NR_CASES}
 CODE_NR_SIM = (
     code_hash(
         "railradio.nr",
-        exclude=("figures.py", "keys.py", "tracking.py", "bounds.py", "workflow.py",
+        exclude=("figures.py", "keys.py", "tracking.py", "bounds.py", "workflow.py", "cases.py",
                  "imm.py", "smoother.py", "imm_report.py"),
         data=("tdl.json",),
     )
@@ -55,7 +62,7 @@ register_figures(
 )
 KEY_NUMBER_FRAGMENTS.append("results/nr/key_numbers.json")
 if NR_CASES:
-    register_figures("nr_sensitivity", ["nr_sensitivity"])
+    register_figures("nr_sensitivity", ["nr_sensitivity"] + (["nr_sweeps"] if NR_SWEEPS else []))
     KEY_NUMBER_FRAGMENTS.append("results/nr/cases/key_numbers.json")
 
 
@@ -266,8 +273,8 @@ rule nr_case_shard:
     params:
         sim=lambda w: nr_sim(NR_CASES[w.case]),
         seed=config["seed"],
-        n_epochs=lambda w: NR["calibration"]["epochs"] if w.real == "cal" else NR_CASE_EPOCHS,
-        n_shards=lambda w: NR_CAL_SHARDS if w.real == "cal" else NR_SENS["n_shards"],
+        n_epochs=lambda w: NR_CASE_N_CAL[w.case] if w.real == "cal" else NR_CASE_N[w.case],
+        n_shards=lambda w: nr_cases.case_n_shards(NR_CASES[w.case], NR, NR_SENS, w.real, NR_CAL_SHARDS),
         code=CODE_NR_SIM,
     log:
         "results/logs/nr/cases/{case}_shard_{real}_s{shard}.log",
@@ -285,32 +292,34 @@ rule nr_case_shard:
 
 
 rule nr_case_calibrate:
-    """Calibration of a sensitivity case (its own calibration run, the main run's key)."""
+    """Calibration of a sensitivity case (its own calibration run, the main run's key; the
+    case's clock errors, nr.sync, on the calibration run's own RRH offsets)."""
     input:
-        lambda w: case_shard_paths(
-            w.case, NR_CASES[w.case], NR, "cal", NR_CAL_SHARDS, NR_SENS["n_shards"], NR_CASES
-        ),
+        lambda w: nr_cases.case_inputs(w.case, NR_CASES, NR, NR_SENS, "cal", NR_EPOCHS, NR_CAL_SHARDS),
     output:
         "results/nr/cases/{case}/calibration.json",
     params:
         sim=lambda w: nr_sim(NR_CASES[w.case]),
         tracker=lambda w: NR_CASES[w.case]["tracker"],
         selection=lambda w: nr_selection(NR_CASES[w.case]),
+        sync=lambda w: NR_CASES[w.case].get("sync", nr_cases.NO_SYNC),
+        seed=config["seed"],
+        n_epochs=lambda w: NR_CASE_N_CAL[w.case],
         code=CODE_NR_TRACK,
     log:
         "results/logs/nr/cases/{case}_calibrate.log",
+    benchmark:
+        "results/benchmarks/nr/cases/{case}_calibrate.tsv"
     conda:
         "../envs/railradio.yaml"
     script:
-        "../scripts/nr/calibrate.py"
+        "../scripts/nr/case_calibrate.py"
 
 
 rule nr_case_track:
-    """EKF tracks of a sensitivity case."""
+    """EKF tracks of a sensitivity case (its epochs; TOAs with the case's clock errors)."""
     input:
-        shards=lambda w: case_shard_paths(
-            w.case, NR_CASES[w.case], NR, "r0", NR_CAL_SHARDS, NR_SENS["n_shards"], NR_CASES
-        ),
+        shards=lambda w: nr_cases.case_inputs(w.case, NR_CASES, NR, NR_SENS, "r0", NR_EPOCHS, NR_CAL_SHARDS),
         calibration="results/nr/cases/{case}/calibration.json",
     output:
         "results/nr/cases/{case}/track.nc",
@@ -318,13 +327,18 @@ rule nr_case_track:
         sim=lambda w: nr_sim(NR_CASES[w.case]),
         tracker=lambda w: NR_CASES[w.case]["tracker"],
         selection=lambda w: nr_selection(NR_CASES[w.case]),
+        sync=lambda w: NR_CASES[w.case].get("sync", nr_cases.NO_SYNC),
+        seed=config["seed"],
+        n_epochs=lambda w: NR_CASE_N[w.case],
         code=CODE_NR_TRACK,
     log:
         "results/logs/nr/cases/{case}_track.log",
+    benchmark:
+        "results/benchmarks/nr/cases/{case}_track.tsv"
     conda:
         "../envs/railradio.yaml"
     script:
-        "../scripts/nr/track.py"
+        "../scripts/nr/case_track.py"
 
 
 rule nr_case_key_numbers:
@@ -336,7 +350,10 @@ rule nr_case_key_numbers:
         "results/nr/cases/key_numbers.json",
     params:
         cases=list(NR_CASES),
-        n_epochs=NR_CASE_EPOCHS,
+        n_epochs={"base": NR_CASE_EPOCHS} | NR_CASE_N,
+        # the TOA floor of the base and of every case with RRH clock offsets
+        sync_sigma_s={"base": 0.0} | {c: nr_cases.sync_sigma_s(NR_CASES[c]) for c in NR_CASES
+                                      if nr_cases.sync_sigma_s(NR_CASES[c]) > 0},
         code=code_hash("railradio.nr.keys", "railradio.keynumbers"),
     log:
         "results/logs/nr/cases/key_numbers.log",
@@ -358,7 +375,7 @@ rule nr_case_figure:
         ),
         png="results/figures/nr_sensitivity.png",
     params:
-        cases=["base"] + list(NR_CASES),
+        cases=["base"] + [c for c in NR_CASES if not any(c in sw["cases"] for sw in NR_SWEEPS.values())],
         code=code_hash("railradio.nr.figures") + CODE_PLOT,
     log:
         "results/logs/nr/cases/figure.log",
@@ -366,3 +383,27 @@ rule nr_case_figure:
         "../envs/railradio.yaml"
     script:
         "../scripts/nr/case_figure.py"
+
+
+rule nr_case_sweeps_figure:
+    """The sensitivity sweeps (speed, RRH spacing, Tx power, clock sync, TDL profile, SS
+    beams): one column per sweep, with the integer-sample TOA floor."""
+    input:
+        numbers="results/nr/cases/key_numbers.json",
+    output:
+        pdf=report(
+            "results/figures/nr_sweeps.pdf",
+            caption="../report/nr_sweeps.rst",
+            category="nr",
+        ),
+        png="results/figures/nr_sweeps.png",
+    params:
+        sweeps=NR_SWEEPS,
+        sync_sigma_s={c: nr_cases.sync_sigma_s(NR_CASES[c]) for c in NR_CASES},
+        code=code_hash("railradio.nr.figures") + CODE_PLOT,
+    log:
+        "results/logs/nr/cases/sweeps_figure.log",
+    conda:
+        "../envs/railradio.yaml"
+    script:
+        "../scripts/nr/case_sweeps_figure.py"

@@ -7,6 +7,7 @@ import xarray as xr
 
 from railradio import plotting
 from railradio.constants import SPEED_OF_LIGHT_M_S
+from railradio.nr.keys import toa_floor_m
 from railradio.nr.numerology import SAMPLE_RATE_HZ
 
 INTEGER_SAMPLE_FLOOR_M = SPEED_OF_LIGHT_M_S / SAMPLE_RATE_HZ / np.sqrt(12)
@@ -129,4 +130,48 @@ def plot_sensitivity(numbers: dict, cases: list[str], pdf: str, png: str) -> Non
         ax.set_xticks(x, [c.replace("_", "\n") for c in cases], fontsize=7)
         ax.set_ylabel(label)
     axes[0].legend(fontsize=7)
+    plotting.save(fig, pdf, png)
+
+
+def plot_sweeps(numbers: dict, sweeps: dict, sync_sigma_s: dict, pdf: str, png: str) -> None:
+    """The nr sensitivity sweeps: one column per sweep; rows: median |TOA range error| with
+    the integer-sample floor (widened by the RRH clock offsets where a case has them), the
+    share of TOAs within 5 m (outliers: another RRH's peak or a false alarm) and the gated
+    EKF AOD+TOA mean error, per receiver (key numbers ``sens.nr.<case>.<receiver>.*``); the
+    sweep's reference point (the base settings) circled."""
+    rxs = sorted({k.split(".")[3] for k in numbers if k.startswith("sens.nr.")} - {"bound"},
+                 key=lambda r: r != "seed")
+    rows = (("meas.toa_err_m.median_abs", "median |TOA error| [m]", True),
+            ("meas.toa_err_m.frac_lt_5m", "TOAs within 5 m", False),
+            ("track.aod_toa_gated.err_m.mean", "gated EKF mean error [m]", True))
+    n = len(sweeps)
+    fig, axes = plotting.figure(nrows=len(rows), ncols=n, figsize=(1.9 * n + 0.6, 6.0), squeeze=False,
+                                sharey="row")
+    for j, (name, sw) in enumerate(sweeps.items()):
+        x = np.arange(len(sw["cases"]))
+        ref = sw.get("reference")
+        for r, (metric, label, log) in enumerate(rows):
+            ax = axes[r][j]
+            for i, rx in enumerate(rxs):
+                vals = np.array([np.nan if (v := numbers.get(f"sens.nr.{c}.{rx}.{metric}", {}).get("value")) is None
+                                 else v for c in sw["cases"]])
+                ax.plot(x, vals, marker="o", color=f"C{i}", label=f"{rx} receiver")
+                if ref in sw["cases"]:
+                    k = sw["cases"].index(ref)
+                    ax.plot(x[k], vals[k], marker="o", markersize=9, markerfacecolor="none", color="black")
+            if r == 0:
+                floor = [toa_floor_m(sync_sigma_s.get(c, 0.0)) for c in sw["cases"]]
+                ax.plot(x, floor, label="integer-sample floor", **plotting.BOUND_STYLE)
+                ax.set_title(name.replace("_", " "), fontsize=8)
+            if log:
+                ax.set_yscale("log")
+            else:
+                ax.set_ylim(0, 1)
+            ax.set_xticks(x, [str(v) for v in sw["values"]], fontsize=7)
+            ax.tick_params(axis="y", labelsize=7)
+            if r == len(rows) - 1:
+                ax.set_xlabel(sw["label"], fontsize=7)
+            if j == 0:
+                ax.set_ylabel(label, fontsize=7)
+    axes[0][0].legend(fontsize=6)
     plotting.save(fig, pdf, png)

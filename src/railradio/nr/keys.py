@@ -7,7 +7,9 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+from railradio.constants import SPEED_OF_LIGHT_M_S
 from railradio.keynumbers import KeySpec
+from railradio.nr.numerology import SAMPLE_RATE_HZ
 
 SKIP_S = 5.0  # errors are counted after the first 5 s (STUDY.md §2.6)
 
@@ -55,6 +57,7 @@ def _metric_fns(rx: str) -> dict:
         "meas.toa_err_m.p95": lambda ts: float(np.nanpercentile(np.abs(meas(ts, "range_err")), 95)),
         "meas.detection_rate": lambda ts: float(np.mean(np.isfinite(meas(ts, "range_err")))),
         "meas.toa_err_m.frac_lt_5m": lambda ts: float(np.mean(np.abs(meas(ts, "range_err")) < 5.0)),
+        "meas.toa_err_m.median_abs": lambda ts: float(np.nanmedian(np.abs(meas(ts, "range_err")))),
         "track.aod_toa.err_m.mean": lambda ts: float(np.nanmean(err(ts, "aod_toa"))),
         "track.aod_toa.err_m.p95": lambda ts: float(np.nanpercentile(err(ts, "aod_toa"), 95)),
         "track.aod_toa.err_m.p99": lambda ts: float(np.nanpercentile(err(ts, "aod_toa"), 99)),
@@ -103,9 +106,15 @@ def key_numbers(tracks: list[xr.Dataset], bounds: list[xr.Dataset] | None = None
     return out
 
 
+SENSITIVITY_SPECS = {
+    "meas.toa_err_m.median_abs": ("m", "median |TOA range error| of the measured RRHs (valid TOAs)"),
+}
+"""Metrics of the sensitivity cases only (unit, description), beside :data:`SPECS`."""
+
 SENSITIVITY_METRICS = (
     "meas.detection_rate",
     "meas.toa_err_m.frac_lt_5m",
+    "meas.toa_err_m.median_abs",
     "meas.toa_err_m.p95",
     "meas.aod_err_deg.p95",
     "track.aod_toa.err_m.mean",
@@ -115,24 +124,60 @@ SENSITIVITY_METRICS = (
 
 
 def sensitivity_key_numbers(base: xr.Dataset, cases: dict[str, xr.Dataset],
-                            n_epochs: int) -> dict[str, Any]:
+                            n_epochs: int | dict[str, int]) -> dict[str, Any]:
     """Key numbers ``sens.nr.<case>.<receiver>.<metric>`` of the sensitivity cases and of
     ``base`` (the main run's realization r0, with the main calibration), all on the first
-    ``n_epochs`` epochs (a tracker-only case tracks the main run's whole r0): one
+    ``n_epochs`` epochs (a tracker-only case tracks the main run's whole r0), or per case
+    (a dict case -> epochs, ``"base"`` included: the cheap sweep points run fewer): one
     realization each, paired (same bursts' random draws), so no Monte Carlo error is
     attached."""
     out: dict[str, Any] = {}
     runs = {"base": base} | dict(cases)
     for case, ds in runs.items():
-        if ds.sizes["epoch"] < n_epochs:
-            raise ValueError(f"case {case!r} has {ds.sizes['epoch']} epochs, fewer than n_epochs={n_epochs}")
-        ds = ds.isel(epoch=slice(0, n_epochs))  # a causal tracker: the same as a shorter run
+        n = n_epochs[case] if isinstance(n_epochs, dict) else n_epochs
+        if ds.sizes["epoch"] < n:
+            raise ValueError(f"case {case!r} has {ds.sizes['epoch']} epochs, fewer than n_epochs={n}")
+        ds = ds.isel(epoch=slice(0, n))  # a causal tracker: the same as a shorter run
         for rx in [str(r) for r in ds["receiver"].values]:
             fns = _metric_fns(rx)
             for metric in SENSITIVITY_METRICS:
-                unit, desc = SPECS[metric][:2]
+                unit, desc = (SPECS | SENSITIVITY_SPECS)[metric][:2]
                 name = f"sens.nr.{case}.{rx}.{metric}"
                 value = fns[metric]([ds])
                 out[name] = KeySpec(name, unit, f"{desc} ({rx} receiver, sensitivity case {case}, "
-                                    f"first {n_epochs} epochs of r0)").entry(value if np.isfinite(value) else None)
+                                    f"first {n} epochs of r0)").entry(value if np.isfinite(value) else None)
+    return out
+
+
+def toa_floor_m(sync_sigma_s: float = 0.0, q: float = 0.5) -> float:
+    """``q``-quantile of |e| for e = u + c·δ: the integer-sample TOA error u ~ U(±c/(2F_s))
+    plus a Gaussian clock offset δ ~ N(0, σ²) [m] — the floor of the seed's TOA estimator
+    when the RRH clocks are off by σ (exact: CDF by quadrature, quantile by root finding)."""
+    from scipy.integrate import quad
+    from scipy.optimize import brentq
+    from scipy.stats import norm
+
+    if not sync_sigma_s >= 0:
+        raise ValueError(f"sync_sigma_s must be >= 0, got {sync_sigma_s!r}")
+    half = SPEED_OF_LIGHT_M_S / SAMPLE_RATE_HZ / 2
+    s = SPEED_OF_LIGHT_M_S * sync_sigma_s
+    if s == 0:
+        return q * half
+
+    def cdf(x):
+        return quad(lambda u: norm.cdf((x - u) / s) - norm.cdf((-x - u) / s), -half, half)[0] / (2 * half)
+
+    return float(brentq(lambda x: cdf(x) - q, 0.0, half + 10 * s))
+
+
+def sensitivity_floor_numbers(sync_sigma_s: dict[str, float]) -> dict[str, Any]:
+    """Key numbers ``sens.nr.<case>.bound.toa_floor_m.median``: the median |TOA error| floor
+    (:func:`toa_floor_m`) of each case with its RRH clock spread σ [s], beside the cases'
+    ``meas.toa_err_m.median_abs``."""
+    out: dict[str, Any] = {}
+    for case, sigma in sync_sigma_s.items():
+        name = f"sens.nr.{case}.bound.toa_floor_m.median"
+        out[name] = KeySpec(name, "m", "median of |integer-sample TOA error + c x RRH clock offset| "
+                            f"(uniform +-c/(2F_s) and N(0, sigma^2), sigma = {sigma:g} s; case {case})").entry(
+                                toa_floor_m(float(sigma)))
     return out

@@ -107,13 +107,19 @@ def simulate_epochs(scn: Scenario, epochs: np.ndarray, seed: int, key: tuple[int
         rng = make_rng(seed, key + (KEY_EPOCH, int(e)))
         z, s_min = syn(lb.links, rng, t0_s=float(t[i]), d2d_m=lb.link_d2d_m)
         cand = dep.nearest(float(xe), n_c)
-        pos = np.searchsorted(lb.rrh, cand)
+        # a candidate beyond radio.range_m (sparse RRHs near the track's ends) sends nothing:
+        # its truth is the geometry to the reference point, its received power NaN, and a
+        # detection of it a false alarm
+        inr = np.isin(cand, lb.rrh)
+        pos = np.searchsorted(lb.rrh, cand[inr])
         out["rrh"][i] = cand
-        out["d3d_m"][i] = lb.d3d_m[pos]
-        out["aod_true_rad"][i] = lb.aod_rad[pos]
-        out["rx_power_dbm"][i] = lb.rx_power_dbm[pos]
+        out["d3d_m"][i] = dep.distance_3d_m(np.full(n_c, float(xe)), cand)
+        out["aod_true_rad"][i] = dep.aod_rad(np.full(n_c, float(xe)), cand)
+        out["d3d_m"][i, inr] = lb.d3d_m[pos]
+        out["aod_true_rad"][i, inr] = lb.aod_rad[pos]
+        out["rx_power_dbm"][i, inr] = lb.rx_power_dbm[pos]
         if lb.panel is not None:
-            out["panel"][i] = lb.panel[pos]
+            out["panel"][i, inr] = lb.panel[pos]
         spectra = {}  # window FFTs shared by receivers with the same window length
         for j, cor in enumerate(cors):
             if cor.n_win not in spectra:

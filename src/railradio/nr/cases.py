@@ -1,0 +1,82 @@
+"""Sensitivity cases of the nr study as the workflow schedules them (kept out of the
+simulation code's fingerprint): each case's epochs, calibration epochs, shards, and which
+estimate shards it reads.
+
+A case is the ``nr`` config with a partial override merged in. It may shorten its runs:
+its ``max_epochs`` caps the evaluation epochs (``nr.sensitivity.epochs``), its
+``calibration.epochs`` the calibration run (at most the main run's). Every random draw is
+keyed by (realization, epoch) or (realization, RRH), so the first n epochs of a longer run
+with the same bursts are exactly a run of n epochs: a case that simulates the main run's
+bursts (a tracker-only case) reads the main run's shards and cuts them.
+"""
+
+from __future__ import annotations
+
+from railradio.nr.simulate import scenario_from_config, shard_epochs
+from railradio.nr.workflow import sim_config
+
+
+def case_epochs(case_cfg: dict, sens: dict) -> int:
+    """Evaluation epochs of a case: ``sens["epochs"]``, fewer where the case sets
+    ``max_epochs`` or its trajectory is shorter."""
+    n = sens["epochs"] if case_cfg.get("max_epochs") is None else min(sens["epochs"], case_cfg["max_epochs"])
+    return min(n, scenario_from_config(case_cfg).trajectory.n_epochs)
+
+
+def case_cal_epochs(case_cfg: dict, main_cfg: dict) -> int:
+    """Calibration epochs of a case: its ``calibration.epochs``, at most the main run's."""
+    return min(case_cfg["calibration"]["epochs"], main_cfg["calibration"]["epochs"])
+
+
+def case_n_shards(case_cfg: dict, main_cfg: dict, sens: dict, real: str, n_cal_shards: int) -> int:
+    """Shards of a case's own run (``real`` "cal" or "r0"): as many per epoch as a
+    full-length case has, at least one."""
+    if real == "cal":
+        n, n_full, shards = case_cal_epochs(case_cfg, main_cfg), main_cfg["calibration"]["epochs"], n_cal_shards
+    else:
+        n, n_full, shards = case_epochs(case_cfg, sens), sens["epochs"], sens["n_shards"]
+    return max(1, min(shards, round(shards * n / n_full)))
+
+
+def case_inputs(case: str, cases: dict, main_cfg: dict, sens: dict, real: str, n_main_epochs: int,
+                n_cal_shards: int) -> list[str]:
+    """Estimate shards read by a case's calibration (``real="cal"``) or track (``"r0"``):
+    the main run's shards covering the case's epochs when the case simulates the same
+    bursts and needs no more epochs than the main run has, else those of the first case in
+    ``cases`` (config order) with the same bursts and epochs, else the case's own."""
+    cfg = cases[case]
+
+    def epochs(c: dict) -> int:
+        return case_cal_epochs(c, main_cfg) if real == "cal" else case_epochs(c, sens)
+
+    n = epochs(cfg)
+    if sim_config(cfg) == sim_config(main_cfg):
+        n_main, n_sh = ((main_cfg["calibration"]["epochs"], n_cal_shards) if real == "cal"
+                        else (n_main_epochs, main_cfg["n_shards"]))
+        if n <= n_main:
+            return [f"results/nr/estimates/{real}/s{k}.nc" for k in range(n_sh)
+                    if shard_epochs(n_main, n_sh, k)[0] < n]
+    owner = next(c for c, other in cases.items()
+                 if sim_config(other) == sim_config(cfg) and epochs(other) == n)
+    n_sh = case_n_shards(cases[owner], main_cfg, sens, real, n_cal_shards)
+    return [f"results/nr/cases/{owner}/estimates/{real}/s{k}.nc" for k in range(n_sh)]
+
+
+def check_sweeps(sweeps: dict, cases: dict) -> None:
+    """Every sweep names known cases (or ``base``), one per value."""
+    for name, sw in sweeps.items():
+        bad = [c for c in sw["cases"] if c != "base" and c not in cases]
+        if bad or len(sw["cases"]) != len(sw["values"]):
+            raise ValueError(f"nr.sensitivity.sweeps.{name}: cases must name nr.sensitivity.cases (or base), "
+                             f"one per value; unknown {bad}, {len(sw['cases'])} cases for {len(sw['values'])} values")
+        if sw.get("reference") is not None and sw["reference"] not in sw["cases"]:
+            raise ValueError(f"nr.sensitivity.sweeps.{name}.reference must be one of its cases, "
+                             f"got {sw['reference']!r}")
+
+
+def sync_sigma_s(case_cfg: dict) -> float:
+    """RRH clock spread σ [s] of a case (0 without ``sync``)."""
+    return float((case_cfg.get("sync") or {}).get("rrh_sigma_s", 0.0))
+
+
+NO_SYNC = {"rrh_sigma_s": 0.0, "train_bias_s": 0.0}
