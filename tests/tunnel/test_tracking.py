@@ -110,3 +110,21 @@ def test_systematic_resampler_matches_filterpy_and_uses_the_generator():
     np.testing.assert_array_equal(idx, systematic_resample_with(w, np.random.default_rng(9)))
     with pytest.raises(ValueError, match="weights"):
         systematic_resample_with(np.array([0.5, -0.1]), np.random.default_rng(0))
+
+
+def test_filters_started_from_the_first_fix_do_not_count_it_twice():
+    """Started from the first fix (variance R, speed 0 +- 100 m/s) at 250 km/h, every track
+    locks on when that fix is not used again; re-using it as a measurement makes the filter
+    overconfident in a wrong speed and the gate then locks some tracks out."""
+    from railradio.tunnel.tracking import kf_track, kf_track_batch
+    rng = np.random.default_rng(11)
+    dt, q, r, b = 0.1, 0.5, 1.0, 400
+    t = np.arange(300) * dt
+    truth = 500.0 + 69.4 * t
+    z = truth[:, None] + np.sqrt(r) * rng.standard_normal((t.size, b))
+    good = kf_track_batch(z, r, dt, q, z[0], (r, 100.0**2), start_at_first=True)
+    twice = kf_track_batch(z, r, dt, q, z[0], (r, 100.0**2))
+    assert np.all(np.abs(good[-1] - truth[-1]) < 5.0)
+    assert np.mean(np.abs(twice[-1] - truth[-1]) > 50.0) > 0.01
+    x, _, _, _ = kf_track(z[:, 0], r, dt, q, (z[0, 0], 0.0), (r, 100.0**2), start_at_first=True)
+    np.testing.assert_allclose(x, good[:, 0], atol=1e-6)

@@ -34,7 +34,7 @@ TUNNEL_FIGURE_NAMES = [
     "tunnel_seed_vs_physical",
 ]
 
-register_figures("tunnel", TUNNEL_FIGURE_NAMES)
+register_figures("tunnel", TUNNEL_FIGURE_NAMES + ["tunnel_sensitivity"])
 KEY_NUMBER_FRAGMENTS.append("results/tunnel/key_numbers.json")
 
 
@@ -158,6 +158,29 @@ rule tunnel_sensitivity:
         "../scripts/tunnel/sensitivity.py"
 
 
+rule tunnel_peak_bias:
+    """Where the wideband peak-delay bias comes from: noiseless CIR peak minus the cable-point
+    model along the tunnel, one slot / all slots' line of sight / full channel."""
+    input:
+        lambda w: "results/tunnel/table_{}.nc".format(TUNNEL["engine"]),
+    output:
+        "results/tunnel/peak_bias.nc",
+    params:
+        cfg=TUNNEL_CHANNEL | {"measurement": TUNNEL["measurement"]},
+        code=CODE_TUNNEL_RUN,
+    log:
+        "results/logs/tunnel/peak_bias.log",
+    benchmark:
+        "results/benchmarks/tunnel/peak_bias.tsv"
+    resources:
+        mem_mb=3000,
+        runtime=10,
+    conda:
+        "../envs/railradio.yaml"
+    script:
+        "../scripts/tunnel/peak_bias.py"
+
+
 rule tunnel_figures:
     """The six tunnel figures (cheap: reads the intermediates)."""
     input:
@@ -166,7 +189,11 @@ rule tunnel_figures:
         runs=expand("results/tunnel/runs/{run}.nc", run=TUNNEL_RUNS),
         engines="results/tunnel/engines.nc",
     output:
-        [report(f, caption="../report/tunnel.rst", category="tunnel") for f in STUDY_FIGURES["tunnel"]],
+        [
+            report(f, caption="../report/tunnel.rst", category="tunnel")
+            for f in STUDY_FIGURES["tunnel"]
+            if "tunnel_sensitivity" not in f
+        ],
     params:
         cfg=TUNNEL,
         tables=TUNNEL_TABLES,
@@ -181,6 +208,29 @@ rule tunnel_figures:
         "../scripts/tunnel/figures.py"
 
 
+rule tunnel_sens_figure:
+    """95th-percentile error against the shadowing and the delay-error sigma, per delay-error model."""
+    input:
+        expand("results/tunnel/sens/{train}.nc", train=TUNNEL_TRAINS),
+    output:
+        pdf=report(
+            "results/figures/tunnel_sensitivity.pdf",
+            caption="../report/tunnel_sensitivity.rst",
+            category="tunnel",
+        ),
+        png="results/figures/tunnel_sensitivity.png",
+    params:
+        sensitivity=TUNNEL["sensitivity"],
+        trains=TUNNEL_TRAINS,
+        code=code_hash("railradio.tunnel.figures") + CODE_PLOT,
+    log:
+        "results/logs/tunnel/sens_figure.log",
+    conda:
+        "../envs/railradio.yaml"
+    script:
+        "../scripts/tunnel/sens_figure.py"
+
+
 rule tunnel_key_numbers:
     """Key numbers tunnel.* beside the seed's design targets."""
     input:
@@ -189,6 +239,7 @@ rule tunnel_key_numbers:
         runs=expand("results/tunnel/runs/{run}.nc", run=TUNNEL_RUNS),
         engines="results/tunnel/engines.nc",
         sens=expand("results/tunnel/sens/{train}.nc", train=TUNNEL_TRAINS),
+        peak_bias="results/tunnel/peak_bias.nc",
     output:
         "results/tunnel/key_numbers.json",
     params:

@@ -137,3 +137,39 @@ def seed_vs_physical(tables: dict[str, xr.Dataset], maps: dict[str, xr.Dataset],
     ac.set_xlabel("RSSI, local mean [dBm]")
     ac.set_ylabel("CDF over the tunnel")
     save(fig, pdf, png)
+
+
+def sensitivity(sens: dict[str, xr.Dataset], shadow_sigma_db, delay_sigma_ns, delay_errors, pdf, png) -> None:
+    """95th-percentile KF train error against the shadowing sigma and the delay-error sigma
+    (one train type per colour), the delay sweep with each delay-error model (line style);
+    error bars: Monte Carlo standard error over the realizations."""
+    from railradio.tunnel.study import _label
+
+    fig, (a_s, a_d) = figure(ncols=2, figsize=(7.5, 3.2))
+    styles = {"white": "-", "ar1": "--", "slot_bias": ":"}
+    names = {"white": "white", "ar1": "AR(1)", "slot_bias": "per-slot bias"}
+
+    def curve(ds, labels):
+        cases = list(ds["case"].values)
+        i = [cases.index(c) for c in labels]
+        per = ds["rep_err_p95_m"].values[i]
+        se = per.std(axis=1, ddof=1) / np.sqrt(per.shape[1]) if per.shape[1] > 1 else None
+        return ds["err_p95_m"].values[i], se
+
+    for c, tr in enumerate(t for t in TRAINS if t in sens):
+        ds = sens[tr]
+        y, se = curve(ds, [f"shadow_sigma_db_{_label(v)}" for v in shadow_sigma_db])
+        a_s.errorbar(shadow_sigma_db, y, yerr=se, color=f"C{c}", marker="o", ms=3, capsize=2, label=tr)
+        for e in delay_errors:
+            suffix = "" if e == "white" else f"_{e}"
+            y, se = curve(ds, [f"delay_sigma_ns_{_label(v)}{suffix}" for v in delay_sigma_ns])
+            a_d.errorbar(delay_sigma_ns, y, yerr=se, color=f"C{c}", ls=styles.get(e, "-."), marker="o", ms=3,
+                         capsize=2, label=f"{tr}, {names.get(e, e)}")
+    a_s.set_xlabel("shadowing sigma [dB] (delay error white)")
+    a_d.set_xlabel("delay-error sigma [ns]")
+    for a in (a_s, a_d):
+        a.set_ylabel("train error, 95th pct [m]")
+        a.set_ylim(bottom=0)
+    a_s.legend(fontsize=7)
+    a_d.legend(fontsize=6, ncol=1)
+    save(fig, pdf, png)

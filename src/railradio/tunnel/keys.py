@@ -75,6 +75,14 @@ def _specs() -> dict[str, KeySpec]:
         "states 0.05-0.08 dB/m (source value: its lower end), ours is about 20 times smaller", 0.05, "≥", 2)
     add("tunnel.rays.slope_db_per_m_500_1000", "dB/m", "decay of one slot's local-mean gain from 500 to 1000 m (image)", digits=2)
     add("tunnel.slot_eirp_db_re_cable", "dB", "slot EIRP relative to the cable power (slot-chain calibration)")
+    for case, what in (("single_slot", "the nearest slot's line-of-sight ray alone"),
+                       ("los_slots", "every slot's line-of-sight ray in the receiver's window (absorbing walls)"),
+                       ("full", "the full channel in the receiver's window"),
+                       ("full_all_slots", "the full channel of every tabulated slot")):
+        add(f"tunnel.wideband.peak_bias_ns.{case}.median", "ns",
+            f"median noiseless CIR-peak delay minus the cable-point model delay along the tunnel: {what}", digits=2)
+    add("tunnel.wideband.peak_bias_ns.full.p5", "ns", "5th pct of the same, full channel in the window", digits=1)
+    add("tunnel.wideband.peak_bias_ns.full.p95", "ns", "95th pct of the same, full channel in the window", digits=1)
     return s
 
 
@@ -120,7 +128,8 @@ def pooled_share(reps: list[np.ndarray], limit_m: float) -> tuple[float, float |
 def key_numbers(runs: dict[tuple[str, str], xr.Dataset], maps: dict[str, xr.Dataset],
                 tables: dict[str, xr.Dataset], engines: xr.Dataset, coverage_dbm: float,
                 blind_dbm: float, min_rays: int, wavelength_m: float, side_m: float,
-                eps: complex, sens: dict[str, xr.Dataset] | None = None) -> dict[str, Any]:
+                eps: complex, sens: dict[str, xr.Dataset] | None = None,
+                peak_bias: xr.Dataset | None = None) -> dict[str, Any]:
     from railradio.tunnel.materials import (eh11_attenuation_db_per_m, fresnel_te, fresnel_tm,
                                             reflection_loss_db)
 
@@ -196,6 +205,12 @@ def key_numbers(runs: dict[tuple[str, str], xr.Dataset], maps: dict[str, xr.Data
     else:
         put("tunnel.rays.slope_db_per_m_500_1000", None)
     put("tunnel.slot_eirp_db_re_cable", t.attrs["slot_eirp_offset_db"])
+    if peak_bias is not None:
+        for case, b in zip(peak_bias["case"].values, peak_bias["peak_bias_s"].values, strict=True):
+            put(f"tunnel.wideband.peak_bias_ns.{case}.median", np.median(b) * 1e9)
+        full = peak_bias["peak_bias_s"].sel(case="full").values * 1e9
+        put("tunnel.wideband.peak_bias_ns.full.p5", np.percentile(full, 5))
+        put("tunnel.wideband.peak_bias_ns.full.p95", np.percentile(full, 95))
     for tr, sd in (sens or {}).items():
         for i, case in enumerate(sd["case"].values):
             per = sd["rep_err_p95_m"].values[i]

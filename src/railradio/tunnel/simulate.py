@@ -418,7 +418,7 @@ def kf_realizations(table, tunnel, cable, train, mm, propagation, tracking, seed
             truth.append(x_rx[:, j])
     z, r_t, truth = np.stack(z, 1), np.stack(r_t, 1), np.stack(truth, 1)
     est = kf_track_batch(z, r_t, 1.0 / tracking["rate_hz"], tracking["accel_sigma_m_s2"], z[0],
-                         (r_t[0], tracking["max_speed_m_s"] ** 2))  # start: the first fix
+                         (r_t[0], tracking["max_speed_m_s"] ** 2), start_at_first=True)  # start: the first fix
     err = np.abs(est - truth)
     return err[:, 0::2].T, err[:, 1::2].T
 
@@ -482,15 +482,15 @@ def run_train(table: xr.Dataset, tunnel: Tunnel, cable: Cable, train: Train, mm:
     z0, p0 = res["fix"][0], r_t[0]
     for c, j in enumerate(ends):
         kf[:, c], _, kf_var[:, c], nis[:, c] = kf_track(meas[:, j:j + 1], r_t[:, j:j + 1], dt, q,
-                                                        (z0[j], 0.0), (p0[j], vmax**2))
+                                                        (z0[j], 0.0), (p0[j], vmax**2), start_at_first=True)
     w0 = 1.0 / p0  # rigid train: the precision-weighted head from all receivers' first fixes
     rigid, _, rigid_var, _ = kf_track(meas, r_t, dt, q, (float(np.sum(w0 * (z0 + offs)) / np.sum(w0)), 0.0),
-                                      (float(1.0 / np.sum(w0)), vmax**2), offsets_m=offs)
+                                      (float(1.0 / np.sum(w0)), vmax**2), offsets_m=offs, start_at_first=True)
     rng_pf = make_rng(seed, spawn_key("tunnel", 400, tid, vid))
     pf = np.empty((t.size, 2))
     for c, j in enumerate(ends):
         pf[:, c], _ = pf_track(meas[:, j], r_t[:, j], dt, q, (z0[j], 0.0), (p0[j], vmax**2),
-                               tracking["n_particles"], rng_pf)
+                               tracking["n_particles"], rng_pf, start_at_first=True)
     head, tail = x_head, x_head - train.length_m
     m = {"units": "m"}
     tr = ("time_s", "receiver")

@@ -55,7 +55,8 @@ def _label(v: float) -> str:
 def sensitivity_cases(cfg: dict[str, Any]) -> dict[str, dict[str, Any]]:
     """Sensitivity cases (STUDY.md §4: shadowing and delay-error sigma swept over the seed's
     ranges; the delay-error model): label -> overrides of the measurement section, each
-    case changing one thing from the defaults."""
+    case changing one thing from the defaults, and the delay-sigma sweep repeated with each
+    correlated delay-error model (``delay_sigma_ns_<v>_<model>``)."""
     sv = cfg["sensitivity"]
     cases: dict[str, dict[str, Any]] = {}
     for v in sv["shadow_sigma_db"]:
@@ -64,6 +65,10 @@ def sensitivity_cases(cfg: dict[str, Any]) -> dict[str, dict[str, Any]]:
         cases[f"delay_sigma_ns_{_label(v)}"] = {"delay_sigma_ns": float(v)}
     for e in sv["delay_errors"]:
         cases[f"delay_error_{e}"] = {"delay_error": e}
+    for e in sv["delay_errors"]:  # the delay-sigma sweep with each correlated error model
+        if e != "white":
+            for v in sv["delay_sigma_ns"]:
+                cases[f"delay_sigma_ns_{_label(v)}_{e}"] = {"delay_sigma_ns": float(v), "delay_error": e}
     return cases
 
 
@@ -98,6 +103,46 @@ def make_sensitivity(cfg: dict[str, Any], table: xr.Dataset, train_name: str, se
         coords={"case": ("case", list(cases), {"units": "1", "long_name": "sensitivity case"}),
                 "realization": ("realization", np.arange(n_r), {"units": "1", "long_name": "Monte Carlo realization"})},
         attrs={"train": train_name})
+
+
+PEAK_BIAS_CASES = ("single_slot", "los_slots", "full", "full_all_slots")
+"""Noiseless wideband peak-delay offsets: the nearest slot's line-of-sight ray alone; every
+slot's line-of-sight ray in the receiver's window (absorbing walls); the full channel in the
+window (the receiver's model); the full channel of every tabulated slot."""
+
+
+def make_peak_bias(cfg: dict[str, Any], table: xr.Dataset, step_m: float = 9.7) -> xr.Dataset:
+    """Where the wideband receiver's peak-delay bias comes from: the noiseless CIR-peak delay
+    minus the cable-point model delay (cable delay to x + h/c) at receivers every ``step_m``
+    along the tunnel (not a divisor of the slot spacing: every offset to the nearest slot
+    occurs), for the cases of :data:`PEAK_BIAS_CASES` (same estimator, same
+    bandwidth and tones; the line-of-sight table has absorbing walls)."""
+    import dataclasses
+
+    from railradio.tunnel.channel import offset_grid_m, tabulate
+    from railradio.tunnel.simulate import cable_model_delay_s, tone_response, wideband_delays
+
+    tun = tunnel_from_config(cfg, table.attrs["shape"])
+    cab = cable_from_config(cfg)
+    mm = measurement_from_config(cfg)
+    r = cfg["rays"]
+    los = tabulate(image_families(tun, 0), tun, cab, table["offset_m"].values, eps=None,
+                   polarization="paraxial", delay_bin_s=r["delay_bin_ns"] * 1e-9, n_delay_bins=r["n_delay_bins"])
+    margin = max(mm.window_m, r["max_offset_m"])
+    if tun.length_m <= 2 * margin:
+        margin = mm.window_m
+    x = np.arange(margin, tun.length_m - margin + 1e-9, step_m)
+    cases = {"single_slot": (los, 0.5 * tun.slot_spacing_m - 1e-6), "los_slots": (los, mm.window_m),
+             "full": (table, mm.window_m), "full_all_slots": (table, r["max_offset_m"])}
+    model = cable_model_delay_s(x, tun, cab)
+    tones = {id(t): tone_response(t, mm) for t in (los, table)}
+    bias = np.stack([wideband_delays(t, tun, cab, x, None, dataclasses.replace(mm, window_m=w), tones=tones[id(t)],
+                                     thermal_noise=False) - model for t, w in cases.values()])
+    return xr.Dataset(
+        {"peak_bias_s": (("case", "x_m"), bias, {"units": "s", "long_name": "noiseless CIR-peak delay minus the cable-point model delay"})},
+        coords={"case": ("case", list(cases), {"units": "1", "long_name": "channel case"}),
+                "x_m": ("x_m", x, {"units": "m", "long_name": "receiver position along the tunnel"})},
+        attrs={"bandwidth_hz": mm.bandwidth_hz, "n_tones": mm.n_tones, "window_m": mm.window_m})
 
 
 def train_from_config(cfg: dict[str, Any], name: str) -> Train:

@@ -35,7 +35,7 @@ def _as_candidates(z_m) -> np.ndarray:
 
 def kf_track(z_m: np.ndarray, r_m2, dt_s: float, accel_sigma: float,
              x0: tuple[float, float], p0: tuple[float, float], offsets_m: np.ndarray | None = None,
-             gate_sigma: float | None = 4.0):
+             gate_sigma: float | None = 4.0, start_at_first: bool = False):
     """Kalman filter (filterpy) over snapshot fixes.
 
     ``z_m``: [T] (one receiver), [T, K] (rigid train: column k measures x - ``offsets_m[k]``)
@@ -44,6 +44,9 @@ def kf_track(z_m: np.ndarray, r_m2, dt_s: float, accel_sigma: float,
     [T] or [T, K] measurement variances.  NaN measurements are skipped (prediction only);
     with ``gate_sigma`` a measurement whose innovation exceeds that many standard
     deviations is rejected (the covariance grows until the filter re-acquires).
+    ``start_at_first``: (x0, p0) is the state at the first epoch, made from that epoch's
+    measurement (e.g. the first snapshot fix with its variance), which is therefore not used
+    again (no double counting); otherwise the prior precedes the first epoch.
     Returns (x [T], v [T], var_x [T], nis [T]).
     """
     z = _as_candidates(z_m)
@@ -66,6 +69,9 @@ def kf_track(z_m: np.ndarray, r_m2, dt_s: float, accel_sigma: float,
     out = np.empty((n, 3))
     nis = np.full(n, np.nan)
     for t in range(n):
+        if t == 0 and start_at_first:
+            out[t] = kf.x[0, 0], kf.x[1, 0], kf.P[0, 0]
+            continue
         kf.predict()
         pred = kf.x[0, 0] - offs
         cand = z[t]
@@ -86,7 +92,8 @@ def kf_track(z_m: np.ndarray, r_m2, dt_s: float, accel_sigma: float,
 
 
 def kf_track_batch(z_m: np.ndarray, r_m2: np.ndarray, dt_s: float, accel_sigma: float,
-                   x0_m: np.ndarray, p0: tuple[float, float], gate_sigma: float | None = 4.0) -> np.ndarray:
+                   x0_m: np.ndarray, p0: tuple[float, float], gate_sigma: float | None = 4.0,
+                   start_at_first: bool = False) -> np.ndarray:
     """The single-receiver :func:`kf_track` (initial speed 0, one candidate per epoch) for B
     independent tracks at once, vectorized over the batch: ``z_m``, ``r_m2`` [T, B],
     ``x0_m`` [B].  Same model, same gate, same NaN handling; covariance update in the
@@ -108,6 +115,9 @@ def kf_track_batch(z_m: np.ndarray, r_m2: np.ndarray, dt_s: float, accel_sigma: 
     p01, p11 = np.zeros(b), np.full(b, float(p0[1]))
     out = np.empty((n, b))
     for t in range(n):
+        if t == 0 and start_at_first:
+            out[t] = x
+            continue
         x = x + dt * v
         p00, p01, p11 = (p00 + 2.0 * dt * p01 + dt * dt * p11 + q[0, 0], p01 + dt * p11 + q[0, 1],
                          p11 + q[1, 1])
@@ -128,7 +138,7 @@ def kf_track_batch(z_m: np.ndarray, r_m2: np.ndarray, dt_s: float, accel_sigma: 
 def pf_track(z_m: np.ndarray, r_m2, dt_s: float, accel_sigma: float,
              x0: tuple[float, float], p0: tuple[float, float], n_particles: int,
              rng: np.random.Generator, outlier_prob: float = 0.02, outlier_width_m: float = 200.0,
-             inject_frac: float = 0.01):
+             inject_frac: float = 0.01, start_at_first: bool = False):
     """Bootstrap particle filter with systematic resampling (:func:`systematic_resample_with`).
 
     ``z_m`` [T] or [T, C] candidate fixes; likelihood: the sum over candidates of
@@ -137,7 +147,8 @@ def pf_track(z_m: np.ndarray, r_m2, dt_s: float, accel_sigma: float,
     size drops below N/2, followed by a Gaussian-kernel regularization (Silverman's
     bandwidth) against sample impoverishment; after every update a fraction ``inject_frac`` of the particles
     is redrawn around the candidate nearest the estimate (sensor resetting, so a filter
-    that lost the train can find it again).  Returns (x [T], var_x [T]).
+    that lost the train can find it again).  ``start_at_first`` as in :func:`kf_track`.
+    Returns (x [T], var_x [T]).
     """
     if n_particles < 10:
         raise ValueError("n_particles must be >= 10")
@@ -153,6 +164,10 @@ def pf_track(z_m: np.ndarray, r_m2, dt_s: float, accel_sigma: float,
     n_inj = int(round(inject_frac * n_particles))
     bandwidth = (4.0 / (4.0 * n_particles)) ** (1.0 / 6.0)  # Silverman, 2-D state
     for t in range(z.shape[0]):
+        if t == 0 and start_at_first:
+            mean = np.sum(w * parts[:, 0])
+            out[t] = mean, np.sum(w * (parts[:, 0] - mean) ** 2)
+            continue
         parts = parts @ f.T + rng.standard_normal((n_particles, 2)) @ lq.T
         zt = z[t][np.isfinite(z[t])]
         if zt.size:

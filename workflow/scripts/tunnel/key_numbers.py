@@ -15,4 +15,5 @@ write_json(smk.output[0], key_numbers(runs, maps, tables, read_dataset(smk.input
                                       cov["threshold_dbm"], cov["blind_spot_dbm"], cov["min_rays"],
                                       cable_from_config(smk.params.cfg).wavelength_m,
                                       tunnel_from_config(smk.params.cfg, "rect").width_m,
-                                      eps_from_config(smk.params.cfg), sens=sens))
+                                      eps_from_config(smk.params.cfg), sens=sens,
+                                      peak_bias=read_dataset(smk.input.peak_bias)))
