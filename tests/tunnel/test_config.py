@@ -21,6 +21,7 @@ def _paper():
     (("tunnel", "rays", "sbr_polarization"), "circular", ["tunnel.rays.sbr_polarization", "vector"]),
     (("tunnel", "trains", "hst", "length_m"), -200.0, ["tunnel.trains.hst.length_m", ">= 10"]),
     (("tunnel", "measurement", "n_slots"), 2, ["tunnel.measurement.n_slots", ">= 3"]),
+    (("tunnel", "sensitivity", "side_wall_slot_z_m"), 12.0, ["tunnel.sensitivity.side_wall_slot_z_m", "<= 10"]),
 ])
 def test_bad_tunnel_values_rejected(path, value, must_mention):
     cfg = copy.deepcopy(_paper())
@@ -41,3 +42,23 @@ def test_ci_tunnel_overrides_valid():
     from railradio.config import deep_merge
 
     validate_config(deep_merge(cfg, {"tunnel": ci["tunnel"]}), SCHEMA)  # Snakemake merges recursively
+
+
+def test_side_wall_variant_moves_only_the_slot_line():
+    """The side-wall tables get the slot line at side_wall_slot_z_m, inside the square's wall
+    (and farther from the roof antenna); the other tables' config is unchanged; a position
+    outside the cross-section is refused naming the slot."""
+    from railradio.tunnel.study import channel_config, side_wall_config, tunnel_from_config
+
+    cfg = _paper()["tunnel"]
+    keys = ["geometry", "cable"]
+    assert channel_config(cfg, "image", keys)["geometry"] == cfg["geometry"]
+    sw = channel_config(cfg, "image_side_wall", keys)
+    assert sw["geometry"]["slot_z_m"] == cfg["sensitivity"]["side_wall_slot_z_m"]
+    assert {k: v for k, v in sw["geometry"].items() if k != "slot_z_m"} == \
+        {k: v for k, v in cfg["geometry"].items() if k != "slot_z_m"}
+    centre, side = tunnel_from_config(cfg, "rect"), tunnel_from_config(side_wall_config(cfg), "rect")
+    assert 0.05 <= side.wall_distance_m(*side.slot_yz) < 0.5
+    assert side.cross_distance_m > centre.cross_distance_m
+    with pytest.raises(ValueError, match="slot position"):
+        tunnel_from_config(side_wall_config(cfg), "circle")  # 3.6 m lies outside the circle at 0.85 m height

@@ -2,10 +2,11 @@
 # Chain: ray families -> tabulated slot-to-receiver channel per engine (NetCDF) ->
 # RSSI map, delay spread, coverage (NetCDF) -> one run per train type and channel /
 # measurement variant (snapshot fixes, KF, PF; NetCDF) -> figures + key numbers.
-from railradio.tunnel.study import TABLES, VARIANTS, sensitivity_cases
+from railradio.tunnel.study import SIDE_WALL, TABLES, VARIANTS, channel_config, sensitivity_cases
 
 TUNNEL = config["tunnel"]
-TUNNEL_TABLES = list(TABLES)  # image (square), sbr (circle), seed (the seed's model)
+TUNNEL_TABLES = [n for n in TABLES if SIDE_WALL not in n]  # image (square), sbr (circle), seed (the seed's model)
+TUNNEL_SIDE_WALL = TUNNEL["engine"] + SIDE_WALL  # the engine's channel with the cable on the side wall
 TUNNEL_TRAINS = list(TUNNEL["trains"])
 TUNNEL_VARIANTS = list(VARIANTS)
 TUNNEL_RUNS = [f"{t}/{v}" for t in TUNNEL_TRAINS for v in TUNNEL_VARIANTS]
@@ -43,11 +44,11 @@ rule tunnel_table:
     output:
         "results/tunnel/table_{name}.nc",
     params:
-        cfg=TUNNEL_CHANNEL,
+        cfg=lambda w: channel_config(TUNNEL, w.name, TUNNEL_CHANNEL_KEYS),
         seed=config["seed"],
         code=CODE_TUNNEL_CHANNEL,
     wildcard_constraints:
-        name="image|sbr|seed",
+        name="|".join(TABLES),
     log:
         "results/logs/tunnel/table_{name}.log",
     benchmark:
@@ -68,10 +69,10 @@ rule tunnel_map:
     output:
         "results/tunnel/map_{name}.nc",
     params:
-        cfg=TUNNEL_CHANNEL | {"coverage": TUNNEL["coverage"]},
+        cfg=lambda w: channel_config(TUNNEL, w.name, TUNNEL_CHANNEL_KEYS) | {"coverage": TUNNEL["coverage"]},
         code=CODE_TUNNEL_CHANNEL,
     wildcard_constraints:
-        name="image|sbr|seed",
+        name="|".join(TABLES),
     log:
         "results/logs/tunnel/map_{name}.log",
     benchmark:
@@ -135,7 +136,8 @@ rule tunnel_sensitivity:
     """One train type through the sensitivity cases (shadowing and delay-error sigma swept
     over the seed's ranges, delay-error models), R realizations each, KF only."""
     input:
-        lambda w: "results/tunnel/table_{}.nc".format(TUNNEL["engine"]),
+        table=lambda w: "results/tunnel/table_{}.nc".format(TUNNEL["engine"]),
+        side_wall=f"results/tunnel/table_{TUNNEL_SIDE_WALL}.nc",
     output:
         "results/tunnel/sens/{train}.nc",
     params:
@@ -240,6 +242,7 @@ rule tunnel_key_numbers:
         engines="results/tunnel/engines.nc",
         sens=expand("results/tunnel/sens/{train}.nc", train=TUNNEL_TRAINS),
         peak_bias="results/tunnel/peak_bias.nc",
+        side_wall_map=f"results/tunnel/map_{TUNNEL_SIDE_WALL}.nc",
     output:
         "results/tunnel/key_numbers.json",
     params:

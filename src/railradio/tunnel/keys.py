@@ -81,6 +81,10 @@ def _specs() -> dict[str, KeySpec]:
                        ("full_all_slots", "the full channel of every tabulated slot")):
         add(f"tunnel.wideband.peak_bias_ns.{case}.median", "ns",
             f"median noiseless CIR-peak delay minus the cable-point model delay along the tunnel: {what}", digits=2)
+    add("tunnel.sens.slot_side_wall.delay_spread_ns.median", "ns",
+        "median RMS delay spread along the tunnel, cable on the side wall (physical, positioning engine)")
+    add("tunnel.sens.slot_side_wall.rssi_dbm.median", "dBm", "median local-mean RSSI, cable on the side wall")
+    add("tunnel.sens.slot_side_wall.cross_distance_m", "m", "slot-line-to-antenna distance in the cross-section, side wall", digits=2)
     add("tunnel.wideband.peak_bias_ns.full.p5", "ns", "5th pct of the same, full channel in the window", digits=1)
     add("tunnel.wideband.peak_bias_ns.full.p95", "ns", "95th pct of the same, full channel in the window", digits=1)
     return s
@@ -129,7 +133,7 @@ def key_numbers(runs: dict[tuple[str, str], xr.Dataset], maps: dict[str, xr.Data
                 tables: dict[str, xr.Dataset], engines: xr.Dataset, coverage_dbm: float,
                 blind_dbm: float, min_rays: int, wavelength_m: float, side_m: float,
                 eps: complex, sens: dict[str, xr.Dataset] | None = None,
-                peak_bias: xr.Dataset | None = None) -> dict[str, Any]:
+                peak_bias: xr.Dataset | None = None, side_wall_map: xr.Dataset | None = None) -> dict[str, Any]:
     from railradio.tunnel.materials import (eh11_attenuation_db_per_m, fresnel_te, fresnel_tm,
                                             reflection_loss_db)
 
@@ -211,6 +215,10 @@ def key_numbers(runs: dict[tuple[str, str], xr.Dataset], maps: dict[str, xr.Data
         full = peak_bias["peak_bias_s"].sel(case="full").values * 1e9
         put("tunnel.wideband.peak_bias_ns.full.p5", np.percentile(full, 5))
         put("tunnel.wideband.peak_bias_ns.full.p95", np.percentile(full, 95))
+    if side_wall_map is not None:
+        put("tunnel.sens.slot_side_wall.delay_spread_ns.median", np.median(side_wall_map["delay_rms_s"].values) * 1e9)
+        put("tunnel.sens.slot_side_wall.rssi_dbm.median", np.median(side_wall_map["rssi_mean_dbm"].values))
+        put("tunnel.sens.slot_side_wall.cross_distance_m", side_wall_map.attrs["cross_distance_m"])
     for tr, sd in (sens or {}).items():
         for i, case in enumerate(sd["case"].values):
             per = sd["rep_err_p95_m"].values[i]

@@ -15,8 +15,24 @@ from railradio.tunnel.rays import Families, image_families, lift, sbr_families
 from railradio.tunnel.simulate import MeasurementModel, Train
 
 TABLES = {"image": ("rect", "image", "physical"), "sbr": ("circle", "sbr", "physical"),
-          "seed": ("rect", "image", "seed")}
-"""table name -> (cross-section, engine, propagation)"""
+          "seed": ("rect", "image", "seed"),
+          "image_side_wall": ("rect", "image", "physical"), "sbr_side_wall": ("circle", "sbr", "physical")}
+"""table name -> (cross-section, engine, propagation); ``*_side_wall``: the same engine with the
+cable at ``sensitivity.side_wall_slot_z_m`` (:func:`side_wall_config`)."""
+SIDE_WALL = "_side_wall"
+
+
+def channel_config(cfg: dict[str, Any], name: str, keys: list[str]) -> dict[str, Any]:
+    """The sections ``keys`` of the tunnel config for table ``name`` (side-wall tables: the
+    slot line moved, :func:`side_wall_config`); the other tables' config stays unchanged."""
+    c = side_wall_config(cfg) if SIDE_WALL in name else cfg
+    return {k: c[k] for k in keys}
+
+
+def side_wall_config(cfg: dict[str, Any]) -> dict[str, Any]:
+    """The tunnel config with the slot line moved to the side wall (the sensitivity variant)."""
+    z = cfg["sensitivity"]["side_wall_slot_z_m"]
+    return cfg | {"geometry": cfg["geometry"] | {"slot_z_m": z}}
 VARIANTS = {"physical_separable": ("physical", "separable"),
             "physical_wideband": ("physical", "wideband"),
             "seed_separable": ("seed", "separable")}
@@ -72,25 +88,31 @@ def sensitivity_cases(cfg: dict[str, Any]) -> dict[str, dict[str, Any]]:
     return cases
 
 
-def make_sensitivity(cfg: dict[str, Any], table: xr.Dataset, train_name: str, seed: int) -> xr.Dataset:
+def make_sensitivity(cfg: dict[str, Any], table: xr.Dataset, train_name: str, seed: int,
+                     side_wall_table: xr.Dataset | None = None) -> xr.Dataset:
     """One train type through every sensitivity case: physical channel, separable receiver,
     head and tail KF, ``cfg['realizations']`` Monte Carlo realizations (the same fields and
     noise as the main run, so the default case reproduces it).  Per case: the pooled 95th
     percentile of the train error and the availabilities, and each realization's 95th
-    percentile (their spread gives the Monte Carlo standard error)."""
+    percentile (their spread gives the Monte Carlo standard error).  With ``side_wall_table``
+    (the channel with the cable on the side wall) also the case ``slot_side_wall``: default
+    measurements, that geometry and channel."""
     from railradio.tunnel.simulate import calibrate_separable, kf_realizations
 
     tun = tunnel_from_config(cfg, table.attrs["shape"])
     cab = cable_from_config(cfg)
     train = train_from_config(cfg, train_name)
     n_r = cfg["realizations"]
-    cases = sensitivity_cases(cfg)
+    cases = {k: (v, tun, table) for k, v in sensitivity_cases(cfg).items()}
+    if side_wall_table is not None:
+        cases["slot_side_wall"] = ({}, tunnel_from_config(side_wall_config(cfg), side_wall_table.attrs["shape"]),
+                                   side_wall_table)
     p95 = np.empty((len(cases), n_r))
     pooled = np.empty((len(cases), 3))
-    for i, over in enumerate(cases.values()):
+    for i, (over, tu, tab) in enumerate(cases.values()):
         mm = measurement_from_config(cfg, **over)
-        r0 = calibrate_separable(table, tun, cab, train, mm, "physical", cfg["tracking"], seed)
-        eh, et = kf_realizations(table, tun, cab, train, mm, "physical", cfg["tracking"], seed, r0, range(n_r))
+        r0 = calibrate_separable(tab, tu, cab, train, mm, "physical", cfg["tracking"], seed)
+        eh, et = kf_realizations(tab, tu, cab, train, mm, "physical", cfg["tracking"], seed, r0, range(n_r))
         err = np.sqrt((eh**2 + et**2) / 2.0)
         p95[i] = np.percentile(err, 95, axis=1)
         pooled[i] = np.percentile(err, 95), np.mean(err < 5.0), np.mean(err < 2.0)
@@ -215,7 +237,7 @@ def make_map(cfg: dict[str, Any], table: xr.Dataset, name: str) -> xr.Dataset:
          "delay_rms_s": (dims, rec.delay_rms_s, {"units": "s", "long_name": "RMS delay spread over all slots' rays (seed 2.5.2)"}),
          "n_strong_rays": (dims, rec.n_strong_rays, {"units": "1", "long_name": "rays above the blind-spot level"})},
         coords={"x_m": (dims, x, {"units": "m", "long_name": "receiver position along the tunnel"})},
-        attrs={"table": name, "shape": shape})
+        attrs={"table": name, "shape": shape, "cross_distance_m": tun.cross_distance_m})
 
 
 def make_engines(cfg: dict[str, Any]) -> xr.Dataset:

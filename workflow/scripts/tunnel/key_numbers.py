@@ -16,4 +16,5 @@ write_json(smk.output[0], key_numbers(runs, maps, tables, read_dataset(smk.input
                                       cable_from_config(smk.params.cfg).wavelength_m,
                                       tunnel_from_config(smk.params.cfg, "rect").width_m,
                                       eps_from_config(smk.params.cfg), sens=sens,
-                                      peak_bias=read_dataset(smk.input.peak_bias)))
+                                      peak_bias=read_dataset(smk.input.peak_bias),
+                                      side_wall_map=read_dataset(smk.input.side_wall_map)))
