@@ -192,3 +192,33 @@ def test_fewer_ss_beams_keep_the_burst_pattern_prefix():
         assert np.array_equal(ReceiverConfig(n_blocks=n).ssb_first, full[:n])
         ang = np.degrees(RrhArray(n_beams=n).beam_angles_rad)
         assert ang[0] == pytest.approx(-90.0 / n) and ang[-1] == pytest.approx(-180.0 + 90.0 / n)
+
+
+@pytest.mark.parametrize("delay", [412.0, 1000.3, 2345.7])
+@pytest.mark.parametrize("offset_ns", [1.0, 3.0, 10.0])
+def test_clock_offset_on_the_toa_equals_a_shifted_burst_up_to_one_sample(delay, offset_ns):
+    """The tracker-side shortcut of apply_clock_errors against the faithful model: a burst
+    synthesized with the delay τ + δ gives the same integer-sample TOA as τ's TOA + δ up
+    to one sample (noiseless, one LOS path, decimated receiver)."""
+    from railradio.nr.channel import TdlProfile
+    from railradio.nr.receiver import Correlator, Links, ReceiverConfig, Synthesizer
+    from railradio.nr.ssb import qpsk_pool
+
+    los = TdlProfile("LOS", 1.0, 0.0, np.zeros(0), np.zeros(0))
+    cfg = ReceiverConfig(decimation=4, n_blocks=8)
+    rng = np.random.default_rng(11)
+    syn = Synthesizer(cfg, los, qpsk_pool(rng, 16))
+    cor = Correlator(cfg)
+
+    def toa_samples(tau_samples):
+        links = Links(n_id1=np.array([5]), n_id2=np.array([1]), tau_s=np.array([tau_samples]) / SAMPLE_RATE_HZ,
+                      amp=np.ones(1), beam_amp=np.ones((1, 64)), data_amp=np.ones(1), f_los_hz=np.zeros(1),
+                      phase0=np.zeros(1), doppler_hz=0.0, noise_psd_w_hz=0.0)
+        z, s_min = syn(links, np.random.default_rng(3), noise=False)
+        return cor.correlate(z, s_min, np.array([5]), np.array([1])).toa_samples[0]
+
+    d = offset_ns * 1e-9 * SAMPLE_RATE_HZ
+    faithful = toa_samples(delay + d)
+    shortcut = toa_samples(delay) + d
+    assert abs(faithful - shortcut) <= 1.0
+    assert abs(faithful - (delay + d)) <= 0.5  # both within the integer-sample quantization
