@@ -157,7 +157,7 @@ def test_intermediates_are_self_explaining(ci_run_j2):
     # 1 tracker-only case (w_distance): its track only (it reads the main run's shards)
     assert len(case_paths) == 3 * (2 + 1 + 1) + 1
     paths += nr_paths + case_paths
-    for study, n_min in (("handover", 10), ("tunnel", 10)):
+    for study, n_min in (("handover", 10), ("tunnel", 10), ("sens/fusion", 5), ("chain", 1)):
         found = sorted((ci_run_j2 / "results" / study).rglob("*.nc"))
         assert len(found) >= n_min, (study, len(found))
         paths += found
@@ -173,7 +173,8 @@ def test_intermediates_are_self_explaining(ci_run_j2):
                  "handover_cost_vs_m", "handover_pingpong_vs_speed", "handover_rsrp_gap_vs_speed",
                  "handover_delay_vs_speed", "handover_interruption_vs_speed",
                  "tunnel_rssi_map", "tunnel_delay_spread", "tunnel_gdop", "tunnel_position_error_cdf",
-                 "tunnel_ray_engines", "tunnel_seed_vs_physical"):
+                 "tunnel_ray_engines", "tunnel_seed_vs_physical", "tunnel_sensitivity",
+                 "nr_sweeps", "fusion_sensitivity", "chain_success_vs_sigma"):
         assert (ci_run_j2 / f"results/figures/{name}.pdf").stat().st_size > 1000
     tex = (ci_run_j2 / "results/paper/numbers.tex").read_text()
     assert r"\@namedef{kn@fusion.d1500.rmse_fused_m}" in tex
