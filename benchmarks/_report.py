@@ -1,5 +1,17 @@
 """Shared output of the benchmarks: one line per value, and the JSON report."""
+import time
+
 from railradio.io import write_json
+
+
+def best_of(fn, repeat: int) -> float:
+    """Smallest wall time [s] of ``repeat`` calls of ``fn``."""
+    times = []
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t0)
+    return min(times)
 
 
 def emit(report: dict, out: str | None) -> None:

@@ -12,25 +12,15 @@ from __future__ import annotations
 
 import argparse
 import platform
-import time
 from dataclasses import replace
 
 import numpy as np
-from _report import emit
+from _report import best_of, emit
 
 from railradio.chain.nr_error import bootstrap, series_from_runs
 from railradio.chain.sim import gm_label, simulate_block
 from railradio.handover.engine import simulate_block as ho_simulate_block
 from railradio.handover.params import Scenario
-
-
-def best_of(fn, repeat: int) -> float:
-    times = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return min(times)
 
 
 def main() -> None:

@@ -11,25 +11,14 @@ from __future__ import annotations
 
 import argparse
 import platform
-import time
 
 import numpy as np
-from _report import emit
+from _report import best_of, emit
 from scipy.optimize import brentq
 
 from railradio.constants import SPEED_OF_LIGHT_M_S
 from railradio.fusion import CellGeometry, PointParams, simulate_point, tdoa_on_track, tdoa_on_track_rootfind
 from railradio.fusion.arc import ArcGeometry, tdoa_on_arc
-
-
-def best_of(fn, repeat: int) -> float:
-    """Smallest wall time [s] of ``repeat`` calls."""
-    times = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return min(times)
 
 
 def main() -> None:

@@ -16,21 +16,12 @@ import platform
 import time
 
 import numpy as np
-from _report import emit
+from _report import best_of, emit
 
 from railradio.tunnel.channel import offset_grid_m, received, slot_powers, tabulate
 from railradio.tunnel.geometry import Cable, Tunnel
 from railradio.tunnel.materials import CONCRETE_900MHZ
 from railradio.tunnel.rays import image_families, lift, sbr_families, trace_2d
-
-
-def best_of(fn, repeat: int) -> float:
-    times = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return min(times)
 
 
 def main() -> None:

@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import importlib.util
 import re
-import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -23,6 +22,7 @@ import yaml
 from railradio.config import deep_merge, load_schema, validate_config
 
 from .conftest import ROOT
+from .conftest import copy_workflow as _copy_workflow
 
 PROFILE = ROOT / "workflow/profiles/slurm"
 SNAKEMAKE = str(Path(sys.executable).parent / "snakemake")
@@ -45,16 +45,6 @@ def _yaml(path: Path) -> dict:
 
 def _ci(section: str) -> dict:
     return deep_merge(_yaml(ROOT / "config/config.yaml"), _yaml(ROOT / "config/ci.yaml"))[section]
-
-
-def _copy_workflow(dest: Path) -> Path:
-    for name in ("Snakefile", "workflow", "config", "paper", "src"):
-        src = ROOT / name
-        if src.is_dir():
-            shutil.copytree(src, dest / name, ignore=shutil.ignore_patterns("__pycache__", "*.egg-info"))
-        else:
-            shutil.copy2(src, dest / name)
-    return dest
 
 
 def _limit(value: str) -> int:

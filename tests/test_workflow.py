@@ -21,20 +21,11 @@ import xarray as xr
 from railradio.keynumbers import compare
 
 from .conftest import ROOT
+from .conftest import copy_workflow as _copy_workflow
 
 pytestmark = pytest.mark.slow
 SNAKEMAKE = str(Path(sys.executable).parent / "snakemake")
 EXPECTED = ROOT / "tests/expected/key_numbers_ci.json"
-
-
-def _copy_workflow(dest: Path) -> Path:
-    for name in ("Snakefile", "workflow", "config", "paper", "src"):
-        src = ROOT / name
-        if src.is_dir():
-            shutil.copytree(src, dest / name, ignore=shutil.ignore_patterns("__pycache__", "*.egg-info"))
-        else:
-            shutil.copy2(src, dest / name)
-    return dest
 
 
 def _env(wd: Path) -> dict[str, str]:

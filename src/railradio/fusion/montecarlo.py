@@ -191,6 +191,19 @@ def _chunk_stats(params: PointParams, x_true: np.ndarray, n_delta: np.ndarray,
     return stats
 
 
+def trial_normals(seed: int, key: tuple[int, ...], positions: range, n_rows: int,
+                  n_trials: int) -> np.ndarray:
+    """Standard normals of the trials at ``positions``: [n_rows, len(positions), n_trials];
+    position j draws its rows in order from its own generator ``key + (1, j)``, so a
+    position's draws do not depend on the chunk it falls in."""
+    z = np.empty((n_rows, len(positions), n_trials))
+    for row, j in enumerate(positions):
+        rng = make_rng(seed, key + (1, j))
+        for r in range(n_rows):
+            z[r, row] = rng.standard_normal(n_trials)
+    return z
+
+
 def simulate_point(params: PointParams, seed: int, key: tuple[int, ...],
                    chunk_positions: int = 50) -> xr.Dataset:
     """Run one sweep point and return per-position statistics.
@@ -219,12 +232,7 @@ def simulate_point(params: PointParams, seed: int, key: tuple[int, ...],
     parts: list[dict[str, np.ndarray]] = []
     for start in range(0, n, chunk_positions):
         idx = range(start, min(start + chunk_positions, n))
-        n_delta = np.empty((len(idx), t))
-        n_theta = np.empty((len(idx), t))
-        for row, j in enumerate(idx):
-            rng = make_rng(seed, key + (1, j))
-            n_delta[row] = rng.standard_normal(t)
-            n_theta[row] = rng.standard_normal(t)
+        n_delta, n_theta = trial_normals(seed, key, idx, 2, t)
         parts.append(_chunk_stats(params, x_true[idx.start:idx.stop], n_delta, n_theta))
     cat = {k: np.concatenate([p[k] for p in parts], axis=-1) for k in parts[0]}
 

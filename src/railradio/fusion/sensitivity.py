@@ -53,7 +53,7 @@ from railradio.fusion.estimators import (
     tdoa_on_track,
 )
 from railradio.fusion.geometry import CellGeometry
-from railradio.fusion.montecarlo import PointParams, train_positions
+from railradio.fusion.montecarlo import PointParams, train_positions, trial_normals
 from railradio.rng import make_rng, spawn_key, stable_id
 
 KINDS = ("curve", "rho")
@@ -251,11 +251,7 @@ def simulate_sens_point(p: SensPoint, seed: int, key: tuple[int, ...],
     parts = []
     for start in range(0, n, chunk_positions):
         idx = range(start, min(start + chunk_positions, n))
-        z = np.empty((n_rows, len(idx), t))
-        for row, j in enumerate(idx):
-            rng = make_rng(seed, key + (1, j))
-            for r in range(n_rows):
-                z[r, row] = rng.standard_normal(t)
+        z = trial_normals(seed, key, idx, n_rows, t)
         xs = x_true[idx.start:idx.stop]
         est = (_curve_chunk if p.kind == "curve" else _rho_chunk)(p, xs, z)
         stats: dict[str, np.ndarray] = {}

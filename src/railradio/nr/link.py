@@ -117,15 +117,21 @@ def link_budget(x_m: float, speed_m_s: float, dep: Deployment, radio: RadioParam
     rrh = np.flatnonzero(d2d_all <= radio.range_m)
     n1, n2 = dep.n_id()
     lam = radio.wavelength_m
+
+    def path(xp: float, gain_db) -> dict:
+        """Geometry and large-scale terms of every RRH's path to a receiver at ``xp``;
+        ``gain_db(aoa)``: its receive gain [dBi]."""
+        d3d = dep.distance_3d_m(xp, rrh)
+        d2d = dep.distance_2d_m(xp, rrh)
+        aod = dep.aod_rad(np.full(rrh.size, xp), rrh)
+        aoa = dep.aoa_rad(np.full(rrh.size, xp), rrh)
+        return dict(xp=xp, d3d=d3d, d2d=d2d, aod=aod, aoa=aoa, gt=rrh_array.beam_gains_db(aod), gr=gain_db(aoa),
+                    pl=pathloss_umi_los_db(d3d, d2d, radio.carrier_hz, dep.h_bs_m, dep.h_ut_m),
+                    sh=shadow.at(xp, rrh) if shadowing else np.zeros(rrh.size))
+
     if train.co_located:
-        d3d = dep.distance_3d_m(x_m, rrh)
-        d2d = dep.distance_2d_m(x_m, rrh)
-        pl = pathloss_umi_los_db(d3d, d2d, radio.carrier_hz, dep.h_bs_m, dep.h_ut_m)
-        sh = shadow.at(x_m, rrh) if shadowing else np.zeros(rrh.size)
-        aod = dep.aod_rad(np.full(rrh.size, x_m), rrh)
-        aoa = dep.aoa_rad(np.full(rrh.size, x_m), rrh)
-        gt = rrh_array.beam_gains_db(aod)
-        gr = train.gain_db(aoa)
+        c = path(x_m, train.gain_db)
+        d3d, d2d, pl, sh, aod, aoa, gt, gr = (c[k] for k in ("d3d", "d2d", "pl", "sh", "aod", "aoa", "gt", "gr"))
         amp = np.sqrt(radio.epre_w * 10 ** ((-pl + sh + gr) / 10))
         links = Links(
             n_id1=n1[rrh], n_id2=n2[rrh], tau_s=d3d / SPEED_OF_LIGHT_M_S, amp=amp,
@@ -141,17 +147,8 @@ def link_budget(x_m: float, speed_m_s: float, dep: Deployment, radio: RadioParam
     # at x + panel_x[1] over its own path (delay, path loss, shadowing, angles, fading)
     per = []
     for panel, dx_panel in enumerate(train.panel_x_m):
-        xp = x_m + float(dx_panel)
-        d3d = dep.distance_3d_m(xp, rrh)
-        d2d = dep.distance_2d_m(xp, rrh)
-        pl = pathloss_umi_los_db(d3d, d2d, radio.carrier_hz, dep.h_bs_m, dep.h_ut_m)
-        sh = shadow.at(xp, rrh) if shadowing else np.zeros(rrh.size)
-        aod = dep.aod_rad(np.full(rrh.size, xp), rrh)
-        aoa = dep.aoa_rad(np.full(rrh.size, xp), rrh)
-        gt = rrh_array.beam_gains_db(aod)
-        gr = train.panel_gain_db(aoa, panel)
-        per.append(dict(xp=xp, d3d=d3d, d2d=d2d, pl=pl, sh=sh, aod=aod, aoa=aoa, gt=gt, gr=gr,
-                        power=-pl + sh + gr + gt.max(axis=1)))
+        p = path(x_m + float(dx_panel), lambda aoa, panel=panel: train.panel_gain_db(aoa, panel))
+        per.append(p | {"power": -p["pl"] + p["sh"] + p["gr"] + p["gt"].max(axis=1)})
     panel = np.argmax(np.stack([p["power"] for p in per]), axis=0)  # [R] the stronger panel
     pick = {k: np.choose(panel, [p[k] for p in per]) for k in ("d3d", "pl", "sh", "aod", "aoa", "gr")}
     gt_serv = np.where(panel[:, None] == 0, per[0]["gt"], per[1]["gt"])
