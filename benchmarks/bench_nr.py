@@ -12,6 +12,10 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import json
+import os
+import subprocess
+import sys
 import time
 
 import numpy as np
@@ -24,6 +28,36 @@ from railradio.nr.numerology import Numerology
 from railradio.nr.receiver import Correlator, Synthesizer
 from railradio.nr.simulate import scenario_from_config
 from railradio.nr.ssb import qpsk_pool, reference_waveform
+from railradio.workflow import JOB_ENV
+
+# A shard-like run in a fresh process: consecutive epochs of realization r0 through
+# simulate_epochs (channel, synthesis, both receivers), as the nr_shard jobs run them.
+_SHARD_RUN = """
+import json, resource, sys, time, yaml
+from railradio.nr.simulate import scenario_from_config, simulate_epochs
+from railradio.rng import spawn_key
+cfg = yaml.safe_load(open(sys.argv[1]))
+scn = scenario_from_config(cfg["nr"])
+ep = list(range(2500, 2500 + int(sys.argv[2])))
+simulate_epochs(scn, ep[:3], cfg["seed"], spawn_key("nr", 0))  # warm-up: kernels, caches
+r0, t0 = resource.getrusage(resource.RUSAGE_SELF), time.perf_counter()
+simulate_epochs(scn, ep, cfg["seed"], spawn_key("nr", 0))
+r1, t1 = resource.getrusage(resource.RUSAGE_SELF), time.perf_counter()
+print(json.dumps({"wall_s": t1 - t0, "user_s": r1.ru_utime - r0.ru_utime,
+                  "sys_s": r1.ru_stime - r0.ru_stime, "n": len(ep)}))
+"""
+
+
+def shard_run(config: str, n_epochs: int, tunables: bool) -> dict:
+    """Time ``n_epochs`` bursts in a fresh process with or without the jobs' malloc
+    settings (glibc reads them at process start, hence the subprocess)."""
+    env = dict(os.environ, **{k: v for k, v in JOB_ENV.items() if k != "GLIBC_TUNABLES"})
+    env.pop("GLIBC_TUNABLES", None)
+    if tunables:
+        env["GLIBC_TUNABLES"] = JOB_ENV["GLIBC_TUNABLES"]
+    out = subprocess.run([sys.executable, "-c", _SHARD_RUN, config, str(n_epochs)], env=env,
+                         check=True, capture_output=True, text=True).stdout
+    return json.loads(out.strip().splitlines()[-1])
 
 
 def naive_correlation(z: np.ndarray, s_min: int, cfg, n_id1: np.ndarray, n_id2: np.ndarray) -> np.ndarray:
@@ -44,6 +78,8 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--config", default="config/config.yaml")
     ap.add_argument("--epochs", type=int, default=6)
+    ap.add_argument("--shard-epochs", type=int, default=100,
+                    help="bursts of the shard-like runs with and without the malloc settings")
     ap.add_argument("--out", default=None)
     args = ap.parse_args()
     with open(args.config, encoding="utf-8") as fh:
@@ -101,6 +137,17 @@ def main() -> None:
         "naive_correlation_ms_per_epoch": 1e3 * times["naive_correlation"] / n,
         "paper_scale_epochs": 3 * scn.trajectory.n_epochs,
     }
+    # the jobs' heap settings (railradio.workflow.JOB_ENV) against glibc's defaults, same
+    # bursts, each in a fresh process, alternated and best of two
+    runs = {False: [], True: []}
+    for _ in range(2):
+        for tun in (False, True):
+            runs[tun].append(shard_run(args.config, args.shard_epochs, tun))
+    for tun, name in ((False, "malloc_default"), (True, "malloc_tuned")):
+        best = min(runs[tun], key=lambda r: r["wall_s"])
+        report[f"{name}_ms_per_burst"] = 1e3 * best["wall_s"] / best["n"]
+        report[f"{name}_sys_share"] = best["sys_s"] / (best["user_s"] + best["sys_s"])
+    report["malloc_speedup"] = report["malloc_default_ms_per_burst"] / report["malloc_tuned_ms_per_burst"]
     emit(report, args.out)
 
 

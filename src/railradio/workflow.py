@@ -12,6 +12,21 @@ import sys
 from importlib.util import find_spec
 from pathlib import Path
 
+JOB_ENV = {
+    # one BLAS/OpenMP thread per job: Snakemake runs jobs in parallel (-j), and a BLAS
+    # thread pool per job oversubscribes the cores (measured: 137 vs 83 ms CPU per nr epoch)
+    "OPENBLAS_NUM_THREADS": "1",
+    "OMP_NUM_THREADS": "1",
+    "MKL_NUM_THREADS": "1",
+    # keep freed memory in the heap instead of handing it back to the kernel: the jobs
+    # allocate and free burst-sized arrays thousands of times, and glibc's defaults (mmap
+    # and trim above 128 KiB) turn each into fresh page faults (benchmarks/bench_nr.py,
+    # ``malloc_*``). Results do not depend on it.
+    "GLIBC_TUNABLES": "glibc.malloc.mmap_threshold=268435456:glibc.malloc.trim_threshold=268435456",
+}
+"""Environment of every workflow job (set by ``workflow/rules/common.smk``; glibc reads
+``GLIBC_TUNABLES`` at process start, so it is set before the jobs' processes start)."""
+
 
 def code_hash(*modules: str, exclude: tuple[str, ...] = (), data: tuple[str, ...] = ()) -> str:
     """SHA-256 (16 hex digits) of the source of the given railradio modules/subpackages.

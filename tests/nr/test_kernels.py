@@ -124,3 +124,18 @@ def test_cross_spectra_is_the_broadcast_product():
     out = np.empty((3, 5, 16), dtype=np.complex64)
     kernels.cross_spectra(zf, bs, out)
     np.testing.assert_allclose(out, zf[None, :, :] * bs[:, None, :], rtol=1e-6)
+
+
+def test_ula_gain_closed_form_equals_the_element_sum():
+    """The Dirichlet-kernel array factor equals |Σ_n e^{jπnu}|²/N summed element by element,
+    including the endfire/broadside points where both sines of the closed form vanish."""
+    from railradio.nr.antenna import ARRAY_NULL_FLOOR, ula_gain
+
+    rng = np.random.default_rng(11)
+    phi = np.concatenate([rng.uniform(-np.pi, np.pi, 20000), [np.pi / 2, -np.pi / 2, 0.0, 1e-9]])
+    steer = np.concatenate([rng.uniform(-np.pi, np.pi, 20000), [-np.pi / 2, np.pi / 2, 0.0, 0.0]])
+    for n in (1, 8, 32):
+        u = np.sin(phi)[:, None] - np.sin(steer)[:, None]
+        ref = np.maximum(np.abs(np.exp(1j * np.pi * u * np.arange(n)).sum(axis=1)) ** 2 / n, ARRAY_NULL_FLOOR)
+        np.testing.assert_allclose(ula_gain(phi, steer, n), ref, rtol=1e-11)
+    assert ula_gain(0.3, 0.3, 8) == pytest.approx(8.0)

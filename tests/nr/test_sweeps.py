@@ -138,11 +138,15 @@ def test_case_scheduling_reuses_bursts_and_cuts_epochs():
 
     nr, sens, cases = _cases_cfg()
     n_main = 5775
-    # the sweep reference: the main run's bursts, cut to its epochs (shard 0 of 12 covers 481)
+    from railradio.nr.simulate import shard_epochs
+
+    s0 = shard_epochs(n_main, nr["n_shards"], 0).size  # epochs of the main run's first shard
+    assert s0 >= 400
+    # the sweep reference: the main run's bursts, cut to its epochs (all in shard 0)
     assert nc.case_epochs(cases["sweep_ref"], sens) == 400
     assert nc.case_cal_epochs(cases["sweep_ref"], nr) == 250
     assert nc.case_inputs("sweep_ref", cases, nr, sens, "r0", n_main, 2) == ["results/nr/estimates/r0/s0.nc"]
-    longer = dict(cases["sweep_ref"], max_epochs=500)
+    longer = dict(cases["sweep_ref"], max_epochs=s0 + 1)
     assert nc.case_inputs("x", {"x": longer}, nr, sens, "r0", n_main, 2) == [
         "results/nr/estimates/r0/s0.nc", "results/nr/estimates/r0/s1.nc"]
     assert nc.case_inputs("sweep_ref", cases, nr, sens, "cal", n_main, 2) == ["results/nr/estimates/cal/s0.nc"]
@@ -150,7 +154,8 @@ def test_case_scheduling_reuses_bursts_and_cuts_epochs():
     assert nc.case_inputs("sync_3ns", cases, nr, sens, "r0", n_main, 2) == \
         nc.case_inputs("sweep_ref", cases, nr, sens, "r0", n_main, 2)
     # a full-length tracker-only case: the main shards covering 2500 epochs
-    assert len(nc.case_inputs("w_distance", cases, nr, sens, "r0", n_main, 2)) == 6
+    assert len(nc.case_inputs("w_distance", cases, nr, sens, "r0", n_main, 2)) == \
+        int(np.searchsorted(np.linspace(0, n_main, nr["n_shards"] + 1).round(), 2500))
     # a simulated sweep point: its own shards, fewer for fewer epochs
     assert nc.case_inputs("tdl_a", cases, nr, sens, "r0", n_main, 2) == ["results/nr/cases/tdl_a/estimates/r0/s0.nc"]
     assert nc.case_inputs("tdl_a", cases, nr, sens, "cal", n_main, 2) == ["results/nr/cases/tdl_a/estimates/cal/s0.nc"]

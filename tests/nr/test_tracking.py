@@ -201,3 +201,45 @@ def test_robust_sigmas_per_distance_bin():
     _, _, b2 = robust_sigmas(e_aod, e_rng * 0, dist, (1499.9,), fs_hz=245.76e6)
     assert b2["sigma_toa_bins_s"][1] == pytest.approx(1 / (np.sqrt(12) * 245.76e6))
     assert robust_sigmas(e_aod, e_rng, dist)[2] == {}
+
+
+def test_select_measurements_equals_nearest_by_full_sort():
+    """The windowed nearest-RRH search picks the same columns as a stable argsort over
+    every RRH: midpoint ties, ends of the track, far-off and NaN predictions included."""
+    from railradio.nr.tracking import select_measurements
+
+    rrh_x = np.arange(87) * 500.0
+    rng = np.random.default_rng(7)
+    xs = np.concatenate([rng.uniform(-3000, 46000, 300), np.arange(87) * 500.0 + 250.0,
+                         np.arange(87) * 500.0, [np.nan, 1e20, -1e20, 5e8, -7e8, -0.0]])
+    for x in xs:
+        cand = rng.choice(87, 6, replace=False)
+        ok = rng.random(6) < 0.8
+        strength = rng.random(6)
+        near = set(np.argsort(np.abs(rrh_x - x), kind="stable")[:6].tolist())
+        cols = sorted((c for c in range(6) if ok[c] and int(cand[c]) in near), key=lambda c: -strength[c])
+        np.testing.assert_array_equal(select_measurements(cand, ok, strength, rrh_x, x, 6, 3),
+                                      np.array(cols[:3], dtype=np.int64))
+
+
+def test_snapshot_batch_equals_one_epoch_at_a_time():
+    """snapshot_ls_batch over padded epochs gives each epoch's own fix."""
+    from railradio.nr.tracking import snapshot_ls_batch
+
+    rng = np.random.default_rng(3)
+    cfg = TrackerConfig(variant="aod_toa", sigma_aod_rad=np.radians(1.0), sigma_toa_s=2e-9)
+    xy_all = np.full((4, 3, 2), np.nan)
+    a_all, t_all, guess = np.full((4, 3), np.nan), np.full((4, 3), np.nan), np.zeros((4, 2))
+    for e, m in enumerate((3, 2, 1, 3)):
+        s = np.array([rng.uniform(100, 900), 0.0, 0, 0, 0, 0])
+        xy = RRH[:m]
+        z = hx(s, xy, DH, "aod_toa") + np.tile([1e-3, 1e-9], m) * rng.standard_normal(2 * m)
+        xy_all[e, :m], a_all[e, :m], t_all[e, :m] = xy, z[0::2], z[1::2]
+        guess[e] = s[:2] + [3.0, 2.0]
+    p, cov = snapshot_ls_batch(xy_all, a_all, t_all, DH, cfg, guess, with_cov=True)
+    for e, m in enumerate((3, 2, 1, 3)):
+        p1, c1 = snapshot_ls(xy_all[e, :m], a_all[e, :m], t_all[e, :m], DH, cfg, guess[e])
+        np.testing.assert_allclose(p[e], p1, rtol=0, atol=1e-9)
+        np.testing.assert_allclose(cov[e], c1, rtol=1e-9)
+    with pytest.raises(ValueError, match="rrh_xy"):
+        snapshot_ls_batch(np.full((1, 3, 2), np.nan), a_all[:1], t_all[:1], DH, cfg, guess[:1])

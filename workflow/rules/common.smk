@@ -2,10 +2,12 @@
 import os
 from pathlib import Path
 
-# One BLAS/OpenMP thread per job: Snakemake runs jobs in parallel (-j), and a BLAS thread
-# pool per job oversubscribes the cores (measured: 137 vs 83 ms CPU per nr epoch).
-for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
-    os.environ.setdefault(_var, "1")
+from railradio.workflow import JOB_ENV
+
+# One BLAS thread per job and a heap that keeps freed memory (railradio.workflow.JOB_ENV);
+# the jobs' processes inherit it. A value already in the environment wins.
+for _var, _value in JOB_ENV.items():
+    os.environ.setdefault(_var, _value)
 
 from railradio.config import load_schema, validate_config
 from railradio.workflow import code_hash

@@ -37,10 +37,17 @@ def ula_gain(phi_rel_rad: NDArray, steer_rel_rad: NDArray, n_elements: int) -> N
     array broadside = panel boresight): |Σ_n e^{jπ n (sin φ - sin φ_s)}|² / N (peak N)."""
     if n_elements < 1:
         raise ValueError(f"n_elements must be >= 1, got {n_elements!r}")
-    u = np.sin(np.asarray(phi_rel_rad))[..., None] - np.sin(np.asarray(steer_rel_rad))[..., None]
-    n = np.arange(n_elements)
-    af = np.exp(1j * np.pi * u * n).sum(axis=-1)
-    return np.maximum(np.abs(af) ** 2 / n_elements, ARRAY_NULL_FLOOR)
+    u = np.sin(np.asarray(phi_rel_rad, float)) - np.sin(np.asarray(steer_rel_rad, float))
+    shape = u.shape
+    u = u.reshape(-1)
+    # Dirichlet kernel: |Σ_n e^{jπnu}|² = sin²(Nπu/2) / sin²(πu/2); near u ≡ 0 (mod 2), where
+    # both sines vanish, the explicit sum
+    den = np.sin(0.5 * np.pi * u)
+    near = np.abs(den) < 1e-6
+    af2 = np.square(np.sin(0.5 * np.pi * n_elements * u) / np.where(near, 1.0, den))
+    if np.any(near):
+        af2[near] = np.abs(np.exp(1j * np.pi * u[near][:, None] * np.arange(n_elements)).sum(axis=-1)) ** 2
+    return np.maximum(af2 / n_elements, ARRAY_NULL_FLOOR).reshape(shape)
 
 
 @dataclass(frozen=True)

@@ -47,12 +47,12 @@ def hx(s: NDArray, rrh_xy: NDArray, dh_m: float, variant: str) -> NDArray[np.flo
     use_aod, use_toa = VARIANTS[variant]
     dx = s[0] - rrh_xy[:, 0]
     dy = s[1] - rrh_xy[:, 1]
-    out = []
+    out = np.empty((dx.size, int(use_aod) + int(use_toa)))
     if use_aod:
-        out.append(np.arctan2(dy, dx))
+        out[:, 0] = np.arctan2(dy, dx)
     if use_toa:
-        out.append(np.sqrt(dx**2 + dy**2 + dh_m**2) / SPEED_OF_LIGHT_M_S)
-    return np.stack(out, axis=1).ravel()  # [aod_0, toa_0, aod_1, toa_1, ...]
+        out[:, -1] = np.sqrt(dx**2 + dy**2 + dh_m**2) / SPEED_OF_LIGHT_M_S
+    return out.ravel()  # [aod_0, toa_0, aod_1, toa_1, ...]
 
 
 def jacobian(s: NDArray, rrh_xy: NDArray, dh_m: float, variant: str) -> NDArray[np.float64]:
@@ -60,15 +60,17 @@ def jacobian(s: NDArray, rrh_xy: NDArray, dh_m: float, variant: str) -> NDArray[
     use_aod, use_toa = VARIANTS[variant]
     dx = s[0] - rrh_xy[:, 0]
     dy = s[1] - rrh_xy[:, 1]
-    rows = []
-    for i in range(rrh_xy.shape[0]):
-        if use_aod:
-            r2 = dx[i] ** 2 + dy[i] ** 2
-            rows.append([-dy[i] / r2, dx[i] / r2, 0, 0, 0, 0])
-        if use_toa:
-            r3 = np.sqrt(dx[i] ** 2 + dy[i] ** 2 + dh_m**2) * SPEED_OF_LIGHT_M_S
-            rows.append([dx[i] / r3, dy[i] / r3, 0, 0, 0, 0])
-    return np.array(rows, dtype=float).reshape(-1, 6)
+    per = int(use_aod) + int(use_toa)
+    out = np.zeros((dx.size, per, 6))
+    if use_aod:
+        r2 = dx**2 + dy**2
+        out[:, 0, 0] = -dy / r2
+        out[:, 0, 1] = dx / r2
+    if use_toa:
+        r3 = np.sqrt(dx**2 + dy**2 + dh_m**2) * SPEED_OF_LIGHT_M_S
+        out[:, -1, 0] = dx / r3
+        out[:, -1, 1] = dy / r3
+    return out.reshape(-1, 6)
 
 
 def residual_fn(variant: str):
@@ -140,15 +142,26 @@ class TrackerConfig:
 
     def noise(self, n: int, dist_m: NDArray | None = None) -> NDArray[np.float64]:
         """W for ``n`` RRHs; ``dist_m`` [n] their predicted 2-D distances [m] (used only
-        with distance bins)."""
+        with distance bins; without them the overall σ)."""
+        if dist_m is None:
+            return np.diag(np.tile(TrackerConfig(self.variant, self.q, self.sigma_aod_rad,
+                                                 self.sigma_toa_s).variances(np.zeros(1))[0], n))
+        return np.diag(self.variances(np.asarray(dist_m, float).reshape(n)).ravel())
+
+    def variances(self, dist_m: NDArray) -> NDArray[np.float64]:
+        """Measurement variances [..., per] (AOD [rad²] then TOA [s²], as used by the
+        variant) of RRHs at 2-D distances ``dist_m`` [...] [m]: the diagonal of
+        :meth:`noise`, for arrays of RRHs."""
         use_aod, use_toa = VARIANTS[self.variant]
-        if self.distance_edges_m and dist_m is not None:
-            b = np.searchsorted(self.distance_edges_m, np.asarray(dist_m, float).reshape(n))
-            cols = (([np.asarray(self.sigma_aod_bins_rad)[b] ** 2] if use_aod else [])
-                    + ([np.asarray(self.sigma_toa_bins_s)[b] ** 2] if use_toa else []))
-            return np.diag(np.stack(cols, axis=1).ravel())
-        per = ([self.sigma_aod_rad**2] if use_aod else []) + ([self.sigma_toa_s**2] if use_toa else [])
-        return np.diag(np.tile(per, n))
+        d = np.asarray(dist_m, float)
+        if self.distance_edges_m:
+            b = np.searchsorted(self.distance_edges_m, d)
+            sig = (([np.asarray(self.sigma_aod_bins_rad)[b]] if use_aod else [])
+                   + ([np.asarray(self.sigma_toa_bins_s)[b]] if use_toa else []))
+        else:
+            sig = (([np.full(d.shape, self.sigma_aod_rad)] if use_aod else [])
+                   + ([np.full(d.shape, self.sigma_toa_s)] if use_toa else []))
+        return np.stack(sig, axis=-1) ** 2
 
     def pick(self, aod: NDArray, toa: NDArray) -> NDArray[np.float64]:
         use_aod, use_toa = VARIANTS[self.variant]
@@ -163,28 +176,90 @@ def distances_m(s: NDArray, rrh_xy: NDArray) -> NDArray[np.float64]:
 
 def snapshot_ls(rrh_xy: NDArray, aod: NDArray, toa: NDArray, dh_m: float, cfg: TrackerConfig,
                 x_init: NDArray, n_iter: int = 20) -> tuple[NDArray, NDArray]:
-    """Weighted Gauss–Newton position fix [x, y] from one epoch and its covariance [m²]."""
+    """Weighted Gauss–Newton position fix [x, y] from one epoch and its covariance [m²]
+    (:func:`snapshot_ls_batch` for one epoch)."""
+    rrh_xy = np.asarray(rrh_xy, float).reshape(-1, 2)
+    p, cov = snapshot_ls_batch(rrh_xy[None], np.asarray(aod, float).reshape(1, -1),
+                               np.asarray(toa, float).reshape(1, -1), dh_m, cfg,
+                               np.asarray(x_init, float).reshape(1, 2), n_iter, with_cov=True)
+    return p[0], cov[0]
+
+
+def snapshot_ls_batch(rrh_xy: NDArray, aod: NDArray, toa: NDArray, dh_m: float, cfg: TrackerConfig,
+                      x_init: NDArray, n_iter: int = 20, with_cov: bool = False
+                      ) -> tuple[NDArray, NDArray | None]:
+    """Weighted Gauss–Newton position fixes of independent epochs, all at once.
+
+    ``rrh_xy`` [E, m, 2], ``aod``/``toa`` [E, m] (NaN RRH positions pad epochs with fewer
+    measurements; every epoch needs at least one), ``x_init`` [E, 2]. Each epoch iterates
+    p ← p + (JᵀWJ)⁻¹ JᵀW (z - h(p)) (angle residuals wrapped) until its step is under 1 µm,
+    at most ``n_iter`` times, and stops early where det JᵀWJ = 0; W is the inverse of
+    :meth:`TrackerConfig.noise` at the initial guess. Returns the fixes [E, 2] and, with
+    ``with_cov``, the covariances pinv(JᵀWJ) at the fixes [E, 2, 2] [m²].
+    """
+    xy = np.asarray(rrh_xy, float)
+    valid = np.isfinite(xy[..., 0])  # [E, m]
+    if not valid.any(axis=1).all():
+        raise ValueError("rrh_xy: every epoch needs at least one measured RRH")
+    xy = np.where(valid[..., None], xy, 0.0)
+    use_aod, use_toa = VARIANTS[cfg.variant]
+    per = int(use_aod) + int(use_toa)
+    n_e, m = valid.shape
     p = np.asarray(x_init, float).copy()
-    w = np.linalg.inv(cfg.noise(rrh_xy.shape[0], distances_m(p, rrh_xy)))
-    z = cfg.pick(aod, toa)
-    res = residual_fn(cfg.variant)
-    h_full = np.zeros(6)
+    # weights [E, m, per] at the initial guess (0 for padding)
+    dist0 = np.hypot(p[:, :1] - xy[..., 0], p[:, 1:] - xy[..., 1])
+    var = cfg.variances(dist0)
+    w = np.where(valid[..., None], 1.0 / var, 0.0)
+    z = np.stack(([np.asarray(aod, float)] if use_aod else [])
+                 + ([np.asarray(toa, float)] if use_toa else []), axis=-1)
+    z = np.where(valid[..., None], z, 0.0)
+
+    def lin(idx):
+        """J [e, m, per, 2] and wrapped residuals [e, m, per] of the epochs ``idx`` at p."""
+        ok = valid[idx]
+        dx = np.where(ok, p[idx, :1] - xy[idx, :, 0], 1.0)
+        dy = np.where(ok, p[idx, 1:] - xy[idx, :, 1], 1.0)
+        jac = np.empty((idx.size, m, per, 2))
+        h = np.empty((idx.size, m, per))
+        if use_aod:
+            r2 = dx**2 + dy**2
+            jac[..., 0, 0], jac[..., 0, 1] = -dy / r2, dx / r2
+            h[..., 0] = np.arctan2(dy, dx)
+        if use_toa:
+            rng = np.sqrt(dx**2 + dy**2 + dh_m**2)
+            r3 = rng * SPEED_OF_LIGHT_M_S
+            jac[..., -1, 0], jac[..., -1, 1] = dx / r3, dy / r3
+            h[..., -1] = rng / SPEED_OF_LIGHT_M_S
+        r = z[idx] - h
+        if use_aod:
+            r[..., 0] = wrap_rad(r[..., 0])
+        return jac, np.where(ok[..., None], r, 0.0)
+
+    def normal(idx, jac, r=None):
+        info = np.einsum("empi,emp,empj->eij", jac, w[idx], jac)
+        return info, (None if r is None else np.einsum("empi,emp,emp->ei", jac, w[idx], r))
+
+    active = np.ones(n_e, dtype=bool)
     for _ in range(n_iter):
-        h_full[:2] = p
-        jac = jacobian(h_full, rrh_xy, dh_m, cfg.variant)[:, :2]
-        r = res(z, hx(h_full, rrh_xy, dh_m, cfg.variant))
-        info = jac.T @ w @ jac
-        try:
-            step = np.linalg.solve(info, jac.T @ w @ r)
-        except np.linalg.LinAlgError:
+        if not active.any():
             break
-        p += step
-        if np.linalg.norm(step) < 1e-6:
-            break
-    h_full[:2] = p
-    jac = jacobian(h_full, rrh_xy, dh_m, cfg.variant)[:, :2]
-    cov = np.linalg.pinv(jac.T @ w @ jac)
-    return p, cov
+        idx = np.flatnonzero(active)
+        jac, r = lin(idx)
+        info, g = normal(idx, jac, r)
+        # 2 × 2 solve in closed form; a singular JᵀWJ stops that epoch
+        det = info[:, 0, 0] * info[:, 1, 1] - info[:, 0, 1] * info[:, 1, 0]
+        ok = det != 0
+        det = np.where(ok, det, 1.0)
+        step = np.stack([info[:, 1, 1] * g[:, 0] - info[:, 0, 1] * g[:, 1],
+                         info[:, 0, 0] * g[:, 1] - info[:, 1, 0] * g[:, 0]], axis=1) / det[:, None]
+        p[idx[ok]] += step[ok]
+        done = ~ok | (np.linalg.norm(step, axis=1) < 1e-6)
+        active[idx[done]] = False
+    if not with_cov:
+        return p, None
+    idx = np.arange(n_e)
+    jac, _ = lin(idx)
+    return p, np.linalg.pinv(normal(idx, jac)[0])
 
 
 def run_ekf(rrh_xy, aod, toa, dt_s: float, dh_m: float,
@@ -231,12 +306,14 @@ def run_ekf(rrh_xy, aod, toa, dt_s: float, dh_m: float,
         if xy.shape[0]:
             z = cfg.pick(np.asarray(aod_k), np.asarray(toa_k))
             keep = np.ones(xy.shape[0], dtype=bool)
-            if cfg.gate:  # per-RRH χ² test on the predicted innovation
-                for i in range(xy.shape[0]):
-                    hi = jacobian(ekf.x, xy[i:i + 1], dh_m, cfg.variant)
-                    si = hi @ ekf.P @ hi.T + cfg.noise(1, distances_m(ekf.x, xy[i:i + 1]))
-                    ri = res(z[i * per:(i + 1) * per], hx(ekf.x, xy[i:i + 1], dh_m, cfg.variant))
-                    keep[i] = float(ri @ np.linalg.solve(si, ri)) <= gate
+            if cfg.gate:  # per-RRH χ² test on the predicted innovation (all RRHs at once)
+                m_k = xy.shape[0]
+                h_all = jacobian(ekf.x, xy, dh_m, cfg.variant).reshape(m_k, per, 6)
+                s_i = np.einsum("ipa,ab,iqb->ipq", h_all, ekf.P, h_all)  # H_i P H_iᵀ
+                s_i[:, np.arange(per), np.arange(per)] += cfg.variances(distances_m(ekf.x, xy))
+                r_i = res(z, hx(ekf.x, xy, dh_m, cfg.variant)).reshape(m_k, per)
+                d2 = np.einsum("ip,ip->i", r_i, np.linalg.solve(s_i, r_i[..., None])[..., 0])
+                keep = d2 <= gate
             if keep.any():
                 xs = xy[keep]
                 zs = z[np.repeat(keep, per)]
@@ -267,8 +344,16 @@ def select_measurements(cand_rrh: NDArray, cand_ok: NDArray, cand_strength: NDAr
                         x_pred: float, n_nearest: int = 6, n_use: int = 3) -> NDArray[np.int64]:
     """Candidate columns to use at one epoch: among the detected candidates that are also
     among the ``n_nearest`` RRHs to the predicted position, the ``n_use`` strongest
-    (seed §4: the 3 strongest of the audible RRHs) [ours: the nearest-to-prediction rule]."""
-    near = set(np.argsort(np.abs(rrh_x - x_pred), kind="stable")[:n_nearest].tolist())
+    (seed §4: the 3 strongest of the audible RRHs) [ours: the nearest-to-prediction rule].
+    ``rrh_x``: the RRH positions along the track, increasing [m]."""
+    if abs(x_pred) < 1e9:  # rrh_x increasing: the n nearest lie within n places of x_pred's
+        # insertion point (the same set and tie-breaking as a stable argsort over all RRHs)
+        i = int(np.searchsorted(rrh_x, x_pred))
+        lo = max(i - n_nearest, 0)
+        win = np.abs(rrh_x[lo:i + n_nearest] - x_pred)
+        near = set((lo + np.argsort(win, kind="stable")[:n_nearest]).tolist())
+    else:  # a lost filter (far off, or NaN): the order rounding gives over all RRHs
+        near = set(np.argsort(np.abs(rrh_x - x_pred), kind="stable")[:n_nearest].tolist())
     cols = [c for c in range(cand_rrh.size) if cand_ok[c] and int(cand_rrh[c]) in near]
     cols.sort(key=lambda c: -cand_strength[c])
     return np.array(cols[:n_use], dtype=np.int64)
@@ -352,12 +437,21 @@ def track(ds, rrh_x: NDArray, rrh_y: float, dh_m: float, dt_s: float, cfg: Track
     # snapshot LS baseline: no tracking; each fix starts from the strongest cell's own
     # AOD/TOA closed form x_k + ρ cos θ (ρ the horizontal range)
     snap = np.full((n, 2), np.nan)
-    for k in range(n if snapshot else 0):
-        xy, a_k, t_k = pick(k, float(rrh_x[rrh[k, 0]]))  # the stored candidates are the nearest
-        if xy.shape[0] >= 1:
-            rho = np.sqrt(max((SPEED_OF_LIGHT_M_S * t_k[0]) ** 2 - dh_m**2, 1.0))
-            guess = np.array([xy[0, 0] + rho * np.cos(a_k[0]), xy[0, 1] + rho * np.sin(a_k[0])])
-            snap[k], _ = snapshot_ls(xy, a_k, t_k, dh_m, cfg, guess)
+    if snapshot:
+        m = n_use
+        xy_all = np.full((n, m, 2), np.nan)
+        a_all = np.full((n, m), np.nan)
+        t_all = np.full((n, m), np.nan)
+        for k in range(n):
+            xy, a_k, t_k = pick(k, float(rrh_x[rrh[k, 0]]))  # the stored candidates are the nearest
+            j = xy.shape[0]
+            xy_all[k, :j], a_all[k, :j], t_all[k, :j] = xy, a_k, t_k
+        has = np.isfinite(xy_all[:, 0, 0])
+        if has.any():
+            xy0, a0, t0 = xy_all[has, 0], a_all[has, 0], t_all[has, 0]
+            rho = np.sqrt(np.maximum((SPEED_OF_LIGHT_M_S * t0) ** 2 - dh_m**2, 1.0))
+            guess = np.stack([xy0[:, 0] + rho * np.cos(a0), xy0[:, 1] + rho * np.sin(a0)], axis=1)
+            snap[has], _ = snapshot_ls_batch(xy_all[has], a_all[has], t_all[has], dh_m, cfg, guess)
     reac = np.zeros(n, dtype=bool)
     reac[k0:] = out["reacquired"]
     return {"state": state, "nis": nis, "n_used": used, "snapshot": snap, "k0": k0, "reacquired": reac}
