@@ -32,7 +32,13 @@ def test_fill_grid_matches_numpy_form():
     pool, h, ramp = crandn(n_p, n), crandn(n_s, n), crandn(n)
     idx = rng.integers(0, n_p, n_s)
     mask = rng.random((n_s, n)) < 0.3
+    mask[5:9] = False  # rows without overlay
+    mask[20:23] = True  # rows overlaid over the whole band
     vals = np.where(mask, crandn(n_s, n), 0).astype(c64)
+    rows = np.flatnonzero(mask.any(axis=1))
+    ov_row = np.full(n_s, -1, dtype=np.int64)
+    ov_row[rows] = np.arange(rows.size)
+    ov = (ov_row, mask[rows].all(axis=1), np.ascontiguousarray(mask[rows]), np.ascontiguousarray(vals[rows]))
     g = rng.random(n_s).astype(np.float32)
     long_of = np.full(n_s, -1)
     long_of[[0, 17]] = [0, 1]
@@ -43,7 +49,7 @@ def test_fill_grid_matches_numpy_form():
         want = grid * (h if has_h else 1) * ramp[None, :] * g[:, None]
         want[[0, 17]] *= long_ramp
         x = np.empty((n_s, n), dtype=c64)
-        kernels.fill_grid(x, pool, idx, mask, vals, h, has_h, ramp, g, long_of, long_ramp)
+        kernels.fill_grid(x, pool, idx, *ov, h, has_h, ramp, g, long_of, long_ramp)
         np.testing.assert_allclose(x, want, rtol=1e-5, atol=1e-5)
 
 

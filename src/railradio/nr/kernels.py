@@ -51,15 +51,19 @@ def sos_taps(amp_l: np.ndarray, f_lm_hz: np.ndarray, phi_lm: np.ndarray,
 
 
 @njit(cache=True, nogil=True)
-def fill_grid(x: np.ndarray, pool: np.ndarray, pool_idx: np.ndarray, ov_mask: np.ndarray,
-              ov_val: np.ndarray, h: np.ndarray, has_h: bool, ramp: np.ndarray,
-              g_row: np.ndarray, long_of: np.ndarray, long_ramp: np.ndarray) -> None:
+def fill_grid(x: np.ndarray, pool: np.ndarray, pool_idx: np.ndarray, ov_row: np.ndarray,
+              ov_full: np.ndarray, ov_mask: np.ndarray, ov_val: np.ndarray, h: np.ndarray,
+              has_h: bool, ramp: np.ndarray, g_row: np.ndarray, long_of: np.ndarray,
+              long_ramp: np.ndarray) -> None:
     """x[s, k] = src[s, k] · h[s, k] · ramp[k] · g_row[s] · long_ramp[long_of[s], k], in place.
 
-    src[s, k] is the SS-block overlay value where ``ov_mask`` is set, else the data-pool
-    symbol ``pool[pool_idx[s], k]``; ``h`` is ignored unless ``has_h`` (flat channel);
-    ``long_of[s] < 0`` means no long-CP ramp for that row. NumPy form:
-    ``grid = pool[pool_idx]; grid[mask] = val; x = grid * h * ramp * g[:, None]; x[long] *= long_ramp``.
+    src[s, k] is the data-pool symbol ``pool[pool_idx[s], k]`` unless row s carries the
+    cell's SS-block overlay (``o = ov_row[s] >= 0``): then ``ov_val[o, k]`` where
+    ``ov_mask[o, k]`` (every k when ``ov_full[o]``). The overlay is compact — only its rows
+    — so that the grids of the twenty-odd cells of a burst stay in cache. ``h`` is ignored
+    unless ``has_h`` (flat channel); ``long_of[s] < 0`` means no long-CP ramp for that row.
+    NumPy form, with the dense mask M and values V (M[s] = ov_mask[ov_row[s]], V alike):
+    ``grid = pool[pool_idx]; grid[M] = V[M]; x = grid * h * ramp * g[:, None]; x[long] *= long_ramp``.
     """
     n_s, n = x.shape
     f = np.empty(n, dtype=np.complex64)
@@ -67,6 +71,7 @@ def fill_grid(x: np.ndarray, pool: np.ndarray, pool_idx: np.ndarray, ov_mask: np
         p = pool_idx[s]
         lr = long_of[s]
         gs = g_row[s]
+        o = ov_row[s]
         for k in range(n):
             f[k] = ramp[k] * gs
         if has_h:
@@ -75,9 +80,16 @@ def fill_grid(x: np.ndarray, pool: np.ndarray, pool_idx: np.ndarray, ov_mask: np
         if lr >= 0:
             for k in range(n):
                 f[k] *= long_ramp[lr, k]
-        for k in range(n):
-            v = ov_val[s, k] if ov_mask[s, k] else pool[p, k]
-            x[s, k] = v * f[k]
+        if o < 0:
+            for k in range(n):
+                x[s, k] = pool[p, k] * f[k]
+        elif ov_full[o]:
+            for k in range(n):
+                x[s, k] = ov_val[o, k] * f[k]
+        else:
+            for k in range(n):
+                v = ov_val[o, k] if ov_mask[o, k] else pool[p, k]
+                x[s, k] = v * f[k]
 
 
 @njit(cache=True, nogil=True)

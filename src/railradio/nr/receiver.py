@@ -213,9 +213,11 @@ class Synthesizer:
         self._overlays.clear()
         return self._span
 
-    def overlay(self, n_id1: int, n_id2: int) -> tuple[NDArray[np.bool_], NDArray[np.complex64]]:
-        """(mask, values) [symbols, n]: where and what the cell's SS blocks write over the
-        pool data (dense, cached per cell)."""
+    def overlay(self, n_id1: int, n_id2: int) -> tuple[NDArray, ...]:
+        """Where and what the cell's SS blocks write over the pool data, compact (cached per
+        cell): ``(ov_row [symbols], ov_full, ov_mask, ov_val)`` as :func:`kernels.fill_grid`
+        takes them — the overlay row of each symbol (-1: none), whether it covers the whole
+        band, and its mask and values."""
         key = (int(n_id1), int(n_id2))
         if key not in self._overlays:
             sp = self._span
@@ -224,8 +226,12 @@ class Synthesizer:
                                    np.full((1, N_FFT), np.nan + 0j, dtype=np.complex64),
                                    np.zeros(sp["symbols"].size, dtype=np.int64))
             mask = ~np.isnan(marked.real) & (sp["block_of"][:, None] >= 0)
-            vals = np.where(mask, marked, 0).astype(np.complex64)
-            self._overlays[key] = (np.ascontiguousarray(mask), vals)
+            rows = np.flatnonzero(mask.any(axis=1))
+            ov_row = np.full(mask.shape[0], -1, dtype=np.int64)
+            ov_row[rows] = np.arange(rows.size)
+            ov_mask = np.ascontiguousarray(mask[rows])
+            ov_val = np.ascontiguousarray(np.where(ov_mask, marked[rows], 0).astype(np.complex64))
+            self._overlays[key] = (ov_row, ov_mask.all(axis=1), ov_mask, ov_val)
         return self._overlays[key]
 
     def draws(self, links: Links, rng: np.random.Generator) -> list[dict]:
@@ -281,17 +287,17 @@ class Synthesizer:
             n_c = int(n_cs[r])
             if n_c >= total:
                 continue
-            mask, vals = self.overlay(links.n_id1[r], links.n_id2[r])
+            ov = self.overlay(links.n_id1[r], links.n_id2[r])
             if full[r] and prof.powers.size:
                 f_lm = links.doppler_hz * np.cos(draws[r]["alpha"])
                 taps = kernels.sos_taps(amp_l, f_lm, draws[r]["phi"], t_sym)
                 taps *= np.exp(-1j * (2 * np.pi * links.f_los_hz[r] * t_sym + links.phase0[r]))[:, None]
                 h = taps.astype(np.complex64) @ self.basis
                 h += np.float32(np.sqrt(prof.los_power))
-                kernels.fill_grid(x, self.pool_band, draws[r]["pool_idx"], mask, vals, h, True,
+                kernels.fill_grid(x, self.pool_band, draws[r]["pool_idx"], *ov, h, True,
                                   ramps[r], g_syms[r], sp["long_of"], sp["long_ramp"])
             else:  # far interferer: one tap with the profile's total power, LOS Doppler
-                kernels.fill_grid(x, self.pool_band, draws[r]["pool_idx"], mask, vals, no_h, False,
+                kernels.fill_grid(x, self.pool_band, draws[r]["pool_idx"], *ov, no_h, False,
                                   ramps[r], g_syms[r], sp["long_of"], sp["long_ramp"])
             y = sfft.ifft(x, axis=1, workers=1, overwrite_x=True)
             # LOS phase e^{j(2π f t + φ0)} at receive times, applied while placing
@@ -418,12 +424,14 @@ class Correlator:
         bspec = np.stack([self.spectrum(a, b) for a, b in zip(n_id1, n_id2, strict=True)])  # [C, N]
         p = np.empty((n_c, n_b, self.n_win), dtype=np.complex64)
         kernels.cross_spectra(np.ascontiguousarray(zf, dtype=np.complex64), bspec, p)  # [C, B, N]
-        xc = sfft.ifft(p, axis=2, workers=1).reshape(n_c * n_b, self.n_win)
         p2 = p.reshape(n_c * n_b, self.n_win)  # row c·B + b
-        r, mu, sigma, eta, k_lo = kernels.magnitude_stats(xc, cfg.lags)  # one pass over |r|
-        r = r.reshape(n_c, n_b, cfg.lags)
-        mu, sigma = mu.reshape(n_c, n_b), sigma.reshape(n_c, n_b)
-        eta, k_lo = eta.reshape(n_c, n_b), k_lo.reshape(n_c, n_b)
+        # one candidate at a time: its IFFT and the pass over |r| stay in cache
+        r = np.empty((n_c, n_b, cfg.lags), dtype=np.float32)
+        mu, sigma, eta = (np.empty((n_c, n_b)) for _ in range(3))
+        k_lo = np.empty((n_c, n_b), dtype=np.int64)
+        for c in range(n_c):
+            xc = sfft.ifft(p[c], axis=1, workers=1)
+            r[c], mu[c], sigma[c], eta[c], k_lo[c] = kernels.magnitude_stats(xc, cfg.lags)
         if self.detector == "cacfar":  # [ours] local noise floor per lag
             k_lo, eta, floor_at = (a.reshape(n_c, n_b) for a in kernels.local_mean_argmax(
                 r.reshape(n_c * n_b, cfg.lags), self.ca_window, self.ca_guard))
