@@ -87,10 +87,10 @@ def test_magnitude_stats_match_numpy():
     np.testing.assert_array_equal(arg, a.argmax(axis=1))
 
 
-@pytest.mark.parametrize("window,guard", [(5, 2), (64, 4)])
-def test_local_mean_argmax_matches_a_direct_loop(window, guard):
+@pytest.mark.parametrize("window,guard,k", [(5, 2, 150), (64, 4, 150), (64, 4, 822), (64, 4, 30)])
+def test_local_mean_argmax_matches_a_direct_loop(window, guard, k):
     rng = np.random.default_rng(13)
-    r = rng.random((4, 150)).astype(np.float32)
+    r = rng.random((4, k)).astype(np.float32)
     k_best, eta, floor_at = kernels.local_mean_argmax(r, window, guard)
     k = r.shape[1]
     floor = np.empty_like(r, dtype=float)

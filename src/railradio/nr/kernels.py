@@ -156,6 +156,18 @@ def magnitude_stats(c: np.ndarray, k: int) -> tuple:
     return r, mu, sigma, eta, arg
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _clamped_floor(c: np.ndarray, j: int, k: int, window: int, guard: int) -> float:
+    """Mean of r over the window lags on each side of j beyond ``guard``, from the prefix
+    sums c, with the windows cut at 0 and k."""
+    a0 = min(max(j - guard - window, 0), k)
+    a1 = min(max(j - guard, 0), k)
+    b0 = min(max(j + guard + 1, 0), k)
+    b1 = min(max(j + guard + 1 + window, 0), k)
+    cnt = (a1 - a0) + (b1 - b0)
+    return ((c[a1] - c[a0]) + (c[b1] - c[b0])) / max(cnt, 1)
+
+
 @njit(cache=True, nogil=True)
 def local_mean_argmax(r: np.ndarray, window: int, guard: int) -> tuple:
     """Cell-averaging CFAR per row of r [R, K]: the floor at each lag (mean of r over
@@ -166,31 +178,36 @@ def local_mean_argmax(r: np.ndarray, window: int, guard: int) -> tuple:
     """
     n_r, k = r.shape
     c = np.empty(k + 1)
+    fl = np.empty(k)
+    ratio = np.empty(k)
     k_best = np.empty(n_r, dtype=np.int64)
     eta = np.empty(n_r)
     floor_at = np.empty(n_r)
+    # lags whose windows are whole on both sides: no clamping (a loop the compiler vectorizes)
+    j_lo = guard + window
+    j_hi = k - guard - window  # exclusive
+    n_full = 2 * window
     for i in range(n_r):
         c[0] = 0.0
         for j in range(k):
             c[j + 1] = c[j] + r[i, j]
+        for j in range(0, min(j_lo, k)):  # clamped windows at both edges
+            fl[j] = _clamped_floor(c, j, k, window, guard)
+        for j in range(max(j_hi, j_lo), k):
+            fl[j] = _clamped_floor(c, j, k, window, guard)
+        for j in range(j_lo, j_hi):
+            fl[j] = ((c[j - guard] - c[j - guard - window]) + (c[j + guard + 1 + window] - c[j + guard + 1])) / n_full
+        for j in range(k):
+            ratio[j] = r[i, j] / max(fl[j], 1e-30)
         best = -1.0
         bj = 0
-        bf = 1.0
         for j in range(k):
-            a0 = min(max(j - guard - window, 0), k)
-            a1 = min(max(j - guard, 0), k)
-            b0 = min(max(j + guard + 1, 0), k)
-            b1 = min(max(j + guard + 1 + window, 0), k)
-            cnt = (a1 - a0) + (b1 - b0)
-            fl = ((c[a1] - c[a0]) + (c[b1] - c[b0])) / max(cnt, 1)
-            ratio = r[i, j] / max(fl, 1e-30)
-            if ratio > best:
-                best = ratio
+            if ratio[j] > best:
+                best = ratio[j]
                 bj = j
-                bf = fl
         k_best[i] = bj
         eta[i] = r[i, bj]
-        floor_at[i] = bf
+        floor_at[i] = fl[bj]
     return k_best, eta, floor_at
 
 
