@@ -445,10 +445,13 @@ class Correlator:
             threshold = mu + cfg.detect_k_sigma * sigma
             pre = mu + cfg.prescreen_k_sigma * sigma
         cand = eta > pre
+        pre_row = np.full((n_c, n_b), -1, dtype=np.int64)  # row of pre_vals, evaluated at k_lo
+        pre_vals = np.zeros((0, self.offsets.size))
         if d > 1 and np.any(cand):  # η at full-rate lags around promising peaks
             ci, bi = np.nonzero(cand)
-            vals = self._at_offsets(p2, ci * n_b + bi, k_lo[ci, bi])
-            eta[ci, bi] = np.maximum(eta[ci, bi], vals.max(axis=1))
+            pre_vals = self._at_offsets(p2, ci * n_b + bi, k_lo[ci, bi])
+            pre_row[ci, bi] = np.arange(ci.size)
+            eta[ci, bi] = np.maximum(eta[ci, bi], pre_vals.max(axis=1))
         detected = eta > threshold
         toa = np.full(n_c, np.nan)
         aod = np.full(n_c, np.nan)
@@ -463,7 +466,14 @@ class Correlator:
             comb = r[c, det].sum(axis=0)  # seed eq. 8 (decimated lags)
             kc = int(comb.argmax())
             if d > 1:  # eq. 9 at full-rate lags d·kc - d ... d·kc + d
-                vals = self._at_offsets(p2, c * n_b + det, np.full(det.size, kc)).sum(axis=0)
+                # blocks whose own peak lag is kc were evaluated there already
+                rows = pre_row[c, det]
+                hit = (rows >= 0) & (k_lo[c, det] == kc)
+                each = np.empty((det.size, self.offsets.size))
+                each[hit] = pre_vals[rows[hit]]
+                if not hit.all():
+                    each[~hit] = self._at_offsets(p2, c * n_b + det[~hit], np.full(int((~hit).sum()), kc))
+                vals = each.sum(axis=0)
                 full = d * kc + np.round(self.offsets * d).astype(int)
             else:
                 full = np.arange(max(kc - 1, 0), min(kc + 2, cfg.lags))
