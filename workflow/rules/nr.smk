@@ -104,6 +104,9 @@ rule nr_shard:
         "results/benchmarks/nr/shard_{real}_s{shard}.tsv"
     wildcard_constraints:
         real=r"r\d+",
+    # before the tracks (which Snakemake's greedy scheduler would otherwise start first:
+    # they have the larger inputs): the long jobs first, the short ones fill the tail
+    priority: 1
     resources:
         mem_mb=3000,
         runtime=60,
