@@ -11,6 +11,7 @@ algebra; a χ² gate per RRH is an option.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 from filterpy.kalman import ExtendedKalmanFilter
@@ -152,16 +153,21 @@ class TrackerConfig:
         """Measurement variances [..., per] (AOD [rad²] then TOA [s²], as used by the
         variant) of RRHs at 2-D distances ``dist_m`` [...] [m]: the diagonal of
         :meth:`noise`, for arrays of RRHs."""
-        use_aod, use_toa = VARIANTS[self.variant]
         d = np.asarray(dist_m, float)
-        if self.distance_edges_m:
-            b = np.searchsorted(self.distance_edges_m, d)
-            sig = (([np.asarray(self.sigma_aod_bins_rad)[b]] if use_aod else [])
-                   + ([np.asarray(self.sigma_toa_bins_s)[b]] if use_toa else []))
-        else:
-            sig = (([np.full(d.shape, self.sigma_aod_rad)] if use_aod else [])
-                   + ([np.full(d.shape, self.sigma_toa_s)] if use_toa else []))
+        if not self.distance_edges_m:  # one W: the same variances for every RRH
+            return np.broadcast_to(self._variances, d.shape + self._variances.shape)
+        use_aod, use_toa = VARIANTS[self.variant]
+        b = np.searchsorted(self.distance_edges_m, d)
+        sig = (([np.asarray(self.sigma_aod_bins_rad)[b]] if use_aod else [])
+               + ([np.asarray(self.sigma_toa_bins_s)[b]] if use_toa else []))
         return np.stack(sig, axis=-1) ** 2
+
+    @cached_property
+    def _variances(self) -> NDArray[np.float64]:
+        use_aod, use_toa = VARIANTS[self.variant]
+        v = np.array(([self.sigma_aod_rad] if use_aod else []) + ([self.sigma_toa_s] if use_toa else [])) ** 2
+        v.flags.writeable = False
+        return v
 
     def pick(self, aod: NDArray, toa: NDArray) -> NDArray[np.float64]:
         use_aod, use_toa = VARIANTS[self.variant]
