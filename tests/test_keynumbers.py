@@ -57,3 +57,16 @@ def test_tex_escape_is_ascii_and_pdflatex_safe():
     assert r"e\_h\^{}2" in got and r"\~{}" in got and r"\%" in got and r"\$x\{y\}" in got
     assert r"$\sigma$" in got and r"$\Delta$" in got and r"$\to$" in got and r"$\ge$" in got
     assert r"$\Alpha$" not in got and r"$\omicron$" not in got  # no such LaTeX macros
+
+
+def test_config_macros_cover_values_lists_and_list_elements():
+    from railradio.keynumbers import config_to_latex
+
+    tex = config_to_latex({"a": {"x": 2.5, "radii_m": [20000.0, 7000.0], "phases": [[1.0, 2.0]],
+                                 "name": "TDL-D"}})
+    assert r"\@namedef{cfg@a.x}{2.5}" in tex
+    assert r"\@namedef{cfg@a.radii_m}{20000, 7000}" in tex
+    assert r"\@namedef{cfgn@a.radii_m}{2}" in tex
+    assert r"\@namedef{cfg@a.radii_m.0}{20000}" in tex and r"\@namedef{cfg@a.radii_m.1}{7000}" in tex
+    assert "cfg@a.phases.0" not in tex  # elements only for lists of scalars
+    assert r"\@namedef{cfg@a.name}{\texttt{TDL-D}}" in tex

@@ -18,10 +18,13 @@ JOB_ENV = {
     "OPENBLAS_NUM_THREADS": "1",
     "OMP_NUM_THREADS": "1",
     "MKL_NUM_THREADS": "1",
-    # keep freed memory in the heap instead of handing it back to the kernel: the jobs
-    # allocate and free burst-sized arrays thousands of times, and glibc's defaults (mmap
-    # and trim above 128 KiB) turn each into fresh page faults (benchmarks/bench_nr.py,
-    # ``malloc_*``). Results do not depend on it.
+    # keep freed memory in the heap instead of handing it back to the kernel: jobs that
+    # allocate and free multi-megabyte arrays thousands of times otherwise spend their
+    # time in page faults under glibc's adaptive mmap/trim thresholds. Measured on the nr
+    # study from nothing with the receiver of 2a1ef81, whose correlation allocated 4 MB
+    # temporaries per burst: system time 196 -> 17 s, wall 9 min 28 s -> 6 min 40 s (with
+    # 12 -> 6 shards). The current receiver allocates less and gains ~5 %
+    # (benchmarks/bench_nr.py, ``malloc_*``). Results do not depend on it.
     "GLIBC_TUNABLES": "glibc.malloc.mmap_threshold=268435456:glibc.malloc.trim_threshold=268435456",
 }
 """Environment of every workflow job (set by ``workflow/rules/common.smk``; glibc reads
