@@ -376,6 +376,7 @@ class Correlator:
         d = cfg.decimation
         # e^{j2π f δ/N} for the full-rate offsets δ = -1 ... +1 (decimated units, step 1/D)
         self.offsets = np.arange(-d, d + 1) / d
+        self.offsets_full = np.arange(-d, d + 1)  # the same offsets in full-rate samples
         theta = 2 * np.pi * np.outer(self.offsets[d:], self.freqs) / self.n_win  # δ >= 0: [d + 1, N]
         self.offset_cos_t = np.ascontiguousarray(np.cos(theta).astype(np.float32))
         self.offset_sin_t = np.ascontiguousarray(np.sin(theta).astype(np.float32))
@@ -474,7 +475,7 @@ class Correlator:
                 if not hit.all():
                     each[~hit] = self._at_offsets(p2, c * n_b + det[~hit], np.full(int((~hit).sum()), kc))
                 vals = each.sum(axis=0)
-                full = d * kc + np.round(self.offsets * d).astype(int)
+                full = d * kc + self.offsets_full
             else:
                 full = np.arange(max(kc - 1, 0), min(kc + 2, cfg.lags))
                 vals = comb[full]
