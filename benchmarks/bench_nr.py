@@ -51,10 +51,9 @@ print(json.dumps({"wall_s": t1 - t0, "user_s": r1.ru_utime - r0.ru_utime,
 def shard_run(config: str, n_epochs: int, tunables: bool) -> dict:
     """Time ``n_epochs`` bursts in a fresh process with or without the jobs' malloc
     settings (glibc reads them at process start, hence the subprocess)."""
-    env = dict(os.environ, **{k: v for k, v in JOB_ENV.items() if k != "GLIBC_TUNABLES"})
-    env.pop("GLIBC_TUNABLES", None)
-    if tunables:
-        env["GLIBC_TUNABLES"] = JOB_ENV["GLIBC_TUNABLES"]
+    env = {**os.environ, **JOB_ENV}
+    if not tunables:
+        del env["GLIBC_TUNABLES"]
     out = subprocess.run([sys.executable, "-c", _SHARD_RUN, config, str(n_epochs)], env=env,
                          check=True, capture_output=True, text=True).stdout
     return json.loads(out.strip().splitlines()[-1])

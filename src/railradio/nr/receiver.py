@@ -375,8 +375,8 @@ class Correlator:
         self.freqs = np.fft.fftfreq(self.n_win, 1.0 / self.n_win)
         d = cfg.decimation
         # e^{j2π f δ/N} for the full-rate offsets δ = -1 ... +1 (decimated units, step 1/D)
-        self.offsets = np.arange(-d, d + 1) / d
-        self.offsets_full = np.arange(-d, d + 1)  # the same offsets in full-rate samples
+        self.offsets_full = np.arange(-d, d + 1)  # full-rate samples
+        self.offsets = self.offsets_full / d
         theta = 2 * np.pi * np.outer(self.offsets[d:], self.freqs) / self.n_win  # δ >= 0: [d + 1, N]
         self.offset_cos_t = np.ascontiguousarray(np.cos(theta).astype(np.float32))
         self.offset_sin_t = np.ascontiguousarray(np.sin(theta).astype(np.float32))

@@ -43,34 +43,44 @@ def _interleave(m: NDArray) -> NDArray[np.float64]:
     return np.kron(m, np.eye(2))
 
 
+def _h_terms(dx: NDArray, dy: NDArray, dh_m: float, variant: str) -> NDArray[np.float64]:
+    """h per RRH, [..., per] (AOD [rad] then TOA [s]), from the train-minus-RRH offsets
+    dx, dy [...] [m] (seed eq. 14, 3-D range with the known height difference)."""
+    use_aod, use_toa = VARIANTS[variant]
+    out = np.empty(np.shape(dx) + (int(use_aod) + int(use_toa),))
+    if use_aod:
+        out[..., 0] = np.arctan2(dy, dx)
+    if use_toa:
+        out[..., -1] = np.sqrt(dx**2 + dy**2 + dh_m**2) / SPEED_OF_LIGHT_M_S
+    return out
+
+
+def _jac_terms(dx: NDArray, dy: NDArray, dh_m: float, variant: str) -> NDArray[np.float64]:
+    """∂h/∂(x, y) per RRH, [..., per, 2], from the offsets dx, dy [...] [m]."""
+    use_aod, use_toa = VARIANTS[variant]
+    out = np.empty(np.shape(dx) + (int(use_aod) + int(use_toa), 2))
+    if use_aod:
+        r2 = dx**2 + dy**2
+        out[..., 0, 0] = -dy / r2
+        out[..., 0, 1] = dx / r2
+    if use_toa:
+        r3 = np.sqrt(dx**2 + dy**2 + dh_m**2) * SPEED_OF_LIGHT_M_S
+        out[..., -1, 0] = dx / r3
+        out[..., -1, 1] = dy / r3
+    return out
+
+
 def hx(s: NDArray, rrh_xy: NDArray, dh_m: float, variant: str) -> NDArray[np.float64]:
     """Stacked measurement function (seed eq. 14) for RRHs at ``rrh_xy`` [n, 2]."""
-    use_aod, use_toa = VARIANTS[variant]
-    dx = s[0] - rrh_xy[:, 0]
-    dy = s[1] - rrh_xy[:, 1]
-    out = np.empty((dx.size, int(use_aod) + int(use_toa)))
-    if use_aod:
-        out[:, 0] = np.arctan2(dy, dx)
-    if use_toa:
-        out[:, -1] = np.sqrt(dx**2 + dy**2 + dh_m**2) / SPEED_OF_LIGHT_M_S
-    return out.ravel()  # [aod_0, toa_0, aod_1, toa_1, ...]
+    h = _h_terms(s[0] - rrh_xy[:, 0], s[1] - rrh_xy[:, 1], dh_m, variant)
+    return h.ravel()  # [aod_0, toa_0, aod_1, toa_1, ...]
 
 
 def jacobian(s: NDArray, rrh_xy: NDArray, dh_m: float, variant: str) -> NDArray[np.float64]:
     """Analytic ∂h/∂s at s: [n·m, 6] (only x, y enter)."""
-    use_aod, use_toa = VARIANTS[variant]
-    dx = s[0] - rrh_xy[:, 0]
-    dy = s[1] - rrh_xy[:, 1]
-    per = int(use_aod) + int(use_toa)
-    out = np.zeros((dx.size, per, 6))
-    if use_aod:
-        r2 = dx**2 + dy**2
-        out[:, 0, 0] = -dy / r2
-        out[:, 0, 1] = dx / r2
-    if use_toa:
-        r3 = np.sqrt(dx**2 + dy**2 + dh_m**2) * SPEED_OF_LIGHT_M_S
-        out[:, -1, 0] = dx / r3
-        out[:, -1, 1] = dy / r3
+    jac = _jac_terms(s[0] - rrh_xy[:, 0], s[1] - rrh_xy[:, 1], dh_m, variant)
+    out = np.zeros(jac.shape[:2] + (6,))
+    out[..., :2] = jac
     return out.reshape(-1, 6)
 
 
@@ -145,8 +155,7 @@ class TrackerConfig:
         """W for ``n`` RRHs; ``dist_m`` [n] their predicted 2-D distances [m] (used only
         with distance bins; without them the overall σ)."""
         if dist_m is None:
-            return np.diag(np.tile(TrackerConfig(self.variant, self.q, self.sigma_aod_rad,
-                                                 self.sigma_toa_s).variances(np.zeros(1))[0], n))
+            return np.diag(np.tile(self._variances, n))
         return np.diag(self.variances(np.asarray(dist_m, float).reshape(n)).ravel())
 
     def variances(self, dist_m: NDArray) -> NDArray[np.float64]:
@@ -164,6 +173,7 @@ class TrackerConfig:
 
     @cached_property
     def _variances(self) -> NDArray[np.float64]:
+        """The overall variances [per] (no distance bins)."""
         use_aod, use_toa = VARIANTS[self.variant]
         v = np.array(([self.sigma_aod_rad] if use_aod else []) + ([self.sigma_toa_s] if use_toa else [])) ** 2
         v.flags.writeable = False
@@ -209,8 +219,7 @@ def snapshot_ls_batch(rrh_xy: NDArray, aod: NDArray, toa: NDArray, dh_m: float, 
         raise ValueError("rrh_xy: every epoch needs at least one measured RRH")
     xy = np.where(valid[..., None], xy, 0.0)
     use_aod, use_toa = VARIANTS[cfg.variant]
-    per = int(use_aod) + int(use_toa)
-    n_e, m = valid.shape
+    n_e = valid.shape[0]
     p = np.asarray(x_init, float).copy()
     # weights [E, m, per] at the initial guess (0 for padding)
     dist0 = np.hypot(p[:, :1] - xy[..., 0], p[:, 1:] - xy[..., 1])
@@ -225,17 +234,8 @@ def snapshot_ls_batch(rrh_xy: NDArray, aod: NDArray, toa: NDArray, dh_m: float, 
         ok = valid[idx]
         dx = np.where(ok, p[idx, :1] - xy[idx, :, 0], 1.0)
         dy = np.where(ok, p[idx, 1:] - xy[idx, :, 1], 1.0)
-        jac = np.empty((idx.size, m, per, 2))
-        h = np.empty((idx.size, m, per))
-        if use_aod:
-            r2 = dx**2 + dy**2
-            jac[..., 0, 0], jac[..., 0, 1] = -dy / r2, dx / r2
-            h[..., 0] = np.arctan2(dy, dx)
-        if use_toa:
-            rng = np.sqrt(dx**2 + dy**2 + dh_m**2)
-            r3 = rng * SPEED_OF_LIGHT_M_S
-            jac[..., -1, 0], jac[..., -1, 1] = dx / r3, dy / r3
-            h[..., -1] = rng / SPEED_OF_LIGHT_M_S
+        jac = _jac_terms(dx, dy, dh_m, cfg.variant)
+        h = _h_terms(dx, dy, dh_m, cfg.variant)
         r = z[idx] - h
         if use_aod:
             r[..., 0] = wrap_rad(r[..., 0])
@@ -444,10 +444,9 @@ def track(ds, rrh_x: NDArray, rrh_y: float, dh_m: float, dt_s: float, cfg: Track
     # AOD/TOA closed form x_k + ρ cos θ (ρ the horizontal range)
     snap = np.full((n, 2), np.nan)
     if snapshot:
-        m = n_use
-        xy_all = np.full((n, m, 2), np.nan)
-        a_all = np.full((n, m), np.nan)
-        t_all = np.full((n, m), np.nan)
+        xy_all = np.full((n, n_use, 2), np.nan)
+        a_all = np.full((n, n_use), np.nan)
+        t_all = np.full((n, n_use), np.nan)
         for k in range(n):
             xy, a_k, t_k = pick(k, float(rrh_x[rrh[k, 0]]))  # the stored candidates are the nearest
             j = xy.shape[0]
