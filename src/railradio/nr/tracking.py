@@ -180,9 +180,15 @@ class TrackerConfig:
         return v
 
     def pick(self, aod: NDArray, toa: NDArray) -> NDArray[np.float64]:
+        """The measurement vector [aod_0, toa_0, aod_1, ...] of the variant's components."""
         use_aod, use_toa = VARIANTS[self.variant]
-        cols = ([aod] if use_aod else []) + ([toa] if use_toa else [])
-        return np.stack(cols, axis=1).ravel()
+        if not use_aod:
+            return np.array(toa, dtype=float).ravel()
+        if not use_toa:
+            return np.array(aod, dtype=float).ravel()
+        out = np.empty(2 * np.size(aod))
+        out[0::2], out[1::2] = aod, toa
+        return out
 
 
 def distances_m(s: NDArray, rrh_xy: NDArray) -> NDArray[np.float64]:
@@ -311,21 +317,28 @@ def run_ekf(rrh_xy, aod, toa, dt_s: float, dh_m: float,
         xy = np.asarray(xy, float).reshape(-1, 2)
         if xy.shape[0]:
             z = cfg.pick(np.asarray(aod_k), np.asarray(toa_k))
-            keep = np.ones(xy.shape[0], dtype=bool)
+            m_k = xy.shape[0]
+            # h, ∂h/∂s and the RRH distances at the prediction, once for the gate and the
+            # update (filterpy evaluates them at the same ekf.x: the kept RRHs' rows)
+            dx, dy = ekf.x[0] - xy[:, 0], ekf.x[1] - xy[:, 1]
+            h_all = np.zeros((m_k, per, 6))
+            h_all[..., :2] = _jac_terms(dx, dy, dh_m, cfg.variant)
+            hx_all = _h_terms(dx, dy, dh_m, cfg.variant)  # [m_k, per]
+            var_all = cfg.variances(np.hypot(dx, dy))  # [m_k, per]
+            keep = np.ones(m_k, dtype=bool)
             if cfg.gate:  # per-RRH χ² test on the predicted innovation (all RRHs at once)
-                m_k = xy.shape[0]
-                h_all = jacobian(ekf.x, xy, dh_m, cfg.variant).reshape(m_k, per, 6)
                 s_i = np.einsum("ipa,ab,iqb->ipq", h_all, ekf.P, h_all)  # H_i P H_iᵀ
-                s_i[:, np.arange(per), np.arange(per)] += cfg.variances(distances_m(ekf.x, xy))
-                r_i = res(z, hx(ekf.x, xy, dh_m, cfg.variant)).reshape(m_k, per)
+                s_i[:, np.arange(per), np.arange(per)] += var_all
+                r_i = res(z, hx_all.ravel()).reshape(m_k, per)
                 d2 = np.einsum("ip,ip->i", r_i, np.linalg.solve(s_i, r_i[..., None])[..., 0])
                 keep = d2 <= gate
-            if keep.any():
-                xs = xy[keep]
+            if keep.all():
+                h_k, hx_k, var_k, zs = h_all.reshape(-1, 6), hx_all.ravel(), var_all.ravel(), z
+            elif keep.any():
+                h_k, hx_k, var_k = h_all[keep].reshape(-1, 6), hx_all[keep].ravel(), var_all[keep].ravel()
                 zs = z[np.repeat(keep, per)]
-                ekf.update(zs, lambda s, xs=xs: jacobian(s, xs, dh_m, cfg.variant),
-                           lambda s, xs=xs: hx(s, xs, dh_m, cfg.variant),
-                           R=cfg.noise(xs.shape[0], distances_m(ekf.x, xs)),
+            if keep.any():
+                ekf.update(zs, lambda s, h_k=h_k: h_k, lambda s, hx_k=hx_k: hx_k, R=np.diag(var_k),
                            residual=res)
                 nis[k] = float(ekf.y @ np.linalg.solve(ekf.S, ekf.y))
                 used[k] = int(keep.sum())
@@ -357,12 +370,12 @@ def select_measurements(cand_rrh: NDArray, cand_ok: NDArray, cand_strength: NDAr
         i = int(np.searchsorted(rrh_x, x_pred))
         lo = max(i - n_nearest, 0)
         win = np.abs(rrh_x[lo:i + n_nearest] - x_pred)
-        near = set((lo + np.argsort(win, kind="stable")[:n_nearest]).tolist())
+        near = lo + np.argsort(win, kind="stable")[:n_nearest]
     else:  # a lost filter (far off, or NaN): the order rounding gives over all RRHs
-        near = set(np.argsort(np.abs(rrh_x - x_pred), kind="stable")[:n_nearest].tolist())
-    cols = [c for c in range(cand_rrh.size) if cand_ok[c] and int(cand_rrh[c]) in near]
-    cols.sort(key=lambda c: -cand_strength[c])
-    return np.array(cols[:n_use], dtype=np.int64)
+        near = np.argsort(np.abs(rrh_x - x_pred), kind="stable")[:n_nearest]
+    cols = np.flatnonzero(cand_ok & (cand_rrh[:, None] == near[None, :]).any(axis=1))
+    # strongest first; equal strengths keep the candidate order
+    return cols[np.argsort(-cand_strength[cols], kind="stable")[:n_use]].astype(np.int64)
 
 
 def track_setup(ds, rrh_x: NDArray, rrh_y: float, dh_m: float, cfg: TrackerConfig, strength: str, n_use: int,
