@@ -231,8 +231,14 @@ def at_offsets(p: np.ndarray, k0: np.ndarray, freq_int: np.ndarray, roots: np.nd
     for i in range(n_r):
         kk = k0[i]
         row = rows[i]
+        # roots[(freq_int[f] k0) mod N], freq_int[f] ≡ f (mod N): the index advances by k0
+        step = kk % n
+        q = 0
         for f in range(n):
-            base[f] = p[row, f] * roots[(freq_int[f] * kk) % n]
+            base[f] = p[row, f] * roots[q]
+            q += step
+            if q >= n:
+                q -= n
         for h in range(n_h):
             a_re = np.float32(0.0)
             a_im = np.float32(0.0)

