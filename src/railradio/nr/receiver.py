@@ -273,7 +273,13 @@ class Synthesizer:
         t_sym = (num.symbol_start(symbols) + sp["cps"] + n / 2) / fs + t0_s
         if draws is None:
             draws = self.draws(links, rng)
-        x = np.empty((symbols.size, n), dtype=np.complex64)
+        # symbols synthesized: all, or with no data traffic only the SS-block symbols (the
+        # others are empty: leaving them out changes no sample)
+        rows = np.flatnonzero(sp["block_of"] >= 0) if self.data_beam == "none" else np.arange(symbols.size)
+        every = rows.size == symbols.size
+        x = np.empty((rows.size, n), dtype=np.complex64)
+        long_of, starts, cps = ((sp["long_of"], sp["starts"], sp["cps"]) if every else
+                                (sp["long_of"][rows], sp["starts"][rows], sp["cps"][rows]))
         no_h = np.ones((1, 1), dtype=np.complex64)
         amp_l = np.sqrt(prof.powers / self.n_sinusoids)
         # per-RRH quantities, vectorized over RRHs: delay τ0 = (n_c - ε)/F_s is placed at
@@ -298,20 +304,24 @@ class Synthesizer:
             if n_c >= total:
                 continue
             ov = self.overlay(links.n_id1[r], links.n_id2[r])
+            pool_idx, g_r = draws[r]["pool_idx"], g_syms[r]
+            if not every:
+                ov = (ov[0][rows],) + ov[1:]
+                pool_idx, g_r = pool_idx[rows], g_r[rows]
             if full[r] and prof.powers.size:
                 f_lm = links.doppler_hz * np.cos(draws[r]["alpha"])
                 taps = kernels.sos_taps(amp_l, f_lm, draws[r]["phi"], t_sym)
                 taps *= np.exp(-1j * (2 * np.pi * links.f_los_hz[r] * t_sym + links.phase0[r]))[:, None]
                 h = taps.astype(np.complex64) @ self.basis
                 h += np.float32(np.sqrt(prof.los_power))
-                kernels.fill_grid(x, self.pool_band, draws[r]["pool_idx"], *ov, h, True,
-                                  ramps[r], g_syms[r], sp["long_of"], sp["long_ramp"])
+                kernels.fill_grid(x, self.pool_band, pool_idx, *ov, h if every else h[rows], True,
+                                  ramps[r], g_r, long_of, sp["long_ramp"])
             else:  # far interferer: one tap with the profile's total power, LOS Doppler
-                kernels.fill_grid(x, self.pool_band, draws[r]["pool_idx"], *ov, no_h, False,
-                                  ramps[r], g_syms[r], sp["long_of"], sp["long_ramp"])
+                kernels.fill_grid(x, self.pool_band, pool_idx, *ov, no_h, False,
+                                  ramps[r], g_r, long_of, sp["long_ramp"])
             y = fft_rows(x, inverse=True, out=x)
             # LOS phase e^{j(2π f t + φ0)} at receive times, applied while placing
-            kernels.place(z, y, sp["starts"], sp["cps"], n_c, 2 * np.pi * links.f_los_hz[r],
+            kernels.place(z, y, starts, cps, n_c, 2 * np.pi * links.f_los_hz[r],
                           float(t_firsts[r]), links.phase0[r], 1.0 / fs)
         if noise:
             var = links.noise_psd_w_hz * fs * links.n_chains
