@@ -40,6 +40,8 @@ def test_defaults_filled():
         (("fusion", "n_trials"), "many", ["fusion.n_trials", "integer", ">= 2"]),
         (("fusion", "clip"), "sometimes", ["fusion.clip", "no_solution"]),
         (("seed",), -3, ["seed", ">= 0"]),
+        (("nr", "sensitivity", "tracker_variants"), ["aod", "toa"],
+         ["nr.sensitivity.tracker_variants", "aod_toa"]),
     ],
 )
 def test_bad_values_name_key_and_range(path, value, must_mention):

@@ -17,6 +17,7 @@ NR_EPOCHS = (
 NR_REALS = [f"r{i}" for i in range(NR["realizations"])]
 NR_CAL_SHARDS = 2
 NR_SIM = nr_sim(NR)
+NR_VARIANTS = ["aod", "toa", "aod_toa"]  # tracker measurement variants of the main run (seed §4)
 NR_SELECTION = nr_selection(NR)
 
 # Sensitivity cases: the nr config with a case's override merged in, validated like the
@@ -153,6 +154,7 @@ rule nr_calibrate:
         sim=NR_SIM,
         tracker=NR["tracker"],
         selection=NR_SELECTION,
+        variants=NR_VARIANTS,
         code=CODE_NR_TRACK,
     log:
         "results/logs/nr/calibrate.log",
@@ -176,6 +178,7 @@ rule nr_track:
         sim=NR_SIM,
         tracker=NR["tracker"],
         selection=NR_SELECTION,
+        variants=NR_VARIANTS,
         code=CODE_NR_TRACK,
     log:
         "results/logs/nr/track_{real}.log",
@@ -305,6 +308,7 @@ rule nr_case_calibrate:
         sim=lambda w: nr_sim(NR_CASES[w.case]),
         tracker=lambda w: NR_CASES[w.case]["tracker"],
         selection=lambda w: nr_selection(NR_CASES[w.case]),
+        variants=NR_SENS.get("tracker_variants", ["aod_toa"]),
         sync=lambda w: NR_CASES[w.case].get("sync", nr_cases.NO_SYNC),
         seed=config["seed"],
         n_epochs=lambda w: NR_CASE_N_CAL[w.case],
@@ -330,6 +334,7 @@ rule nr_case_track:
         sim=lambda w: nr_sim(NR_CASES[w.case]),
         tracker=lambda w: NR_CASES[w.case]["tracker"],
         selection=lambda w: nr_selection(NR_CASES[w.case]),
+        variants=NR_SENS.get("tracker_variants", ["aod_toa"]),
         sync=lambda w: NR_CASES[w.case].get("sync", nr_cases.NO_SYNC),
         seed=config["seed"],
         n_epochs=lambda w: NR_CASE_N[w.case],

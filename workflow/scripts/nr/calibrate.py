@@ -7,7 +7,7 @@ sys.path.insert(0, str(__import__("pathlib").Path(__file__).parent))
 from common import read_shards, scenario  # noqa: E402
 
 from railradio.io import write_json  # noqa: E402
-from railradio.nr.tracking import VARIANTS, calibrate  # noqa: E402
+from railradio.nr.tracking import calibrate  # noqa: E402
 from railradio.workflow import setup_script  # noqa: E402
 
 smk = snakemake  # noqa: F821
@@ -20,7 +20,7 @@ if not smk.params.tracker.get("lever_arm", True):  # the point model: panels' le
 out = {}
 for rx in ds["receiver"].values:
     dsr = ds.sel(receiver=rx)
-    for variant in VARIANTS:
+    for variant in smk.params.variants:
         for gate in (False, True):  # each tracker calibrated as it will run
             name = f"{rx}/{variant}/{'gate' if gate else 'nogate'}"
             cfg = calibrate(dsr, variant, dep.x_m, dep.offset_m, dep.h_bs_m - dep.h_ut_m,

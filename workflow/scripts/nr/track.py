@@ -9,7 +9,7 @@ sys.path.insert(0, str(__import__("pathlib").Path(__file__).parent))
 from common import read_shards, scenario  # noqa: E402
 
 from railradio.io import write_dataset  # noqa: E402
-from railradio.nr.tracking import VARIANTS, TrackerConfig, measurement_errors, track  # noqa: E402
+from railradio.nr.tracking import TrackerConfig, measurement_errors, track  # noqa: E402
 from railradio.workflow import setup_script  # noqa: E402
 
 smk = snakemake  # noqa: F821
@@ -21,7 +21,7 @@ if not smk.params.tracker.get("lever_arm", True):  # the point model: panels' le
     ds = ds.drop_vars("train_panel_x", errors="ignore")
 cal = json.loads(open(smk.input.calibration, encoding="utf-8").read())
 receivers = [str(r) for r in ds["receiver"].values]
-variants = list(VARIANTS)
+variants = [str(v) for v in smk.params.variants]
 n = ds.sizes["epoch"]
 err = np.full((len(receivers), len(variants), 2, n), np.nan)
 snap = np.full((len(receivers), len(variants), n), np.nan)
