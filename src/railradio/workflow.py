@@ -23,8 +23,10 @@ JOB_ENV = {
     # time in page faults under glibc's adaptive mmap/trim thresholds. Measured on the nr
     # study from nothing with the receiver of 2a1ef81, whose correlation allocated 4 MB
     # temporaries per burst: system time 196 -> 17 s, wall 9 min 28 s -> 6 min 40 s (with
-    # 12 -> 6 shards). The current receiver allocates less and gains ~5 %
-    # (benchmarks/bench_nr.py, ``malloc_*``). Results do not depend on it.
+    # 12 -> 6 shards). The current receiver (ducc0 FFTs in place into reused buffers)
+    # allocates little: bench_nr's ``malloc_speedup`` was 0.89-1.00 in three runs on
+    # 2026-11-22, no gain any more, kept as a guard for jobs with large temporaries.
+    # Results do not depend on it.
     "GLIBC_TUNABLES": "glibc.malloc.mmap_threshold=268435456:glibc.malloc.trim_threshold=268435456",
 }
 """Environment of every workflow job (set by ``workflow/rules/common.smk``; glibc reads
