@@ -69,3 +69,26 @@ def test_data_beam_policies_and_geometry_bounded_window():
     k = int(np.ceil(2000.0 / SPEED_OF_LIGHT_M_S * SAMPLE_RATE_HZ))
     assert scn2.receiver.lags_full == k and all(v[1].lags_full == k for v in scn2.variants)
     assert dataclasses.replace(scn2.receiver, search_lags=None).lags_full == 6576
+
+
+def test_no_data_synthesizes_only_ss_symbols_without_changing_the_burst():
+    """data_beam="none" skips the symbols without an SS block; the burst equals the one
+    built over every symbol with an all-zero data pool ("train" with zero data), up to the
+    float32 rounding of the FFT batch."""
+    from railradio.nr.link import ShadowingMap, link_budget
+    from railradio.nr.receiver import Synthesizer
+    from railradio.nr.ssb import qpsk_pool
+
+    scn = _scenario()
+    dep = scn.deployment
+    lb = link_budget(5100.0, 80.0, dep, scn.radio, scn.rrh_array, scn.train_array,
+                     ShadowingMap(1, (0,), dep, scn.radio))
+    zero_pool = np.zeros_like(qpsk_pool(np.random.default_rng(0), 16))
+    z = {}
+    for policy in ("none", "train"):
+        syn = Synthesizer(scn.receiver, scn.profile, zero_pool, scn.n_sinusoids, scn.full_channel_range_m, policy)
+        z[policy] = syn(lb.links, None, 10.0, noise=False, draws=syn.draws(lb.links, np.random.default_rng(1)))[0]
+    scale = np.abs(z["train"]).max()
+    assert scale > 0
+    np.testing.assert_allclose(z["none"], z["train"], rtol=0, atol=1e-5 * scale)
+    assert not np.array_equal(z["none"], np.zeros_like(z["none"]))

@@ -274,7 +274,8 @@ class Synthesizer:
         if draws is None:
             draws = self.draws(links, rng)
         # symbols synthesized: all, or with no data traffic only the SS-block symbols (the
-        # others are empty: leaving them out changes no sample)
+        # others are empty; leaving them out changes the burst only by the float32 rounding
+        # of a different FFT batch, tests/nr/test_simulate.py)
         rows = np.flatnonzero(sp["block_of"] >= 0) if self.data_beam == "none" else np.arange(symbols.size)
         every = rows.size == symbols.size
         x = np.empty((rows.size, n), dtype=np.complex64)
