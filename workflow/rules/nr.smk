@@ -6,6 +6,7 @@ from railradio.nr.workflow import receiver_selection as nr_selection
 from railradio.nr.simulate import scenario_from_config
 from railradio.nr.workflow import sim_config as nr_sim
 from railradio.nr import cases as nr_cases
+from railradio.nr.tracking import VARIANTS as NR_TRACKER_VARIANTS
 
 NR = config["nr"]
 NR_SCN = scenario_from_config(NR)
@@ -17,7 +18,7 @@ NR_EPOCHS = (
 NR_REALS = [f"r{i}" for i in range(NR["realizations"])]
 NR_CAL_SHARDS = 2
 NR_SIM = nr_sim(NR)
-NR_VARIANTS = ["aod", "toa", "aod_toa"]  # tracker measurement variants of the main run (seed §4)
+NR_VARIANTS = list(NR_TRACKER_VARIANTS)  # the main run tracks every measurement variant (seed §4)
 NR_SELECTION = nr_selection(NR)
 
 # Sensitivity cases: the nr config with a case's override merged in, validated like the
@@ -308,7 +309,7 @@ rule nr_case_calibrate:
         sim=lambda w: nr_sim(NR_CASES[w.case]),
         tracker=lambda w: NR_CASES[w.case]["tracker"],
         selection=lambda w: nr_selection(NR_CASES[w.case]),
-        variants=NR_SENS.get("tracker_variants", ["aod_toa"]),
+        variants=NR_SENS.get("tracker_variants"),  # schema default: [aod_toa]
         sync=lambda w: NR_CASES[w.case].get("sync", nr_cases.NO_SYNC),
         seed=config["seed"],
         n_epochs=lambda w: NR_CASE_N_CAL[w.case],
@@ -334,7 +335,7 @@ rule nr_case_track:
         sim=lambda w: nr_sim(NR_CASES[w.case]),
         tracker=lambda w: NR_CASES[w.case]["tracker"],
         selection=lambda w: nr_selection(NR_CASES[w.case]),
-        variants=NR_SENS.get("tracker_variants", ["aod_toa"]),
+        variants=NR_SENS.get("tracker_variants"),  # schema default: [aod_toa]
         sync=lambda w: NR_CASES[w.case].get("sync", nr_cases.NO_SYNC),
         seed=config["seed"],
         n_epochs=lambda w: NR_CASE_N[w.case],

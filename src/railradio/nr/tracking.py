@@ -332,14 +332,11 @@ def run_ekf(rrh_xy, aod, toa, dt_s: float, dh_m: float,
                 r_i = res(z, hx_all.ravel()).reshape(m_k, per)
                 d2 = np.einsum("ip,ip->i", r_i, np.linalg.solve(s_i, r_i[..., None])[..., 0])
                 keep = d2 <= gate
-            if keep.all():
-                h_k, hx_k, var_k, zs = h_all.reshape(-1, 6), hx_all.ravel(), var_all.ravel(), z
-            elif keep.any():
-                h_k, hx_k, var_k = h_all[keep].reshape(-1, 6), hx_all[keep].ravel(), var_all[keep].ravel()
-                zs = z[np.repeat(keep, per)]
             if keep.any():
-                ekf.update(zs, lambda s, h_k=h_k: h_k, lambda s, hx_k=hx_k: hx_k, R=np.diag(var_k),
-                           residual=res)
+                if not keep.all():
+                    h_all, hx_all, var_all, z = h_all[keep], hx_all[keep], var_all[keep], z[np.repeat(keep, per)]
+                h_k, hx_k = h_all.reshape(-1, 6), hx_all.ravel()
+                ekf.update(z, lambda s, h=h_k: h, lambda s, hx=hx_k: hx, R=np.diag(var_all.ravel()), residual=res)
                 nis[k] = float(ekf.y @ np.linalg.solve(ekf.S, ekf.y))
                 used[k] = int(keep.sum())
                 misses = 0
