@@ -18,6 +18,9 @@ include: "workflow/rules/tunnel.smk"
 include: "workflow/rules/paper.smk"
 
 
+set_code_hashes(workflow.rules)
+
+
 rule all:
     default_target: True
     input:

@@ -34,14 +34,3 @@ def test_bad_keys_raise(bad):
 def test_bad_seed_raises():
     with pytest.raises(ValueError, match="seed"):
         make_rng(-1, (2,))
-
-
-def test_code_hash_follows_code_and_data_but_not_excluded_files():
-    from railradio.workflow import code_hash
-
-    a = code_hash("railradio.nr", exclude=("figures.py",))
-    assert a == code_hash("railradio.nr", exclude=("figures.py",))
-    assert a != code_hash("railradio.nr")  # figures.py counts unless excluded
-    assert a != code_hash("railradio.nr", exclude=("figures.py",), data=("tdl.json",))
-    with pytest.raises(ValueError, match="not found"):
-        code_hash("railradio.nope")

@@ -1,15 +1,13 @@
-"""Helpers for the Snakemake side: code fingerprints and script set-up.
+"""Helpers for the Snakemake side: the jobs' environment and script set-up.
 
 Kept free of Snakemake imports so the library stays importable without it.
 """
 
 from __future__ import annotations
 
-import hashlib
 import logging
 import signal
 import sys
-from importlib.util import find_spec
 from pathlib import Path
 
 JOB_ENV = {
@@ -31,43 +29,6 @@ JOB_ENV = {
 }
 """Environment of every workflow job (set by ``workflow/rules/common.smk``; glibc reads
 ``GLIBC_TUNABLES`` at process start, so it is set before the jobs' processes start)."""
-
-
-def code_hash(*modules: str, exclude: tuple[str, ...] = (), data: tuple[str, ...] = ()) -> str:
-    """SHA-256 (16 hex digits) of the source of the given railradio modules/subpackages.
-
-    Used as a rule ``param`` so that Snakemake re-runs a rule exactly when the library
-    code it depends on changes (it fingerprints params, not imported code).
-
-    Parameters
-    ----------
-    modules
-        Dotted names, e.g. ``"railradio.fusion"`` (all ``.py`` files below it) or
-        ``"railradio.io"`` (one file).
-    exclude
-        File names to leave out (e.g. ``("figures.py",)`` so a plot change does not
-        re-run a simulation).
-    data
-        Package data files (under ``railradio/data``) the code reads, e.g. ``("tdl.json",)``.
-    """
-    h = hashlib.sha256()
-    for mod in sorted(modules):
-        spec = find_spec(mod)
-        if spec is None or spec.origin is None:
-            raise ValueError(f"module {mod!r} not found")
-        origin = Path(spec.origin)
-        paths = sorted(origin.parent.rglob("*.py")) if origin.name == "__init__.py" else [origin]
-        for p in paths:
-            if p.name in exclude:
-                continue
-            h.update(p.name.encode())
-            h.update(p.read_bytes())
-    if data:
-        data_dir = Path(find_spec("railradio").origin).parent / "data"
-        for name in sorted(data):
-            h.update(name.encode())
-            h.update((data_dir / name).read_bytes())
-    return h.hexdigest()[:16]
 
 
 def _raise_on_sigterm(signum, frame):  # pragma: no cover - signal path

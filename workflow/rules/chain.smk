@@ -10,7 +10,6 @@ CH = config["chain"]
 CH_PARAMS = params_from_config(CH)
 CH_BATCHES = range(CH["n_batches"])
 CH_FIGURE_MAX_SIGMA_M = CH["figure_max_sigma_m"]
-CODE_CHAIN_SIM = code_hash("railradio.chain.sim", "railradio.chain.nr_error", "railradio.chain.params") + CODE_HO_SIM
 
 register_figures("chain", ["chain_success_vs_sigma"])
 KEY_NUMBER_FRAGMENTS.append("results/chain/key_numbers.json")
@@ -29,7 +28,6 @@ rule chain_shard:
         n_batches=CH["n_batches"],
         runs_per_block=HO_SWEEP["runs_per_block"],
         seed=config["seed"],
-        code=CODE_CHAIN_SIM,
     log:
         "results/logs/chain/shard_b{batch}.log",
     benchmark:
@@ -49,8 +47,6 @@ rule chain_summary:
         expand("results/chain/shards/b{batch}.nc", batch=CH_BATCHES),
     output:
         "results/chain/summary.nc",
-    params:
-        code=code_hash("railradio.chain.summary", "railradio.handover.stats"),
     log:
         "results/logs/chain/summary.log",
     resources:
@@ -73,7 +69,6 @@ rule chain_key_numbers:
         chain=CH,
         receiver=NR["imm"]["receiver"],
         figure_max_sigma_m=CH_FIGURE_MAX_SIGMA_M,
-        code=code_hash("railradio.chain.summary", "railradio.chain.nr_error", "railradio.keynumbers"),
     log:
         "results/logs/chain/key_numbers.log",
     conda:
@@ -95,7 +90,6 @@ rule chain_figure:
         png="results/figures/chain_success_vs_sigma.png",
     params:
         figure_max_sigma_m=CH_FIGURE_MAX_SIGMA_M,
-        code=code_hash("railradio.chain.figures") + CODE_PLOT,
     log:
         "results/logs/chain/figure.log",
     conda:

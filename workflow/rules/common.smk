@@ -9,8 +9,8 @@ from railradio.workflow import JOB_ENV
 for _var, _value in JOB_ENV.items():
     os.environ.setdefault(_var, _value)
 
+from railradio.codedeps import script_code_hash
 from railradio.config import load_schema, validate_config
-from railradio.workflow import code_hash
 
 validate_config(
     config, load_schema(Path(workflow.basedir) / "workflow/schemas/config.schema.yaml")
@@ -21,13 +21,19 @@ STUDY_FIGURES = {}
 KEY_NUMBER_FRAGMENTS = []
 FIGURES = []
 
-# Library fingerprints shared by every study (see railradio.workflow.code_hash).
-CODE_SHARED = code_hash("railradio.io", "railradio.rng", "railradio.constants")
-CODE_PLOT = code_hash("railradio.plotting")
-
 
 def register_figures(study, names):
     """Register a study's figures (PDF and PNG) as targets."""
     paths = [f"results/figures/{n}.{ext}" for n in names for ext in ("pdf", "png")]
     STUDY_FIGURES[study] = paths
     FIGURES.extend(paths)
+
+
+def set_code_hashes(workflow_rules):
+    """Set the ``code`` param of each scripted step to the hash of the library modules,
+    helper scripts and data files its script reaches by imports (railradio.codedeps), so a
+    step re-runs exactly when code it runs changes. Called once every step is defined."""
+    for r in workflow_rules:
+        if r.script is not None:
+            script = Path(r.basedir.join(r.script).get_path_or_uri(secret_free=True))
+            r.set_params(code=script_code_hash(script))

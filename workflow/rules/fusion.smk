@@ -14,9 +14,6 @@ from railradio.fusion.montecarlo import sweep_points
 # the sensitivity modules (issue 7) are left out: they do not change the main sweeps
 FUSION_SENS_MODULES = ("arc.py", "correlated.py", "sensitivity.py", "sensitivity_keys.py",
                        "sensitivity_figures.py")
-CODE_FUSION_SIM = code_hash(
-    "railradio.fusion", exclude=("figures.py", "keys.py") + FUSION_SENS_MODULES
-) + CODE_SHARED
 
 register_figures("fusion", [f"fusion_rmse_vs_{n}" for n in FUSION_FIGURE_SWEEP] + ["fusion_sensitivity"])
 KEY_NUMBER_FRAGMENTS.append("results/fusion/key_numbers.json")
@@ -36,7 +33,6 @@ rule fusion_point:
         point=lambda w: sweep_points(FUSION, w.sweep)[int(w.point)],
         seed=config["seed"],
         chunk_positions=FUSION["chunk_positions"],
-        code=CODE_FUSION_SIM,
     log:
         "results/logs/fusion/point_{sweep}_p{point}.log",
     benchmark:
@@ -62,7 +58,6 @@ rule fusion_sweep:
         "results/fusion/sweep_{sweep}.nc",
     params:
         sweep="{sweep}",
-        code=CODE_FUSION_SIM,
     log:
         "results/logs/fusion/sweep_{sweep}.log",
     conda:
@@ -84,7 +79,6 @@ rule fusion_figure:
         png="results/figures/fusion_rmse_vs_{name}.png",
     params:
         sweep=lambda w: FUSION_FIGURE_SWEEP[w.name],
-        code=code_hash("railradio.fusion.figures") + CODE_PLOT,
     log:
         "results/logs/fusion/figure_{name}.log",
     wildcard_constraints:
@@ -104,7 +98,6 @@ rule fusion_key_numbers:
         "results/fusion/key_numbers.json",
     params:
         sweeps=FUSION_SWEEPS,
-        code=code_hash("railradio.fusion.keys", "railradio.keynumbers"),
     log:
         "results/logs/fusion/key_numbers.log",
     conda:
@@ -117,18 +110,6 @@ rule fusion_key_numbers:
 from railradio.fusion.sensitivity import sens_points
 
 FUSION_SENS_POINTS = {kind: sens_points(FUSION, kind) for kind in ("curve", "rho")}  # validates radii
-CODE_FUSION_SENS = (
-    code_hash(
-        "railradio.fusion.arc",
-        "railradio.fusion.correlated",
-        "railradio.fusion.sensitivity",
-        "railradio.fusion.geometry",
-        "railradio.fusion.estimators",
-        "railradio.fusion.montecarlo",
-        "railradio.fusion.crlb",
-    )
-    + CODE_SHARED
-)
 
 
 rule fusion_sens_point:
@@ -139,7 +120,6 @@ rule fusion_sens_point:
         point=lambda w: FUSION_SENS_POINTS[w.kind][int(w.point)],
         seed=config["seed"],
         chunk_positions=FUSION["chunk_positions"],
-        code=CODE_FUSION_SENS,
     log:
         "results/logs/fusion/sens_point_{kind}_p{point}.log",
     benchmark:
@@ -168,7 +148,6 @@ rule fusion_sens_sweep:
         "results/sens/fusion/sweep_{kind}.nc",
     params:
         kind="{kind}",
-        code=CODE_FUSION_SENS,
     log:
         "results/logs/fusion/sens_sweep_{kind}.log",
     wildcard_constraints:
@@ -191,8 +170,6 @@ rule fusion_sens_figure:
             category="fusion",
         ),
         png="results/figures/fusion_sensitivity.png",
-    params:
-        code=code_hash("railradio.fusion.sensitivity_figures") + CODE_PLOT,
     log:
         "results/logs/fusion/sens_figure.log",
     conda:
@@ -208,8 +185,6 @@ rule fusion_sens_key_numbers:
         rho="results/sens/fusion/sweep_rho.nc",
     output:
         "results/sens/fusion/key_numbers.json",
-    params:
-        code=code_hash("railradio.fusion.sensitivity_keys", "railradio.keynumbers"),
     log:
         "results/logs/fusion/sens_key_numbers.log",
     conda:

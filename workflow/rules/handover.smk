@@ -22,12 +22,6 @@ HO_FIGURES = {
     "handover_interruption_vs_speed": "results/handover/summary.nc",
     "handover_sensitivity": "results/handover/sensitivity.nc",
 }
-CODE_HO_SIM = (
-    code_hash("railradio.handover", exclude=("figures.py", "keys.py", "summary.py", "stats.py", "reference.py",
-                                      "bounds.py"))
-    + CODE_SHARED
-)
-CODE_HO_SUMMARY = code_hash("railradio.handover.summary", "railradio.handover.stats")
 
 register_figures("handover", list(HO_FIGURES))
 KEY_NUMBER_FRAGMENTS.append("results/handover/key_numbers.json")
@@ -48,7 +42,6 @@ rule handover_cost:
         cost=HO["cost"],
         runs_per_block=HO_SWEEP["runs_per_block"],
         seed=config["seed"],
-        code=CODE_HO_SIM,
     log:
         "results/logs/handover/cost.log",
     benchmark:
@@ -77,7 +70,6 @@ rule handover_shard:
         n_batches=HO_SWEEP["n_batches"],
         runs_per_block=HO_SWEEP["runs_per_block"],
         seed=config["seed"],
-        code=CODE_HO_SIM,
     log:
         "results/logs/handover/shard_v{ho_speed}_b{batch}.log",
     benchmark:
@@ -101,7 +93,6 @@ rule handover_summary:
         dim="speed_kmh",
         groups=[v for v in HO_SPEEDS for _ in HO_BATCHES],
         policies=HO["policies"],
-        code=CODE_HO_SUMMARY,
     log:
         "results/logs/handover/summary.log",
     resources:
@@ -127,7 +118,6 @@ rule handover_sensitivity_shard:
         n_batches=1,
         runs_per_block=HO_SWEEP["runs_per_block"],
         seed=config["seed"],
-        code=CODE_HO_SIM,
     log:
         "results/logs/handover/sensitivity_{variant}_b{batch}.log",
     benchmark:
@@ -153,7 +143,6 @@ rule handover_sensitivity:
         variants=HO_VARIANTS,
         policies=HO["policies"],
         speed_kmh=float(HO_SENS["speed_kmh"]),
-        code=CODE_HO_SUMMARY,
     log:
         "results/logs/handover/sensitivity.log",
     conda:
@@ -173,8 +162,6 @@ rule handover_figure:
             category="handover",
         ),
         png="results/figures/{name}.png",
-    params:
-        code=code_hash("railradio.handover.figures") + CODE_PLOT,
     log:
         "results/logs/handover/figure_{name}.log",
     wildcard_constraints:
@@ -195,8 +182,6 @@ rule handover_key_numbers:
         "results/handover/key_numbers.json",
     params:
         sim=HO_SIM,
-        code=code_hash("railradio.handover.keys", "railradio.handover.band", "railradio.handover.bounds",
-                       "railradio.keynumbers"),
     log:
         "results/logs/handover/key_numbers.log",
     conda:

@@ -41,16 +41,6 @@ NR_SWEEPS = NR_SENS.get("sweeps", {})
 nr_cases.check_sweeps(NR_SWEEPS, NR_CASES)
 NR_CASE_N = {c: nr_cases.case_epochs(NR_CASES[c], NR_SENS) for c in NR_CASES}
 NR_CASE_N_CAL = {c: nr_cases.case_cal_epochs(NR_CASES[c], NR) for c in NR_CASES}
-CODE_NR_SIM = (
-    code_hash(
-        "railradio.nr",
-        exclude=("figures.py", "keys.py", "tracking.py", "bounds.py", "workflow.py", "cases.py",
-                 "imm.py", "smoother.py", "imm_report.py"),
-        data=("tdl.json",),
-    )
-    + CODE_SHARED
-)
-CODE_NR_TRACK = code_hash("railradio.nr.tracking") + CODE_NR_SIM
 
 register_figures(
     "nr",
@@ -81,7 +71,6 @@ rule nr_trajectory:
     params:
         sim=NR_SIM,
         n_epochs=NR_EPOCHS,
-        code=CODE_NR_SIM,
     log:
         "results/logs/nr/trajectory.log",
     conda:
@@ -99,7 +88,6 @@ rule nr_shard:
         seed=config["seed"],
         n_epochs=NR_EPOCHS,
         n_shards=NR["n_shards"],
-        code=CODE_NR_SIM,
     log:
         "results/logs/nr/shard_{real}_s{shard}.log",
     benchmark:
@@ -128,7 +116,6 @@ rule nr_cal_shard:
         seed=config["seed"],
         n_epochs=NR["calibration"]["epochs"],
         n_shards=NR_CAL_SHARDS,
-        code=CODE_NR_SIM,
     log:
         "results/logs/nr/shard_{real}_s{shard}.log",
     benchmark:
@@ -156,7 +143,6 @@ rule nr_calibrate:
         tracker=NR["tracker"],
         selection=NR_SELECTION,
         variants=NR_VARIANTS,
-        code=CODE_NR_TRACK,
     log:
         "results/logs/nr/calibrate.log",
     priority: 10
@@ -180,7 +166,6 @@ rule nr_track:
         tracker=NR["tracker"],
         selection=NR_SELECTION,
         variants=NR_VARIANTS,
-        code=CODE_NR_TRACK,
     log:
         "results/logs/nr/track_{real}.log",
     benchmark:
@@ -206,7 +191,6 @@ rule nr_bounds:
             if "robust" in NR.get("receiver_variants", {})
             else "seed/aod_toa/gate"
         ),
-        code=code_hash("railradio.nr.bounds", data=("tdl.json",)) + CODE_NR_TRACK,
     log:
         "results/logs/nr/bounds_{real}.log",
     benchmark:
@@ -225,7 +209,6 @@ rule nr_sample:
         sim=NR_SIM,
         seed=config["seed"],
         epochs=[min(2000, NR_EPOCHS - 1)],
-        code=CODE_NR_SIM,
     log:
         "results/logs/nr/sample.log",
     conda:
@@ -243,8 +226,6 @@ rule nr_figures:
         bounds=expand("results/nr/bounds/{real}.nc", real=NR_REALS),
     output:
         [report(f, caption="../report/nr.rst", category="nr") for f in STUDY_FIGURES["nr"]],
-    params:
-        code=code_hash("railradio.nr.figures") + CODE_PLOT,
     log:
         "results/logs/nr/figures.log",
     conda:
@@ -260,8 +241,6 @@ rule nr_key_numbers:
         bounds=expand("results/nr/bounds/{real}.nc", real=NR_REALS),
     output:
         "results/nr/key_numbers.json",
-    params:
-        code=code_hash("railradio.nr.keys", "railradio.keynumbers"),
     log:
         "results/logs/nr/key_numbers.log",
     conda:
@@ -282,7 +261,6 @@ rule nr_case_shard:
         seed=config["seed"],
         n_epochs=lambda w: NR_CASE_N_CAL[w.case] if w.real == "cal" else NR_CASE_N[w.case],
         n_shards=lambda w: nr_cases.case_n_shards(NR_CASES[w.case], NR, NR_SENS, w.real, NR_CAL_SHARDS),
-        code=CODE_NR_SIM,
     log:
         "results/logs/nr/cases/{case}_shard_{real}_s{shard}.log",
     benchmark:
@@ -313,7 +291,6 @@ rule nr_case_calibrate:
         sync=lambda w: NR_CASES[w.case].get("sync", nr_cases.NO_SYNC),
         seed=config["seed"],
         n_epochs=lambda w: NR_CASE_N_CAL[w.case],
-        code=CODE_NR_TRACK,
     log:
         "results/logs/nr/cases/{case}_calibrate.log",
     benchmark:
@@ -339,7 +316,6 @@ rule nr_case_track:
         sync=lambda w: NR_CASES[w.case].get("sync", nr_cases.NO_SYNC),
         seed=config["seed"],
         n_epochs=lambda w: NR_CASE_N[w.case],
-        code=CODE_NR_TRACK,
     log:
         "results/logs/nr/cases/{case}_track.log",
     benchmark:
@@ -363,7 +339,6 @@ rule nr_case_key_numbers:
         # the TOA floor of the base and of every case with RRH clock offsets
         sync_sigma_s={"base": 0.0} | {c: nr_cases.sync_sigma_s(NR_CASES[c]) for c in NR_CASES
                                       if nr_cases.sync_sigma_s(NR_CASES[c]) > 0},
-        code=code_hash("railradio.nr.keys", "railradio.keynumbers"),
     log:
         "results/logs/nr/cases/key_numbers.log",
     conda:
@@ -385,7 +360,6 @@ rule nr_case_figure:
         png="results/figures/nr_sensitivity.png",
     params:
         cases=["base"] + [c for c in NR_CASES if not any(c in sw["cases"] for sw in NR_SWEEPS.values())],
-        code=code_hash("railradio.nr.figures") + CODE_PLOT,
     log:
         "results/logs/nr/cases/figure.log",
     conda:
@@ -409,7 +383,6 @@ rule nr_case_sweeps_figure:
     params:
         sweeps=NR_SWEEPS,
         sync_sigma_s={c: nr_cases.sync_sigma_s(NR_CASES[c]) for c in NR_CASES},
-        code=code_hash("railradio.nr.figures") + CODE_PLOT,
     log:
         "results/logs/nr/cases/sweeps_figure.log",
     conda:

@@ -2,7 +2,6 @@
 # IMM (quiet + manoeuvre white-jerk models) and an RTS smoother, around the trajectory's
 # acceleration changes. Reads the nr shards and calibration; simulates nothing.
 NR_IMM = NR["imm"]
-CODE_NR_IMM = code_hash("railradio.nr.imm", "railradio.nr.smoother") + CODE_NR_TRACK
 
 register_figures("nr_imm", ["nr_imm_lag"])
 KEY_NUMBER_FRAGMENTS.append("results/nr/imm/key_numbers.json")
@@ -20,7 +19,6 @@ rule nr_imm:
         tracker=NR["tracker"],
         imm=NR_IMM,
         selection=NR_SELECTION,
-        code=CODE_NR_IMM,
     wildcard_constraints:
         real=r"r\d+",
     log:
@@ -41,7 +39,6 @@ rule nr_imm_key_numbers:
         "results/nr/imm/key_numbers.json",
     params:
         window_s=NR_IMM["window_s"],
-        code=code_hash("railradio.nr.imm_report", "railradio.nr.keys", "railradio.keynumbers"),
     log:
         "results/logs/nr/imm_key_numbers.log",
     conda:
@@ -63,7 +60,6 @@ rule nr_imm_figure:
         png="results/figures/nr_imm_lag.png",
     params:
         window_s=NR_IMM["figure_window_s"],
-        code=code_hash("railradio.nr.imm_report") + CODE_PLOT,
     log:
         "results/logs/nr/imm_figure.log",
     conda:

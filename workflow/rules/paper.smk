@@ -13,7 +13,6 @@ rule key_numbers:
         config="results/paper/config.tex",
     params:
         config=config,
-        code=code_hash("railradio.keynumbers"),
     log:
         "results/logs/paper/key_numbers.log",
     conda:

@@ -12,20 +12,6 @@ TUNNEL_VARIANTS = list(VARIANTS)
 TUNNEL_RUNS = [f"{t}/{v}" for t in TUNNEL_TRAINS for v in TUNNEL_VARIANTS]
 TUNNEL_CHANNEL_KEYS = ["geometry", "cable", "wall", "rays", "seed_model"]
 TUNNEL_CHANNEL = {k: TUNNEL[k] for k in TUNNEL_CHANNEL_KEYS}
-CODE_TUNNEL_CHANNEL = (
-    code_hash(
-        "railradio.tunnel.geometry",
-        "railradio.tunnel.materials",
-        "railradio.tunnel.rays",
-        "railradio.tunnel.channel",
-        "railradio.tunnel.study",
-    )
-    + CODE_SHARED
-)
-CODE_TUNNEL_RUN = (
-    code_hash("railradio.tunnel.positioning", "railradio.tunnel.tracking", "railradio.tunnel.simulate")
-    + CODE_TUNNEL_CHANNEL
-)
 TUNNEL_FIGURE_NAMES = [
     "tunnel_rssi_map",
     "tunnel_delay_spread",
@@ -46,7 +32,6 @@ rule tunnel_table:
     params:
         cfg=lambda w: channel_config(TUNNEL, w.name, TUNNEL_CHANNEL_KEYS),
         seed=config["seed"],
-        code=CODE_TUNNEL_CHANNEL,
     wildcard_constraints:
         name="|".join(TABLES),
     log:
@@ -70,7 +55,6 @@ rule tunnel_map:
         "results/tunnel/map_{name}.nc",
     params:
         cfg=lambda w: channel_config(TUNNEL, w.name, TUNNEL_CHANNEL_KEYS) | {"coverage": TUNNEL["coverage"]},
-        code=CODE_TUNNEL_CHANNEL,
     wildcard_constraints:
         name="|".join(TABLES),
     log:
@@ -92,7 +76,6 @@ rule tunnel_engines:
         "results/tunnel/engines.nc",
     params:
         cfg=TUNNEL_CHANNEL,
-        code=CODE_TUNNEL_CHANNEL,
     log:
         "results/logs/tunnel/engines.log",
     benchmark:
@@ -115,7 +98,6 @@ rule tunnel_run:
         cfg=lambda w: TUNNEL_CHANNEL
         | {k: TUNNEL[k] for k in ("measurement", "trains", "positioning", "tracking", "realizations")},
         seed=config["seed"],
-        code=CODE_TUNNEL_RUN,
     wildcard_constraints:
         train="metro|hst|freight",
         variant="|".join(VARIANTS),
@@ -144,7 +126,6 @@ rule tunnel_sensitivity:
         cfg=TUNNEL_CHANNEL
         | {k: TUNNEL[k] for k in ("measurement", "trains", "positioning", "tracking", "realizations", "sensitivity")},
         seed=config["seed"],
-        code=CODE_TUNNEL_RUN,
     wildcard_constraints:
         train="metro|hst|freight",
     log:
@@ -169,7 +150,6 @@ rule tunnel_peak_bias:
         "results/tunnel/peak_bias.nc",
     params:
         cfg=TUNNEL_CHANNEL | {"measurement": TUNNEL["measurement"]},
-        code=CODE_TUNNEL_RUN,
     log:
         "results/logs/tunnel/peak_bias.log",
     benchmark:
@@ -201,7 +181,6 @@ rule tunnel_figures:
         tables=TUNNEL_TABLES,
         runs=TUNNEL_RUNS,
         names=TUNNEL_FIGURE_NAMES,
-        code=code_hash("railradio.tunnel.figures") + CODE_PLOT,
     log:
         "results/logs/tunnel/figures.log",
     conda:
@@ -224,7 +203,6 @@ rule tunnel_sens_figure:
     params:
         sensitivity=TUNNEL["sensitivity"],
         trains=TUNNEL_TRAINS,
-        code=code_hash("railradio.tunnel.figures") + CODE_PLOT,
     log:
         "results/logs/tunnel/sens_figure.log",
     conda:
@@ -250,7 +228,6 @@ rule tunnel_key_numbers:
         tables=TUNNEL_TABLES,
         runs=TUNNEL_RUNS,
         trains=TUNNEL_TRAINS,
-        code=code_hash("railradio.tunnel.keys", "railradio.tunnel.materials", "railradio.keynumbers"),
     log:
         "results/logs/tunnel/key_numbers.log",
     conda:

@@ -1,0 +1,170 @@
+"""The library code a workflow script runs, found by reading imports (no execution).
+
+Snakemake re-runs a rule when its script changes, not when a module the script imports
+changes. :func:`script_code_hash` closes that gap: it walks the script's ``import``
+statements (its abstract syntax tree) transitively through ``railradio`` and through the
+helper modules beside the script, and hashes every file reached. The workflow sets the
+hash as each rule's ``code`` param, so a rule re-runs exactly when code it runs changes.
+
+What counts as reached, from a file F:
+
+* every ``import railradio.x`` / ``from railradio.x import y`` anywhere in F (also inside
+  functions: a conditional import is counted, which can only re-run a rule too often);
+  ``y`` counts when it is a module; a module's parent packages (their ``__init__.py``)
+  count, because importing the module runs them;
+* for a workflow script, ``import helper`` of a ``helper.py`` beside it (or, failing that,
+  in exactly one other script directory), and a string literal naming a sibling script
+  (``"track.py"``, run through :mod:`runpy`);
+* a package data file (``railradio/data/<name>``) whose name appears as a string literal.
+
+Third-party modules are not followed: their versions are pinned by ``constraints.txt``.
+"""
+
+from __future__ import annotations
+
+import ast
+import hashlib
+from functools import lru_cache
+from pathlib import Path
+
+PACKAGE = "railradio"
+SRC_ROOT = Path(__file__).resolve().parent
+"""The ``railradio`` package directory."""
+DATA_DIR = SRC_ROOT / "data"
+
+
+def module_path(name: str, root: Path = SRC_ROOT) -> Path | None:
+    """The file of ``railradio`` module ``name`` (a package: its ``__init__.py``), or None."""
+    parts = name.split(".")
+    if parts[0] != PACKAGE:
+        return None
+    base = root.joinpath(*parts[1:])
+    if (base / "__init__.py").is_file():
+        return base / "__init__.py"
+    if base.with_suffix(".py").is_file():
+        return base.with_suffix(".py")
+    return None
+
+
+def _parents(name: str) -> list[str]:
+    parts = name.split(".")
+    return [".".join(parts[:i]) for i in range(1, len(parts))]
+
+
+def _facts(path: Path) -> tuple[tuple[str, ...], frozenset[str]]:
+    """(dotted names imported, string literals) of one file, cached while it is unchanged."""
+    st = path.stat()
+    return _facts_cached(path, st.st_mtime_ns, st.st_size)
+
+
+@lru_cache(maxsize=None)
+def _facts_cached(path: Path, mtime_ns: int, size: int) -> tuple[tuple[str, ...], frozenset[str]]:  # noqa: ARG001
+    names: list[str] = []
+    strings: set[str] = set()
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"), filename=str(path))):
+        if isinstance(node, ast.Import):
+            names += [a.name for a in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                raise ValueError(f"{path}: relative imports are not supported (use railradio.…)")
+            mod = node.module or ""
+            names += [mod] + [f"{mod}.{a.name}" for a in node.names]
+        elif isinstance(node, ast.Constant) and isinstance(node.value, str) and len(node.value) < 256:
+            strings.add(node.value)
+    return tuple(names), frozenset(strings)
+
+
+def _helper(name: str, local_dirs: tuple[Path, ...]) -> Path | None:
+    """The helper file ``name`` (e.g. ``common.py``): in the first directory of
+    ``local_dirs`` (the script's own) or, failing that, in exactly one of the others."""
+    if name in _file_names(local_dirs[0], ".py"):
+        return local_dirs[0] / name
+    found = [d / name for d in local_dirs[1:] if name in _file_names(d, ".py")]
+    if len(found) > 1:
+        raise ValueError(f"helper {name!r} is ambiguous: {[str(f) for f in found]}")
+    return found[0] if found else None
+
+
+def _references(path: Path, local_dirs: tuple[Path, ...] | None, root: Path) -> tuple[set[str], set[Path]]:
+    """(railradio modules, helper files) that ``path`` refers to.
+
+    ``local_dirs``: for a workflow script, its directory and then the other script
+    directories, whose ``*.py`` files are helpers (None for library modules, which import
+    only ``railradio``)."""
+    modules: set[str] = set()
+    local: set[Path] = set()
+    names, strings = _facts(path)
+    if local_dirs is not None:  # a sibling script run by name (runpy)
+        local |= {local_dirs[0] / v for v in strings & _file_names(local_dirs[0], ".py")}
+    for n in names:
+        if module_path(n, root) is not None:
+            modules.add(n)
+            modules.update(_parents(n))
+        elif local_dirs is not None and "." not in n and (h := _helper(f"{n}.py", local_dirs)):
+            local.add(h)
+    return modules, local
+
+
+@lru_cache(maxsize=None)
+def _file_names(directory: Path, suffix: str = "") -> frozenset[str]:
+    return frozenset(p.name for p in directory.iterdir() if p.is_file() and p.name.endswith(suffix))
+
+
+def _data_files(path: Path, root: Path) -> set[Path]:
+    data = root / "data"
+    names = _file_names(data) if data.is_dir() else frozenset()
+    return {data / v for v in _facts(path)[1] & names}
+
+
+def script_closure(script: str | Path, root: Path = SRC_ROOT) -> dict[str, Path]:
+    """Every file ``script`` runs or reads from this repository, by a stable name.
+
+    Names: ``railradio.x.y`` for library modules, ``data/<file>`` for package data,
+    ``local/<dir>/<file>.py`` for helper scripts (the script itself excluded: Snakemake
+    tracks it). ``root``: the ``railradio`` package directory to resolve against.
+    """
+    script = Path(script).resolve()
+    if not script.is_file():
+        raise ValueError(f"script {str(script)!r} not found")
+    others = sorted(d for d in script.parent.parent.iterdir() if d.is_dir() and d != script.parent)
+    local_dirs = (script.parent, *others)
+    out: dict[str, Path] = {}
+    todo_local = [script]
+    seen_local: set[Path] = set()
+    modules: set[str] = set()
+    while todo_local:  # the script and its sibling helpers
+        f = todo_local.pop()
+        if f in seen_local:
+            continue
+        seen_local.add(f)
+        if f != script:
+            out[f"local/{f.relative_to(script.parent.parent)}"] = f
+        mods, local = _references(f, local_dirs, root)
+        modules |= mods
+        todo_local.extend(local - seen_local)
+    todo = sorted(modules)
+    seen: set[str] = set()
+    while todo:  # the library, transitively
+        name = todo.pop()
+        if name in seen:
+            continue
+        seen.add(name)
+        path = module_path(name, root)
+        out[name] = path
+        mods, _ = _references(path, None, root)
+        todo.extend(mods - seen)
+    for path in list(out.values()):
+        for d in _data_files(path, root):
+            out[f"data/{d.name}"] = d
+    return dict(sorted(out.items()))
+
+
+def script_code_hash(script: str | Path, root: Path = SRC_ROOT) -> str:
+    """SHA-256 (16 hex digits) over the names and bytes of :func:`script_closure`."""
+    h = hashlib.sha256()
+    for name, path in script_closure(script, root).items():
+        h.update(name.encode())
+        h.update(b"\0")
+        h.update(path.read_bytes())
+        h.update(b"\0")
+    return h.hexdigest()[:16]

@@ -1,0 +1,180 @@
+"""Code hashes derived from imports: every rule re-runs exactly when code its script runs
+changes (railradio.codedeps), checked over every rule and every library module."""
+from __future__ import annotations
+
+import json
+import os
+import re
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from railradio.codedeps import script_closure, script_code_hash
+
+from .conftest import ROOT, copy_workflow
+
+SCRIPTS = sorted((ROOT / "workflow/scripts").glob("*/*.py"))
+LIBRARY = sorted(p for p in (ROOT / "src/railradio").rglob("*.py") if "__pycache__" not in p.parts)
+
+
+def rule_scripts() -> dict[str, Path]:
+    """rule name -> script, read from the rule files (independently of Snakemake)."""
+    out = {}
+    for smk in sorted((ROOT / "workflow/rules").glob("*.smk")):
+        text = smk.read_text()
+        for m in re.finditer(r"^rule (\w+):\n(.*?)(?=^rule |\Z)", text, flags=re.M | re.S):
+            s = re.search(r'^\s+script:\s*\n\s+"([^"]+)"', m.group(2), flags=re.M)
+            if s:
+                out[m.group(1)] = (smk.parent / s.group(1)).resolve()
+    return out
+
+
+def _dynamic_closure(scripts: list[Path]) -> dict[str, list[str]]:
+    """What importing each script's imports really loads: in a child process per script
+    (forked after the third-party packages are imported), the script's import statements
+    (and its ``sys.path`` set-up) are executed and the railradio modules and helper files
+    in ``sys.modules`` listed."""
+    prog = r'''
+import ast, json, os, sys
+import numpy, scipy, xarray, numba, matplotlib, filterpy, pandas, h5netcdf  # noqa: F401
+out = {}
+for script in sys.argv[1:]:
+    r, w = os.pipe()
+    pid = os.fork()
+    if pid == 0:
+        try:
+            os.close(r)
+            here = os.path.dirname(script)
+            top = os.path.dirname(here)
+            sys.path.insert(0, here)
+            before = set(sys.modules)
+            tree = ast.parse(open(script).read())
+            imports = [n for n in tree.body if isinstance(n, (ast.Import, ast.ImportFrom))
+                       or (isinstance(n, ast.Expr) and "sys.path" in ast.unparse(n))]
+            exec(compile(ast.Module(body=imports, type_ignores=[]), script, "exec"), {"__file__": script})
+            got = []
+            for name, mod in sys.modules.items():
+                f = getattr(mod, "__file__", None) or ""
+                if name.startswith("railradio"):
+                    got.append(name)
+                elif name not in before and f and os.path.dirname(os.path.dirname(os.path.abspath(f))) == top:
+                    got.append("local/" + os.path.relpath(os.path.abspath(f), top))
+            os.write(w, json.dumps(sorted(got)).encode())
+        except BaseException as exc:
+            os.write(w, json.dumps({"error": repr(exc)}).encode())
+        finally:
+            os._exit(0)
+    os.close(w)
+    data = b""
+    while chunk := os.read(r, 65536):
+        data += chunk
+    os.waitpid(pid, 0)
+    out[script] = json.loads(data)
+print(json.dumps(out))
+'''
+    env = {**os.environ, "PYTHONPATH": str(ROOT / "src"), "MPLBACKEND": "Agg"}
+    run = subprocess.run([sys.executable, "-c", prog, *map(str, scripts)], env=env, capture_output=True,
+                         text=True, check=False, timeout=600)
+    assert run.returncode == 0, run.stderr[-3000:]
+    out = json.loads(run.stdout.splitlines()[-1])
+    errors = {s: v["error"] for s, v in out.items() if isinstance(v, dict)}
+    assert not errors, errors
+    return out
+
+
+def test_every_rule_has_a_script_and_every_script_a_rule_or_a_user():
+    rules = rule_scripts()
+    assert len(rules) >= 40
+    assert all(p.is_file() for p in rules.values()), rules
+    used = set(rules.values())
+    for s in SCRIPTS:  # a script no rule names is a helper another script imports or runs
+        if s not in used:
+            assert any(f"local/{s.parent.name}/{s.name}" in script_closure(u) for u in used), s
+
+
+def test_static_closure_contains_everything_the_imports_load():
+    """The AST walk is conservative: each module or helper a script's imports really load
+    is in its closure (a miss would leave a stale result)."""
+    dynamic = _dynamic_closure(SCRIPTS)
+    for s in SCRIPTS:
+        static = set(script_closure(s))
+        missing = set(dynamic[str(s)]) - static
+        assert not missing, (s.name, sorted(missing))
+
+
+def test_changing_a_module_changes_exactly_the_hashes_of_the_rules_that_run_it(tmp_path):
+    """For every library module, helper script and data file: appending to it changes the
+    code hash of exactly the rules whose script reaches it (and nothing else)."""
+    src = tmp_path / "src"
+    shutil.copytree(ROOT / "src/railradio", src / "railradio", ignore=shutil.ignore_patterns("__pycache__"))
+    shutil.copytree(ROOT / "workflow/scripts", tmp_path / "scripts")
+    root = src / "railradio"
+    rules = {r: tmp_path / "scripts" / p.relative_to(ROOT / "workflow/scripts") for r, p in rule_scripts().items()}
+    closures = {r: script_closure(s, root) for r, s in rules.items()}
+    base = {r: script_code_hash(s, root) for r, s in rules.items()}
+    files = sorted(root.rglob("*.py")) + sorted((root / "data").iterdir()) + sorted(
+        p for p in (tmp_path / "scripts").glob("*/*.py") if p not in rules.values())
+    reached = set()
+    for f in files:
+        original = f.read_bytes()
+        f.write_bytes(original + (b"\n# edited\n" if f.suffix == ".py" else b"\n"))
+        try:
+            changed = {r for r, s in rules.items() if script_code_hash(s, root) != base[r]}
+        finally:
+            f.write_bytes(original)
+        expect = {r for r, c in closures.items() if f in c.values()}
+        assert changed == expect, (str(f.relative_to(tmp_path)), sorted(changed ^ expect))
+        reached |= changed
+    assert reached == set(rules)  # every rule depends on some code
+    assert {r: script_code_hash(s, root) for r, s in rules.items()} == base  # restored
+
+
+@pytest.mark.parametrize(
+    ("module", "rules"),
+    [  # the stale results found by an independent audit: each must re-run now
+        ("railradio.nr.keys", {"nr_figures", "nr_imm_figure"}),
+        ("railradio.nr.bounds", {"nr_imm"}),
+        ("railradio.plotting", {"nr_imm_key_numbers"}),
+        ("railradio.nr.tracking", {"nr_case_track", "nr_case_calibrate", "nr_track", "nr_calibrate"}),
+    ],
+)
+def test_known_dependencies_are_found(module, rules):
+    scripts = rule_scripts()
+    for r in rules:
+        assert module in script_closure(scripts[r]), (module, r)
+
+
+def test_a_plot_change_reruns_no_simulation():
+    scripts = rule_scripts()
+    for r in ("fusion_point", "nr_shard", "handover_shard", "tunnel_run", "chain_shard"):
+        names = script_closure(scripts[r])
+        assert not any(n.endswith(("figures", "plotting")) for n in names), (r, names)
+
+
+def test_the_workflow_sets_each_rule_hash_from_its_script(tmp_path):
+    """Every scripted rule of the loaded workflow carries ``code = script_code_hash(script)``
+    (read from Snakemake's own rule objects after the Snakefile is parsed)."""
+    wd = copy_workflow(tmp_path)
+    (wd / "probe.smk").write_text(
+        'include: "Snakefile"\n'
+        "import json as _json\n"
+        "print('PROBE' + _json.dumps({r.name: [getattr(r.params, 'code', None), r.script]"
+        " for r in workflow.rules}))\n")
+    env = {**os.environ, "PYTHONPATH": str(wd / "src")}
+    run = subprocess.run([str(Path(sys.executable).parent / "snakemake"), "-s", "probe.smk", "-n", "-q",
+                          "rules", "--workflow-profile", "workflow/profiles/default", "all"],
+                         cwd=wd, env=env, capture_output=True, text=True, check=False, timeout=300)
+    assert run.returncode == 0, run.stderr[-2000:]
+    line = next(x for x in run.stdout.splitlines() if x.startswith("PROBE"))
+    loaded = json.loads(line[len("PROBE"):])
+    assert set(loaded) >= set(rule_scripts())
+    for name, (code, script) in loaded.items():
+        if script is None:
+            assert code is None, name
+            continue
+        path = (wd / "workflow/rules" / script).resolve()
+        assert code == script_code_hash(path, wd / "src/railradio"), name
+    assert not re.search(r"(?<!script_)code_hash\(", "".join(p.read_text() for p in (ROOT / "workflow/rules").glob("*.smk")))
