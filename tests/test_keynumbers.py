@@ -41,12 +41,33 @@ def test_latex_macros_and_claims():
     assert r"\kn{" not in claims_table({"k": KeySpec("k", "m", "x").entry(1.0)}, with_source_only=True)
 
 
-def test_compare_uses_monte_carlo_errors():
+def test_statistical_comparison_uses_monte_carlo_errors():
     ref = {"k": {"value": 10.0, "mc_stderr": 0.1}}
-    assert compare({"k": {"value": 10.3, "mc_stderr": 0.1}}, ref) == []  # 2.1 sigma
-    assert compare({"k": {"value": 10.7, "mc_stderr": 0.1}}, ref)  # 4.9 sigma
+    assert compare({"k": {"value": 10.3, "mc_stderr": 0.1}}, ref, mode="statistical") == []  # 2.1 sigma
+    assert compare({"k": {"value": 10.7, "mc_stderr": 0.1}}, ref, mode="statistical")  # 4.9 sigma
     assert compare({}, ref) == ["k: missing from the new numbers"]
     assert compare({"k": {"value": 10.0}}, {"k": {"value": 10.0}}) == []
+
+
+def test_reproduction_is_judged_by_the_precision_of_the_path_not_the_monte_carlo_error():
+    """Same config and seed: the Monte Carlo error does not widen the tolerance; a key with
+    a float32 stage (nr.*) is allowed 1e-5 relative, a float64 key 1e-9, never 1e-9 for
+    float32."""
+    from railradio.keynumbers import REL_TOL_FLOAT32, REL_TOL_FLOAT64, rel_tol, tolerance
+
+    ref = {"k": {"value": 10.0, "mc_stderr": 0.1}}
+    assert compare({"k": {"value": 10.3, "mc_stderr": 0.1}}, ref)  # 2 sigma is not rounding
+    assert compare({"k": {"value": 10.0 + 5e-9}}, ref) == []
+    assert compare({"k": {"value": 10.0 + 5e-8}}, ref)
+    nr = {"nr.track.x": {"value": 10.0}}
+    assert compare({"nr.track.x": {"value": 10.0 + 5e-5}}, nr) == []
+    assert compare({"nr.track.x": {"value": 10.0 + 5e-4}}, nr)
+    assert rel_tol("sens.nr.base.seed.x") == rel_tol("chain.nr_ekf.err_m.rms") == REL_TOL_FLOAT32
+    assert rel_tol("chain.joint.success.sigma0") == rel_tol("handover.a3.success.v350") == REL_TOL_FLOAT64
+    assert REL_TOL_FLOAT32 > 1e3 * REL_TOL_FLOAT64
+    assert tolerance("k", {"value": 0.0}, {"value": 0.0}) > 0  # an absolute floor at zero
+    with pytest.raises(ValueError, match="mode"):
+        compare({"k": {"value": 1.0}}, {"k": {"value": 1.0}}, mode="exact")
 
 
 def test_tex_escape_is_ascii_and_pdflatex_safe():

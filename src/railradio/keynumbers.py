@@ -217,13 +217,50 @@ def claims_table(numbers: Mapping[str, Any], prefixes: Iterable[str] | None = No
     return "\n".join(head + rows + tail) + "\n"
 
 
-def compare(ours: Mapping[str, Any], reference: Mapping[str, Any], n_sigma: float = 4.0,
-            rel_tol: float = 1e-9) -> list[str]:
-    """Differences between two key-number sets, as messages (empty when they agree).
+FLOAT32_PREFIXES = ("nr.", "sens.nr.", "chain.nr_")
+"""Keys whose computation passes through float32 arithmetic: the nr receiver synthesizes
+and correlates in single precision, and everything built on its estimates (the nr
+tracks, bounds calibrated on them, the sensitivity cases, the chain's nr input) inherits
+its rounding. Every other key is computed in float64 throughout."""
 
-    Two values agree when ``|a - b| <= n_sigma * sqrt(se_a**2 + se_b**2) + rel_tol*|b|``,
-    with ``se`` the entries' Monte Carlo standard errors (0 where absent).
+REL_TOL_FLOAT64 = 1e-9
+"""Relative tolerance of a key computed in float64 throughout (~10⁷ ulp: sums of up to
+10⁷ terms in another order)."""
+REL_TOL_FLOAT32 = 1e-5
+"""Relative tolerance of a key with a float32 stage (~100 float32 ulp)."""
+ABS_TOL = 1e-12
+"""Absolute floor, for values that are zero in one set (in the key's unit)."""
+
+
+def rel_tol(name: str) -> float:
+    """The relative tolerance of key ``name`` by the precision of its computation."""
+    return REL_TOL_FLOAT32 if name.startswith(FLOAT32_PREFIXES) else REL_TOL_FLOAT64
+
+
+def tolerance(name: str, ours: Mapping[str, Any], reference: Mapping[str, Any],
+              mode: str = "reproduce", n_sigma: float = 4.0) -> float:
+    """How far two values of key ``name`` may differ (the rule in ``config/README.md``).
+
+    ``mode="reproduce"``: the two sets come from the same config and seed, hence the same
+    random draws; they may differ only by rounding, so the tolerance is the precision
+    floor ``rel_tol(name)·|b| + ABS_TOL`` and the Monte Carlo error does not enter.
+    ``mode="statistical"``: the sets come from different draws (another scale, another
+    seed); the tolerance adds ``n_sigma`` combined Monte Carlo standard errors.
     """
+    if mode not in ("reproduce", "statistical"):
+        raise ValueError(f"mode must be 'reproduce' or 'statistical', got {mode!r}")
+    b = reference["value"]
+    tol = rel_tol(name) * abs(b) + ABS_TOL
+    if mode == "statistical":
+        tol += n_sigma * math.hypot(ours.get("mc_stderr") or 0.0, reference.get("mc_stderr") or 0.0)
+    return tol
+
+
+def compare(ours: Mapping[str, Any], reference: Mapping[str, Any], mode: str = "reproduce",
+            n_sigma: float = 4.0) -> list[str]:
+    """Differences between two key-number sets, as messages (empty when they agree):
+    missing or new keys, a value where the other has none, and values farther apart
+    than :func:`tolerance`."""
     msgs = []
     for name in sorted(set(ours) | set(reference)):
         if name not in ours:
@@ -237,28 +274,31 @@ def compare(ours: Mapping[str, Any], reference: Mapping[str, Any], n_sigma: floa
             if a is not b:
                 msgs.append(f"{name}: {a!r} vs reference {b!r}")
             continue
-        se = math.hypot(ours[name].get("mc_stderr") or 0.0, reference[name].get("mc_stderr") or 0.0)
-        tol = n_sigma * se + rel_tol * abs(b)
+        tol = tolerance(name, ours[name], reference[name], mode, n_sigma)
         if abs(a - b) > tol:
             msgs.append(f"{name}: {a!r} vs reference {b!r} (|diff| {abs(a - b):.3g} > tol {tol:.3g})")
     return msgs
 
 
 def main(argv: list[str] | None = None) -> int:
-    """``python -m railradio.keynumbers NEW.json REFERENCE.json``: report differences."""
+    """``python -m railradio.keynumbers NEW.json REFERENCE.json``: report differences
+    (exit status 1 when there are any)."""
     import argparse
     import json
 
     ap = argparse.ArgumentParser(description=main.__doc__)
     ap.add_argument("new")
     ap.add_argument("reference")
+    ap.add_argument("--mode", choices=("reproduce", "statistical"), default="reproduce",
+                    help="reproduce: same config and seed (precision floors only); statistical: "
+                         "different draws (adds --n-sigma Monte Carlo errors)")
     ap.add_argument("--n-sigma", type=float, default=4.0)
     args = ap.parse_args(argv)
     with open(args.new, encoding="utf-8") as fh:
         new = json.load(fh)
     with open(args.reference, encoding="utf-8") as fh:
         ref = json.load(fh)
-    msgs = compare(new, ref, n_sigma=args.n_sigma)
+    msgs = compare(new, ref, mode=args.mode, n_sigma=args.n_sigma)
     for m in msgs:
         print(m)
     print(f"{len(ref)} reference key numbers, {len(msgs)} difference(s)")

@@ -113,9 +113,9 @@ def test_at_offsets_is_the_band_limited_interpolant():
     k0 = np.array([0, 17, 63])
     rows = np.array([2, 0, 1])  # rows of p, in any order
     theta = 2 * np.pi * np.outer(offsets[d:], freqs) / n  # the non-negative offsets
-    got = kernels.at_offsets(p, k0, np.round(freqs).astype(np.int64),
-                             np.exp(2j * np.pi * np.arange(n) / n).astype(np.complex64),
-                             np.cos(theta).astype(np.float32), np.sin(theta).astype(np.float32), rows)
+    cs_t = np.concatenate([np.cos(theta), np.sin(theta)]).T.astype(np.float32)
+    got = kernels.at_offsets(p, k0, np.exp(2j * np.pi * np.arange(n) / n).astype(np.complex64),
+                             np.ascontiguousarray(cs_t), rows)
     lam = k0[:, None] + offsets[None, :]  # [3, J]
     want = np.abs(np.einsum("rf,rjf->rj", p[rows], np.exp(2j * np.pi * lam[:, :, None] * freqs / n))) / n
     np.testing.assert_allclose(got, want, rtol=1e-4)

@@ -4,7 +4,8 @@ from pathlib import Path
 
 from railradio.workflow import JOB_ENV
 
-# One BLAS thread per job and a heap that keeps freed memory (railradio.workflow.JOB_ENV);
+# One BLAS thread per job, a heap that keeps freed memory, and NumPy's and OpenBLAS's code
+# paths pinned so that the arithmetic does not depend on the CPU (railradio.workflow.JOB_ENV);
 # the jobs' processes inherit it. A value already in the environment wins.
 for _var, _value in JOB_ENV.items():
     os.environ.setdefault(_var, _value)
