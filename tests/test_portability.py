@@ -28,6 +28,7 @@ from .conftest import COMMAND_TIMEOUT_S, ROOT, copy_workflow, smk, workflow_env
 NR_SLICE = ("results/nr/key_numbers.json", "results/nr/imm/key_numbers.json")
 
 
+@pytest.mark.slow
 def test_generic_cpu_build_of_the_kernels_gives_the_same_nr_numbers(ci_run, tmp_path):
     """The nr study at CI scale with numba compiling for a generic x86-64 CPU, at -j1,
     against the session's host build at -j2: the key numbers agree within the
@@ -39,11 +40,13 @@ def test_generic_cpu_build_of_the_kernels_gives_the_same_nr_numbers(ci_run, tmp_
                             "repr(config.CPU_FEATURES))"], env=env, capture_output=True, text=True,
                            check=True, timeout=COMMAND_TIMEOUT_S)
     assert probe.stdout.split()[:2] == ["generic", "''"], probe.stdout  # no host features
+    n_keys = 0
     for frag in NR_SLICE:
         ours, host = (json.loads((d / frag).read_text()) for d in (wd, ci_run))
-        assert len(ours) > 20
+        n_keys += len(ours)
         msgs = compare(ours, host, mode="reproduce")
         assert msgs == [], "\n".join(msgs)
+    assert n_keys > 40
     for shard in sorted((ci_run / "results/nr/estimates").rglob("*.nc")):
         with xr.open_dataset(shard) as a, xr.open_dataset(wd / shard.relative_to(ci_run)) as b:
             for name in a.data_vars:

@@ -88,17 +88,18 @@ def test_slurm_profile_dry_run_resolves(tmp_path):
 
 @pytest.mark.parametrize(
     ("override", "key"),
-    [("fusion:\n  reference:\n    sigma_aoa_rad: -0.01\n", "fusion.reference.sigma_aoa_rad"),
+    [("seed: 10.0\n", "seed"),  # a float where an integer belongs (the schema)
      ("fusion:\n  sweeps:\n    d_m: []\n", "fusion.sweeps.d_m"),
-     ("fusion:\n  n_trials: lots\n", "fusion.n_trials"),
+     ("nr:\n  n_shards: 500\n", "nr.n_shards"),  # more shards than the CI run's 160 epochs
+     ("handover:\n  sweep:\n    n_batches: 3\n", "handover.sweep.n_batches"),  # more batches than blocks
      ("nr:\n  sensitivity:\n    cases:\n      loud:\n        radio: {tx_power_dbm: 900}\n",
       "nr.sensitivity.cases.loud.radio.tx_power_dbm")],
 )
 def test_bad_config_stops_before_any_job(tmp_path, override, key):
     wd = _copy_workflow(tmp_path)
     (wd / "bad.yaml").write_text(override)
-    run = subprocess.run([SNAKEMAKE, "all", "-j1", "--configfile", "bad.yaml"], cwd=wd, env=_env(wd),
-                         capture_output=True, text=True, check=False, timeout=COMMAND_TIMEOUT_S)
+    run = subprocess.run([SNAKEMAKE, "all", "-j1", "--configfile", "config/ci.yaml", "bad.yaml"], cwd=wd,
+                         env=_env(wd), capture_output=True, text=True, check=False, timeout=COMMAND_TIMEOUT_S)
     assert run.returncode != 0
     assert f"config key '{key}'" in run.stderr + run.stdout
     assert "Allowed:" in run.stderr + run.stdout

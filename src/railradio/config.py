@@ -50,6 +50,8 @@ def describe_allowed(schema: dict[str, Any]) -> str:
         parts.append(f"at least {schema['minItems']} item(s)")
     if "maxItems" in schema:
         parts.append(f"at most {schema['maxItems']} item(s)")
+    if "prefixItems" in schema:
+        parts.append("items " + ", ".join(f"[{i}] {describe_allowed(p)}" for i, p in enumerate(schema["prefixItems"])))
     if "items" in schema and isinstance(schema["items"], dict):
         parts.append("each item " + describe_allowed(schema["items"]))
     if schema.get("uniqueItems"):
@@ -67,7 +69,11 @@ def _description_at(schema: dict[str, Any], path: Any) -> str:
     """The description of the deepest schema node on ``path`` that has one."""
     node, desc = schema, schema.get("description", "")
     for p in path:
-        node = node.get("items", {}) if isinstance(p, int) else node.get("properties", {}).get(p, {})
+        if isinstance(p, int):
+            prefix = node.get("prefixItems", [])
+            node = prefix[p] if p < len(prefix) else node.get("items", {})
+        else:
+            node = node.get("properties", {}).get(p, node.get("additionalProperties", {}))
         desc = node.get("description", desc) if isinstance(node, dict) else desc
         if not isinstance(node, dict):
             break
@@ -75,11 +81,29 @@ def _description_at(schema: dict[str, Any], path: Any) -> str:
 
 
 def _fill_defaults(cfg: MutableMapping[str, Any], schema: dict[str, Any]) -> None:
+    """Fill every missing key from the schema's defaults, creating missing sections (an
+    object with ``properties`` and no default of its own is made of its keys' defaults)."""
     for name, sub in schema.get("properties", {}).items():
-        if name not in cfg and "default" in sub:
-            cfg[name] = sub["default"]
+        if name not in cfg:
+            if "default" in sub:
+                cfg[name] = copy.deepcopy(sub["default"])
+            elif sub.get("type") == "object" and "properties" in sub:
+                cfg[name] = {}
         if isinstance(cfg.get(name), MutableMapping) and sub.get("type") == "object":
             _fill_defaults(cfg[name], sub)
+
+
+def _is_integer(checker: Any, instance: Any) -> bool:
+    """JSON's integers, without the floats of integral value JSON Schema admits (10.0): a
+    count written as a float is a mistake (it fails later as an index or a range)."""
+    return isinstance(instance, int) and not isinstance(instance, bool)
+
+
+Validator = jsonschema.validators.extend(
+    jsonschema.Draft202012Validator,
+    type_checker=jsonschema.Draft202012Validator.TYPE_CHECKER.redefine("integer", _is_integer),
+)
+"""Draft 2020-12 validation with strict integers."""
 
 
 def deep_merge(base: Mapping[str, Any], override: Mapping[str, Any]) -> dict[str, Any]:
@@ -107,7 +131,7 @@ def validate_config(cfg: MutableMapping[str, Any], schema: dict[str, Any],
         what is allowed and the key's description.
     """
     _fill_defaults(cfg, schema)
-    validator = jsonschema.Draft202012Validator(schema)
+    validator = Validator(schema)
     errors = sorted(validator.iter_errors(cfg), key=lambda e: (-len(e.path), list(map(str, e.path))))
     if errors:
         lines = []

@@ -176,19 +176,6 @@ def test_case_scheduling_reuses_bursts_and_cuts_epochs():
     assert v[0] * 3.6 == pytest.approx(500.0, abs=0.1)
 
 
-def test_sweeps_name_known_cases():
-    from railradio.nr import cases as nc
-
-    nr, sens, cases = _cases_cfg()
-    nc.check_sweeps(sens["sweeps"], cases)
-    with pytest.raises(ValueError, match="unknown"):
-        nc.check_sweeps({"x": {"label": "", "cases": ["nope"], "values": [1]}}, cases)
-    with pytest.raises(ValueError, match="one per value"):
-        nc.check_sweeps({"x": {"label": "", "cases": ["base"], "values": [1, 2]}}, cases)
-    with pytest.raises(ValueError, match="reference"):
-        nc.check_sweeps({"x": {"label": "", "cases": ["base"], "values": [1], "reference": "tdl_a"}}, cases)
-
-
 def test_fewer_ss_beams_keep_the_burst_pattern_prefix():
     """n_beams 32/16: the first 32/16 block positions of the seed pattern, beams spread
     over the same 0..180 deg (the schema allows 2..64)."""

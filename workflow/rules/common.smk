@@ -12,10 +12,13 @@ for _var, _value in JOB_ENV.items():
 
 from railradio.codedeps import script_code_hash
 from railradio.config import load_schema, validate_config
+from railradio.config_checks import check_config
 
-validate_config(
-    config, load_schema(Path(workflow.basedir) / "workflow/schemas/config.schema.yaml")
-)
+# The schema (types, ranges, a default for every key), then the rules between keys: a bad
+# value stops Snakemake here, naming the key, before any job.
+CONFIG_SCHEMA = load_schema(Path(workflow.basedir) / "workflow/schemas/config.schema.yaml")
+validate_config(config, CONFIG_SCHEMA)
+check_config(config, CONFIG_SCHEMA)
 
 # Each study's rule file registers its figures and key-number fragment here.
 STUDY_FIGURES = {}

@@ -1,13 +1,13 @@
 # Study `nr`: 5G NR SS-burst positioning of a high-speed train (seed 000, STUDY.md §2).
 # Chain: trajectory -> per-shard channel + burst + per-cell estimates (NetCDF) ->
 # calibration run (noise levels, q) -> EKF tracking per realization -> figures + numbers.
-from railradio.config import deep_merge, load_schema, validate_config
 from railradio.nr.workflow import receiver_selection as nr_selection
 from railradio.nr.simulate import scenario_from_config
 from railradio.nr.workflow import sim_config as nr_sim
 from railradio.nr import cases as nr_cases
 from railradio.nr.tracking import VARIANTS as NR_TRACKER_VARIANTS
 
+# (validated with every cross-key rule in common.smk: railradio.config_checks)
 NR = config["nr"]
 NR_SCN = scenario_from_config(NR)
 NR_EPOCHS = (
@@ -21,24 +21,11 @@ NR_SIM = nr_sim(NR)
 NR_VARIANTS = list(NR_TRACKER_VARIANTS)  # the main run tracks every measurement variant (seed §4)
 NR_SELECTION = nr_selection(NR)
 
-# Sensitivity cases: the nr config with a case's override merged in, validated like the
-# nr section itself (a bad value names nr.sensitivity.cases.<case>.<key>).
-NR_SENS = NR.get("sensitivity") or {"epochs": 0, "n_shards": 1, "cases": {}}
-_NR_SCHEMA = load_schema(Path(workflow.basedir) / "workflow/schemas/config.schema.yaml")
-NR_CASES = {
-    case: validate_config(
-        deep_merge({k: v for k, v in NR.items() if k != "sensitivity"}, override),
-        _NR_SCHEMA["properties"]["nr"],
-        root=f"nr.sensitivity.cases.{case}",
-    )
-    for case, override in NR_SENS["cases"].items()
-}
+# Sensitivity cases: the nr config with a case's override merged in
+NR_SENS = NR["sensitivity"]
+NR_CASES = nr_cases.merged_cases(NR, CONFIG_SCHEMA["properties"]["nr"])
 NR_CASE_EPOCHS = min(NR_SENS["epochs"], NR_SCN.trajectory.n_epochs)
-if any(NR.get("sync", {}).values()):
-    raise ValueError("nr.sync must stay 0 in the main run: clock errors are a sensitivity case's "
-                     "(nr.sensitivity.cases.<case>.sync)")
-NR_SWEEPS = NR_SENS.get("sweeps", {})
-nr_cases.check_sweeps(NR_SWEEPS, NR_CASES)
+NR_SWEEPS = NR_SENS["sweeps"]
 NR_CASE_N = {c: nr_cases.case_epochs(NR_CASES[c], NR_SENS) for c in NR_CASES}
 NR_CASE_N_CAL = {c: nr_cases.case_cal_epochs(NR_CASES[c], NR) for c in NR_CASES}
 
@@ -188,7 +175,7 @@ rule nr_bounds:
         n_epochs=NR_EPOCHS,
         calibrated=(
             "robust/aod_toa/gate"
-            if "robust" in NR.get("receiver_variants", {})
+            if "robust" in NR["receiver_variants"]
             else "seed/aod_toa/gate"
         ),
     log:
@@ -287,8 +274,8 @@ rule nr_case_calibrate:
         sim=lambda w: nr_sim(NR_CASES[w.case]),
         tracker=lambda w: NR_CASES[w.case]["tracker"],
         selection=lambda w: nr_selection(NR_CASES[w.case]),
-        variants=NR_SENS.get("tracker_variants"),  # schema default: [aod_toa]
-        sync=lambda w: NR_CASES[w.case].get("sync", nr_cases.NO_SYNC),
+        variants=NR_SENS["tracker_variants"],
+        sync=lambda w: NR_CASES[w.case]["sync"],
         seed=config["seed"],
         n_epochs=lambda w: NR_CASE_N_CAL[w.case],
     log:
@@ -312,8 +299,8 @@ rule nr_case_track:
         sim=lambda w: nr_sim(NR_CASES[w.case]),
         tracker=lambda w: NR_CASES[w.case]["tracker"],
         selection=lambda w: nr_selection(NR_CASES[w.case]),
-        variants=NR_SENS.get("tracker_variants"),  # schema default: [aod_toa]
-        sync=lambda w: NR_CASES[w.case].get("sync", nr_cases.NO_SYNC),
+        variants=NR_SENS["tracker_variants"],
+        sync=lambda w: NR_CASES[w.case]["sync"],
         seed=config["seed"],
         n_epochs=lambda w: NR_CASE_N[w.case],
     log:

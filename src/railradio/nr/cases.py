@@ -12,14 +12,26 @@ bursts (a tracker-only case) reads the main run's shards and cuts them.
 
 from __future__ import annotations
 
+from typing import Any
+
+from railradio.config import deep_merge, validate_config
 from railradio.nr.simulate import scenario_from_config, shard_epochs
 from railradio.nr.workflow import sim_config
+
+
+def merged_cases(nr_cfg: dict[str, Any], nr_schema: dict[str, Any]) -> dict[str, dict[str, Any]]:
+    """Each sensitivity case as a whole nr config: the main nr config (without its
+    ``sensitivity`` section) with the case's override merged in, validated against the nr
+    section's schema (a bad value names ``nr.sensitivity.cases.<case>.<key>``)."""
+    base = {k: v for k, v in nr_cfg.items() if k != "sensitivity"}
+    return {case: validate_config(deep_merge(base, override), nr_schema, root=f"nr.sensitivity.cases.{case}")
+            for case, override in nr_cfg["sensitivity"]["cases"].items()}
 
 
 def case_epochs(case_cfg: dict, sens: dict) -> int:
     """Evaluation epochs of a case: ``sens["epochs"]``, fewer where the case sets
     ``max_epochs`` or its trajectory is shorter."""
-    n = sens["epochs"] if case_cfg.get("max_epochs") is None else min(sens["epochs"], case_cfg["max_epochs"])
+    n = sens["epochs"] if case_cfg["max_epochs"] is None else min(sens["epochs"], case_cfg["max_epochs"])
     return min(n, scenario_from_config(case_cfg).trajectory.n_epochs)
 
 
@@ -62,21 +74,8 @@ def case_inputs(case: str, cases: dict, main_cfg: dict, sens: dict, real: str, n
     return [f"results/nr/cases/{owner}/estimates/{real}/s{k}.nc" for k in range(n_sh)]
 
 
-def check_sweeps(sweeps: dict, cases: dict) -> None:
-    """Every sweep names known cases (or ``base``), one per value."""
-    for name, sw in sweeps.items():
-        bad = [c for c in sw["cases"] if c != "base" and c not in cases]
-        if bad or len(sw["cases"]) != len(sw["values"]):
-            raise ValueError(f"nr.sensitivity.sweeps.{name}: cases must name nr.sensitivity.cases (or base), "
-                             f"one per value; unknown {bad}, {len(sw['cases'])} cases for {len(sw['values'])} values")
-        if sw.get("reference") is not None and sw["reference"] not in sw["cases"]:
-            raise ValueError(f"nr.sensitivity.sweeps.{name}.reference must be one of its cases, "
-                             f"got {sw['reference']!r}")
-
-
 def sync_sigma_s(case_cfg: dict) -> float:
     """RRH clock spread σ [s] of a case (0 without ``sync``)."""
-    return float((case_cfg.get("sync") or {}).get("rrh_sigma_s", 0.0))
+    return float(case_cfg["sync"]["rrh_sigma_s"])
 
 
-NO_SYNC = {"rrh_sigma_s": 0.0, "train_bias_s": 0.0}

@@ -1,0 +1,222 @@
+"""Rules between config keys, which a JSON schema cannot state, checked before any job.
+
+:func:`check_config` runs after the schema (:func:`railradio.config.validate_config`) on the
+whole config and raises one :class:`~railradio.config.ConfigError` listing every broken
+rule, each naming its key, the value and what the other keys allow. Two kinds of rule:
+
+* cross-key rules written out here (shards ≤ epochs, batches ≤ blocks, a receiver that
+  exists, a speed that is simulated, ascending grids, …);
+* the studies' own parameter objects built from the config (``scenario_from_config`` and
+  friends), which check physical consistency (a slot inside the tunnel, a track arc
+  around its base stations); their ``ValueError`` is reported under the section's key.
+
+The nr sensitivity cases are validated here too, each as the nr section with the case
+merged in (:func:`railradio.nr.cases.merged_cases`), under ``nr.sensitivity.cases.<case>``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator, Mapping
+from typing import Any
+
+from railradio.config import ConfigError
+
+Problem = tuple[str, Any, str]
+"""(dotted key, its value, what the rule allows)."""
+
+
+def _get(cfg: Mapping[str, Any], key: str) -> Any:
+    node: Any = cfg
+    for part in key.split("."):
+        node = node[part]
+    return node
+
+
+def _at_most(cfg: Mapping[str, Any], key: str, limit_key: str, limit: Any | None = None) -> Iterator[Problem]:
+    value, lim = _get(cfg, key), _get(cfg, limit_key) if limit is None else limit
+    if value > lim:
+        yield key, value, f"<= {limit_key} = {lim!r}"
+
+
+def _ascending(cfg: Mapping[str, Any], key: str) -> Iterator[Problem]:
+    v = list(_get(cfg, key))
+    if any(b <= a for a, b in zip(v, v[1:], strict=False)):
+        yield key, v, "strictly ascending values"
+
+
+def _probe(key: str, build: Callable[[], Any]) -> Iterator[Problem]:
+    """Build a study's parameter object; its ValueError becomes a problem of ``key``."""
+    try:
+        build()
+    except (ValueError, KeyError) as exc:
+        yield key, "…", f"values the study accepts ({exc})"
+
+
+# ---------------------------------------------------------------- the studies
+
+
+def _fusion(cfg: Mapping[str, Any]) -> Iterator[Problem]:
+    from railradio.fusion.arc import ArcGeometry
+
+    f = cfg["fusion"]
+    for i, r in enumerate(f["sensitivity"]["radii_m"]):
+        yield from _probe(f"fusion.sensitivity.radii_m[{i}]",
+                          lambda r=r: ArcGeometry(f["reference"]["d_m"], r, f["cell_radius_factor"]))
+
+
+def nr_problems(nr: Mapping[str, Any], root: str = "nr", main: bool = True) -> Iterator[Problem]:
+    """The rules of one nr config (the main run's, ``main=True``, or a merged case's)."""
+    from railradio.nr.simulate import scenario_from_config
+
+    try:
+        scn = scenario_from_config(dict(nr))
+    except (ValueError, KeyError) as exc:
+        yield root, "…", f"values the study accepts ({exc})"
+        return
+    n_traj = scn.trajectory.n_epochs
+    n_epochs = n_traj if nr["max_epochs"] is None else min(nr["max_epochs"], n_traj)
+    if main and nr["n_shards"] > n_epochs:
+        yield f"{root}.n_shards", nr["n_shards"], f"<= the run's {n_epochs} epochs (one epoch per shard at least)"
+    if nr["calibration"]["epochs"] > n_traj:
+        yield f"{root}.calibration.epochs", nr["calibration"]["epochs"], \
+            f"<= the trajectory's {n_traj} epochs"
+    v = 0.0
+    for i, (dur, acc) in enumerate(nr["trajectory"]["phases"]):
+        v += dur * acc
+        if v < -1e-9:
+            yield f"{root}.trajectory.phases[{i}]", [dur, acc], f"phases that keep the speed >= 0 (this one ends at {v:.3g} m/s)"
+    yield from _prefixed(root, _ascending(nr, "tracker.w_distance_edges_m"))
+    receivers = {"seed", *nr["receiver_variants"]}
+    if "seed" in nr["receiver_variants"]:
+        yield f"{root}.receiver_variants.seed", "…", "a name other than 'seed' (the source's receiver, nr.receiver)"
+    if nr["imm"]["receiver"] not in receivers:
+        yield f"{root}.imm.receiver", nr["imm"]["receiver"], f"one of {sorted(receivers)} (seed or a receiver_variants name)"
+    dt = nr["trajectory"]["dt_s"]
+    for i, tau in enumerate(nr["imm"]["sojourn_s"]):
+        if tau < dt:
+            yield f"{root}.imm.sojourn_s[{i}]", tau, f">= {root}.trajectory.dt_s = {dt}"
+
+
+def _prefixed(root: str, problems: Iterator[Problem]) -> Iterator[Problem]:
+    for key, value, rule in problems:
+        yield f"{root}.{key}", value, rule
+
+
+def _nr(cfg: Mapping[str, Any], schema: Mapping[str, Any]) -> Iterator[Problem]:
+    from railradio.nr import cases as nr_cases
+
+    nr = cfg["nr"]
+    yield from nr_problems(nr)
+    if any(nr["sync"].values()):
+        yield "nr.sync", dict(nr["sync"]), ("zeros in the main run (clock errors are a sensitivity "
+                                            "case's: nr.sensitivity.cases.<case>.sync)")
+    sens = nr["sensitivity"]
+    yield from _at_most(cfg, "nr.sensitivity.n_shards", "nr.sensitivity.epochs")
+    try:
+        cases = nr_cases.merged_cases(nr, schema["properties"]["nr"])
+    except ConfigError as exc:
+        yield "nr.sensitivity.cases", "…", str(exc).replace("invalid configuration:\n  ", "")
+        return
+    for name, case in cases.items():
+        yield from nr_problems(case, root=f"nr.sensitivity.cases.{name}", main=False)
+    for name, sw in sens["sweeps"].items():
+        key = f"nr.sensitivity.sweeps.{name}"
+        bad = [c for c in sw["cases"] if c != "base" and c not in cases]
+        if bad:
+            yield f"{key}.cases", bad, "names of nr.sensitivity.cases (or base)"
+        if len(sw["cases"]) != len(sw["values"]):
+            yield f"{key}.values", sw["values"], f"one value per case ({len(sw['cases'])})"
+        if sw.get("reference") is not None and sw["reference"] not in sw["cases"]:
+            yield f"{key}.reference", sw["reference"], "one of the sweep's cases"
+
+
+def _handover(cfg: Mapping[str, Any]) -> Iterator[Problem]:
+    from railradio.handover.params import scenario_from_config
+
+    ho = cfg["handover"]
+    yield from _at_most(cfg, "handover.sweep.n_batches", "handover.sweep.n_blocks")
+    yield from _at_most(cfg, "handover.sensitivity.n_blocks", "handover.sweep.n_blocks")
+    speeds = ho["sweep"]["speeds_kmh"]
+    if ho["sensitivity"]["speed_kmh"] not in speeds:
+        yield "handover.sensitivity.speed_kmh", ho["sensitivity"]["speed_kmh"], \
+            f"one of handover.sweep.speeds_kmh = {speeds} (the variants reuse its draws)"
+    yield from _at_most(cfg, "handover.cost.alpha_min", "handover.cost.alpha_max")
+    yield from _at_most(cfg, "handover.cost.full_grid_max_m", "handover.cost.m_values",
+                        limit=max(ho["cost"]["m_values"]))
+    yield from _ascending(cfg, "handover.joint.exponent_bounds")
+    yield from _ascending(cfg, "handover.sweep.speeds_kmh")
+    if ho["radio"]["q_in_db"] < ho["radio"]["q_out_db"]:
+        yield "handover.radio.q_in_db", ho["radio"]["q_in_db"], \
+            f">= handover.radio.q_out_db = {ho['radio']['q_out_db']} (in-sync needs the better link)"
+    yield from _probe("handover", lambda: scenario_from_config(dict(ho)))
+
+
+def _chain(cfg: Mapping[str, Any]) -> Iterator[Problem]:
+    from railradio.chain.params import params_from_config
+
+    ch = cfg["chain"]
+    yield from _at_most(cfg, "chain.n_batches", "chain.n_blocks")
+    yield from _ascending(cfg, "chain.sigmas_m")
+    speeds = cfg["handover"]["sweep"]["speeds_kmh"]
+    if ch["speed_kmh"] not in speeds:
+        yield "chain.speed_kmh", ch["speed_kmh"], \
+            f"one of handover.sweep.speeds_kmh = {speeds} (the chain reuses its draws)"
+    if "imm" in ch["nr_filters"] and not cfg["nr"]["imm"]:
+        yield "chain.nr_filters", ch["nr_filters"], "ekf only without an nr.imm section"
+    yield from _probe("chain", lambda: params_from_config(dict(ch)))
+
+
+def _tunnel(cfg: Mapping[str, Any]) -> Iterator[Problem]:
+    from railradio.tunnel import study
+
+    tu = cfg["tunnel"]
+    g, r, m = tu["geometry"], tu["rays"], tu["measurement"]
+    steps = g["slot_spacing_m"] / r["offset_step_m"]
+    if abs(steps - round(steps)) > 1e-9:
+        yield "tunnel.rays.offset_step_m", r["offset_step_m"], \
+            f"a divisor of tunnel.geometry.slot_spacing_m = {g['slot_spacing_m']}"
+    if tu["coverage"]["blind_spot_dbm"] > tu["coverage"]["threshold_dbm"]:
+        yield "tunnel.coverage.blind_spot_dbm", tu["coverage"]["blind_spot_dbm"], \
+            f"<= tunnel.coverage.threshold_dbm = {tu['coverage']['threshold_dbm']}"
+    for name, t in tu["trains"].items():
+        if t["length_m"] >= g["length_m"]:
+            yield f"tunnel.trains.{name}.length_m", t["length_m"], f"< tunnel.geometry.length_m = {g['length_m']}"
+    yield from _at_most(cfg, "tunnel.tracking.calibration_m", "tunnel.geometry.length_m")
+    yield from _at_most(cfg, "tunnel.measurement.window_m", "tunnel.rays.max_offset_m")
+    for key in ("convergence_offsets_m", "engine_offsets_m"):
+        for i, off in enumerate(r[key]):
+            if off > r["max_offset_m"]:
+                yield f"tunnel.rays.{key}[{i}]", off, f"<= tunnel.rays.max_offset_m = {r['max_offset_m']}"
+    n_window = int(2 * m["window_m"] // g["slot_spacing_m"])
+    if m["n_slots"] > n_window:
+        yield "tunnel.measurement.n_slots", m["n_slots"], \
+            f"<= the {n_window} slots within ±tunnel.measurement.window_m"
+    for shape in ("circle", "rect"):
+        yield from _probe("tunnel.geometry", lambda shape=shape: study.tunnel_from_config(tu, shape))
+    side_shape = study.TABLES[tu["engine"] + study.SIDE_WALL][0]  # the positioning engine's cross-section
+    yield from _probe("tunnel.sensitivity.side_wall_slot_z_m",
+                      lambda: study.tunnel_from_config(study.side_wall_config(tu), side_shape))
+    yield from _probe("tunnel.cable", lambda: study.cable_from_config(tu))
+    yield from _probe("tunnel.measurement", lambda: study.measurement_from_config(tu))
+    for name in tu["trains"]:
+        yield from _probe(f"tunnel.trains.{name}", lambda name=name: study.train_from_config(tu, name))
+
+
+def problems(cfg: Mapping[str, Any], schema: Mapping[str, Any]) -> list[Problem]:
+    """Every cross-key rule ``cfg`` (schema-valid, defaults filled) breaks."""
+    out: list[Problem] = []
+    out += _fusion(cfg)
+    out += _nr(cfg, schema)
+    out += _handover(cfg)
+    out += _chain(cfg)
+    out += _tunnel(cfg)
+    return out
+
+
+def check_config(cfg: Mapping[str, Any], schema: Mapping[str, Any]) -> None:
+    """Raise :class:`ConfigError` naming each key whose value breaks a rule between keys."""
+    found = problems(cfg, schema)
+    if found:
+        lines = [f"config key '{k}': " + ("the values are inconsistent" if v == "…" else f"{v!r} is not allowed")
+                 + f". Allowed: {rule}." for k, v, rule in found]
+        raise ConfigError("invalid configuration:\n  " + "\n  ".join(lines))
