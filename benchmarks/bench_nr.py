@@ -55,7 +55,7 @@ def shard_run(config: str, n_epochs: int, tunables: bool) -> dict:
     if not tunables:
         del env["GLIBC_TUNABLES"]
     out = subprocess.run([sys.executable, "-c", _SHARD_RUN, config, str(n_epochs)], env=env,
-                         check=True, capture_output=True, text=True).stdout
+                         check=True, capture_output=True, text=True, timeout=1800).stdout
     return json.loads(out.strip().splitlines()[-1])
 
 

@@ -21,7 +21,7 @@ import yaml
 
 from railradio.config import deep_merge, load_schema, validate_config
 
-from .conftest import ROOT
+from .conftest import COMMAND_TIMEOUT_S, PIPELINE_TIMEOUT_S, ROOT
 from .conftest import copy_workflow as _copy_workflow
 
 PROFILE = ROOT / "workflow/profiles/slurm"
@@ -127,7 +127,7 @@ def test_slurm_dry_run_gives_every_job_its_rule_resources_and_cluster_shards(tmp
                           "--workflow-profile", "workflow/profiles/slurm"], cwd=tmp_path,
                          env={"PATH": str(Path(sys.executable).parent) + ":/usr/bin:/bin",
                               "PYTHONPATH": str(tmp_path / "src"), "HOME": str(tmp_path)},
-                         capture_output=True, text=True, check=False)
+                         capture_output=True, text=True, check=False, timeout=COMMAND_TIMEOUT_S)
     out = run.stdout + run.stderr
     assert run.returncode == 0, out[-3000:]
     prof = _yaml(PROFILE / "config.yaml")
@@ -237,7 +237,8 @@ def test_handover_workflow_identical_for_one_and_two_batches(tmp_path):
         (wd / "batches.yaml").write_text(f"handover:\n  sweep:\n    n_batches: {n_batches}\n")
         run = subprocess.run([SNAKEMAKE, "results/handover/summary.nc", "-j1", "--workflow-profile",
                               "workflow/profiles/default", "--configfile", "config/ci.yaml", "batches.yaml"],
-                             cwd=wd, env=env, capture_output=True, text=True, check=False)
+                             cwd=wd, env=env, capture_output=True, text=True, check=False,
+                             timeout=PIPELINE_TIMEOUT_S)
         assert run.returncode == 0, (run.stdout + run.stderr)[-3000:]
         shards = {v: xr.concat([read_dataset(wd / f"results/handover/shards/v{v}/b{b}.nc")
                                 for b in range(n_batches)], dim="run", data_vars="minimal")

@@ -15,7 +15,7 @@ log = setup_script(smk.log[0])
 scn = scenario(smk)
 dep = scn.deployment
 ds = read_shards(smk.input)
-if not smk.params.tracker.get("lever_arm", True):  # the point model: panels' lever arm ignored
+if not smk.params.tracker["lever_arm"]:  # the point model: panels' lever arm ignored
     ds = ds.drop_vars("train_panel_x", errors="ignore")
 out = {}
 for rx in ds["receiver"].values:
@@ -26,7 +26,7 @@ for rx in ds["receiver"].values:
             cfg = calibrate(dsr, variant, dep.x_m, dep.offset_m, dep.h_bs_m - dep.h_ut_m,
                             scn.trajectory.dt_s, np.asarray(smk.params.tracker["q_grid"]), gate,
                             smk.params.selection[str(rx)],
-                            distance_edges_m=tuple(smk.params.tracker.get("w_distance_edges_m") or ()))
+                            distance_edges_m=tuple(smk.params.tracker["w_distance_edges_m"]))
             out[name] = cfg.record()
             log.info("%s: %s", name, out[name])
 write_json(smk.output[0], out)

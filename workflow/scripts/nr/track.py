@@ -17,7 +17,7 @@ log = setup_script(smk.log[0])
 scn = scenario(smk)
 dep = scn.deployment
 ds = read_shards(smk.input.shards)
-if not smk.params.tracker.get("lever_arm", True):  # the point model: panels' lever arm ignored
+if not smk.params.tracker["lever_arm"]:  # the point model: panels' lever arm ignored
     ds = ds.drop_vars("train_panel_x", errors="ignore")
 cal = json.loads(open(smk.input.calibration, encoding="utf-8").read())
 receivers = [str(r) for r in ds["receiver"].values]
