@@ -19,7 +19,7 @@ import sys
 import time
 
 import numpy as np
-from _report import emit
+from _report import best_of, emit
 import scipy.fft as sfft
 import yaml
 
@@ -70,6 +70,29 @@ def naive_correlation(z: np.ndarray, s_min: int, cfg, n_id1: np.ndarray, n_id2: 
         ref = reference_waveform(num, int(a), int(b), int(cfg.ssb_first[0]))
         r = np.abs(sfft.ifft(zf * np.conj(sfft.fft(ref, n, workers=1)), workers=1))
         out[c] = r[v[:, None] + np.arange(cfg.lags_full)[None, :]]
+    return out
+
+
+def fft_backends(repeat: int = 30) -> dict:
+    """The receiver's FFT batches (the correlator's 64 × 1232 blocks, the synthesizer's
+    457 × 128 symbols; complex64, one thread) through scipy.fft, which the receiver uses,
+    beside numpy.fft and, when it is installed, ducc0 (GPL-2.0-or-later, so not a
+    dependency of this MIT project: ``pip install ducc0`` to see what it would gain).
+    µs per batch, best of ``repeat``."""
+    rng = np.random.default_rng(2)
+    out = {}
+    backends = {"scipy": lambda a: sfft.ifft(a, axis=-1, workers=1),
+                "numpy": lambda a: np.fft.ifft(a, axis=-1)}
+    try:
+        import ducc0  # noqa: PLC0415 - optional, for comparison only
+
+        backends["ducc0"] = lambda a: ducc0.fft.c2c(a, axes=(a.ndim - 1,), forward=False, inorm=2, nthreads=1)
+    except ImportError:
+        pass
+    for shape in ((64, 1232), (457, 128)):
+        a = (rng.standard_normal(shape) + 1j * rng.standard_normal(shape)).astype(np.complex64)
+        for name, fn in backends.items():
+            out[f"fft_{name}_{shape[0]}x{shape[1]}_us"] = 1e6 * best_of(lambda fn=fn, a=a: fn(a), repeat)
     return out
 
 
@@ -147,6 +170,7 @@ def main() -> None:
         report[f"{name}_ms_per_burst"] = 1e3 * best["wall_s"] / best["n"]
         report[f"{name}_sys_share"] = best["sys_s"] / (best["user_s"] + best["sys_s"])
     report["malloc_speedup"] = report["malloc_default_ms_per_burst"] / report["malloc_tuned_ms_per_burst"]
+    report.update(fft_backends())
     emit(report, args.out)
 
 

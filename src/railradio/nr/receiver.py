@@ -453,10 +453,9 @@ class Correlator:
         # one candidate at a time: its IFFT and the pass over |r| stay in cache
         r = np.empty((n_c, n_b, cfg.lags), dtype=np.float32)
         mu, sigma, eta = (np.empty((n_c, n_b)) for _ in range(3))
-        xbuf = np.empty((n_b, self.n_win), dtype=np.complex64)
         k_lo = np.empty((n_c, n_b), dtype=np.int64)
         for c in range(n_c):
-            xc = fft_rows(p[c], inverse=True, out=xbuf)
+            xc = fft_rows(p[c], inverse=True)
             r[c], mu[c], sigma[c], eta[c], k_lo[c] = kernels.magnitude_stats(xc, cfg.lags)
         if self.detector == "cacfar":  # [ours] local noise floor per lag
             k_lo, eta, floor_at = (a.reshape(n_c, n_b) for a in kernels.local_mean_argmax(
