@@ -184,7 +184,9 @@ def test_only_affected_rules_rerun(ci_run, tmp_path):
     reasons = rerun_reasons(smk(wd, "all", "-n").stdout)
     want = {r for r, s in rule_scripts().items() if "railradio.nr.keys" in script_closure(s)}
     assert {"nr_figures", "nr_imm_figure", "nr_key_numbers"} <= want
-    assert {r for r, why in reasons.items() if "Params have changed" in why} == want, reasons
+    assert want <= set(reasons), sorted(want - set(reasons))  # every rule that runs nr/keys.py
+    # (Snakemake names one reason per job: a rule downstream of another re-run may show that one)
+    assert {r for r, why in reasons.items() if "Params have changed" in why} <= want, reasons
     assert all("Input files updated by another job" in why for r, why in reasons.items() if r not in want)
 
 
@@ -213,7 +215,11 @@ def test_interrupted_run_leaves_nothing_half_written_and_resumes_to_the_same_num
     for p in points.rglob("*.nc"):  # whatever exists is whole
         xr.open_dataset(p).close()
     run = smk(wd, "fusion", "-j1")
-    assert job_counts(run.stdout + run.stderr).get("fusion_point", 0) == len(list(points.rglob("*.nc"))) - n_done
+    n_points = len(list(points.rglob("*.nc")))
+    redone = job_counts(run.stdout + run.stderr).get("fusion_point", 0)
+    # the rest, plus at most the point whose file was renamed into place as the run was
+    # stopped, before Snakemake recorded it
+    assert n_points - n_done <= redone <= n_points - n_done + 1, (redone, n_points, n_done)
     for frag in ("results/fusion/key_numbers.json", "results/sens/fusion/key_numbers.json"):
         assert json.loads((wd / frag).read_text()) == json.loads((ci_run / frag).read_text()), frag
     for sweep in ("d_m", "sigma_tdoa_us", "sigma_aoa_rad"):
