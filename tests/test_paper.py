@@ -1,5 +1,6 @@
-"""The manuscript's macros without LaTeX: every ``\\kn``, ``\\knsrc``, ``\\cfg`` and ``\\cfgn``
-key in ``paper/main.tex`` exists (the PDF build itself is tests/test_workflow.py's)."""
+"""The manuscript's macros without LaTeX: every ``\\kn``, ``\\knm``, ``\\knsrc``, ``\\cfg`` and
+``\\cfgn`` key in ``paper/main.tex`` exists (the PDF build itself is tests/test_workflow.py's);
+no published tracker accuracy exceeds 10 km."""
 from __future__ import annotations
 
 import json
@@ -20,7 +21,7 @@ def _keys(macro: str) -> set[str]:
 
 def test_every_key_number_the_paper_cites_is_published():
     published = json.loads((ROOT / "paper/numbers.json").read_text())
-    cited = _keys("kn") | _keys("knsrc")
+    cited = _keys("kn") | _keys("knsrc") | _keys("knm")
     assert len(cited) > 100
     assert not cited - set(published), sorted(cited - set(published))
     for name in _keys("knsrc"):  # a source claim cited must exist
@@ -39,5 +40,15 @@ def test_every_config_value_the_paper_cites_exists():
 
 def test_no_macro_key_is_built_from_parts():
     """Keys are literal (a key assembled with \\csname or #1 would escape the checks above)."""
-    for macro in ("kn", "knsrc", "cfg", "cfgn"):
+    for macro in ("kn", "knsrc", "knm", "cfg", "cfgn"):
         assert not any(re.search(r"[\\#]", k) for k in _keys(macro)), macro
+
+
+def test_no_published_nr_accuracy_exceeds_10_km():
+    """A lost track is a lost share, never a mean error of 10^19 m."""
+    from railradio.nr.loss import ACCURACY_CAP_M
+
+    published = json.loads((ROOT / "paper/numbers.json").read_text())
+    bad = {k: e["value"] for k, e in published.items() if k.startswith(("nr.", "sens.nr."))
+           and ".err_m." in k and e["value"] is not None and e["value"] > ACCURACY_CAP_M}
+    assert not bad, bad

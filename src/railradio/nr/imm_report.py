@@ -21,6 +21,7 @@ from numpy.typing import NDArray
 
 from railradio import plotting
 from railradio.keynumbers import KeySpec
+from railradio.nr import loss
 from railradio.nr.keys import SKIP_S
 
 FILTERS = ("ekf", "imm", "rts")
@@ -81,24 +82,36 @@ def key_numbers(runs: list[xr.Dataset], window_s: float) -> dict[str, Any]:
         raise ValueError("runs must not be empty")
     w = f"{window_s:g} s"
     out: dict[str, Any] = {}
+    spacings = {loss.rrh_spacing_m(r) for r in runs}
+    if len(spacings) != 1:
+        raise ValueError(f"runs come from different RRH spacings: {sorted(spacings)}")
+    spacing = spacings.pop()
 
-    def put(name, unit, desc, fn):
+    def put(name, unit, desc, fn, lost_frac=None):
         value, se = _pooled(runs, fn)
-        out[name] = KeySpec(name, unit, desc).entry(value, se)
+        if lost_frac is not None:  # an accuracy: null where the track is lost too often
+            value = loss.accuracy(value, lost_frac)
+            se = se if value is not None else None
+        out[name] = KeySpec(name, unit, desc).entry(value, se, lost_frac=lost_frac)
 
     for f in FILTERS:
         who = {"ekf": "the seed's EKF (robust receiver, AOD+TOA, gated)", "imm": "the IMM (same measurements and gate)",
                "rts": "the RTS-smoothed EKF (offline)"}[f]
+        put(f"nr.track.{f}.lost_frac", "1", f"share of the scored epochs lost by {who} (2-D error above half "
+            "the RRH spacing)", lambda rs, f=f: float(np.mean(loss.lost_mask(_overall(rs, "pos_err", f), spacing))))
+        lf = out[f"nr.track.{f}.lost_frac"]["value"]
+        put(f"nr.track.{f}.tracked.err_m.mean", "m", f"mean 2-D position error of {who} over the epochs not lost",
+            lambda rs, f=f: (lambda v: _stat(v[~loss.lost_mask(v, spacing)], np.mean))(_overall(rs, "pos_err", f)))
         put(f"nr.track.{f}.err_m.mean", "m", f"mean 2-D position error of {who}",
-            lambda rs, f=f: _stat(_overall(rs, "pos_err", f), np.mean))
+            lambda rs, f=f: _stat(_overall(rs, "pos_err", f), np.mean), lf)
         put(f"nr.track.{f}.err_m.p95", "m", f"95th percentile of the 2-D position error of {who}",
-            lambda rs, f=f: _stat(_overall(rs, "pos_err", f), lambda v: np.percentile(v, 95)))
+            lambda rs, f=f: _stat(_overall(rs, "pos_err", f), lambda v: np.percentile(v, 95)), lf)
         put(f"nr.track.{f}.err_m.after_change_mean", "m",
             f"mean 2-D position error of {who} in the {w} after each acceleration change",
-            lambda rs, f=f: _stat(_after(rs, "pos_err", f, window_s), np.mean))
+            lambda rs, f=f: _stat(_after(rs, "pos_err", f, window_s), np.mean), lf)
         put(f"nr.track.{f}.lag_m.after_change_mean", "m",
             f"mean along-track lag −sign(Δa)·(x̂ − x) of {who} in the {w} after each acceleration change",
-            lambda rs, f=f: _stat(_after(rs, "along_err", f, window_s, signed=True), np.mean))
+            lambda rs, f=f: _stat(_after(rs, "along_err", f, window_s, signed=True), np.mean), lf)
         put(f"nr.track.{f}.nees.mean", "1",
             f"mean 2-D position NEES of {who} (2 for a consistent filter)",
             lambda rs, f=f: _stat(_overall(rs, "pos_nees", f), np.mean))

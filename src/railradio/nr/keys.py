@@ -7,8 +7,11 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+import re
+
 from railradio.constants import SPEED_OF_LIGHT_M_S
 from railradio.keynumbers import KeySpec
+from railradio.nr import loss
 from railradio.nr.numerology import SAMPLE_RATE_HZ
 
 SKIP_S = 5.0  # errors are counted after the first 5 s (STUDY.md §2.6)
@@ -38,8 +41,61 @@ def _per_real(tracks: list[xr.Dataset], rx: str, fn) -> tuple[float, float | Non
     pooled = fn(tracks)
     if len(tracks) < 2:
         return pooled, None
-    each = np.array([fn([t]) for t in tracks])
+    each = np.array([fn([t]) for t in tracks], dtype=float)
+    if not np.all(np.isfinite(each)):  # a realization without a value (e.g. every epoch lost)
+        return pooled, None
     return pooled, float(np.std(each, ddof=1) / np.sqrt(len(tracks)))
+
+
+_ACCURACY = re.compile(r"^track\.(?P<variant>aod_toa|aod|toa)(?P<gated>_gated)?\.err_m\.\w+$")
+"""An all-epoch accuracy key of a tracker (reported only where the track is rarely lost)."""
+
+TRACK_LOSS_SPECS = {
+    "lost_frac": ("1", "share of the scored epochs lost (2-D error above half the RRH spacing)"),
+    "time_to_loss_s": ("s", "time from the run's start to its first lost epoch (mean over the realizations that "
+                            "lose the track; null if none does)"),
+    "tracked.err_m.mean": ("m", "mean 2-D position error over the epochs not lost"),
+    "tracked.err_m.p95": ("m", "95th percentile of the 2-D position error over the epochs not lost"),
+    "tracked.err_m.p99": ("m", "99th percentile of the 2-D position error over the epochs not lost"),
+}
+"""Per tracker (receiver × variant × gate): ``track.<variant>[_gated].<metric>``."""
+
+
+def _runs(ts: list[xr.Dataset], rx: str, variant: str, gate: int) -> list[tuple[np.ndarray, np.ndarray]]:
+    """(t, 2-D error) of each realization after the first SKIP_S seconds."""
+    out = []
+    for t in ts:
+        keep = t["t"].values >= SKIP_S
+        out.append((t["t"].values[keep], t["pos_err"].sel(receiver=rx, variant=variant, gate=gate).values[keep]))
+    return out
+
+
+def _loss_fns(spacing_m: float, rx: str, variant: str, gate: int) -> dict:
+    """Each metric of :data:`TRACK_LOSS_SPECS` as a function of a list of track datasets."""
+
+    def tracked(ts):
+        err = np.concatenate([e for _, e in _runs(ts, rx, variant, gate)])
+        return err[~loss.lost_mask(err, spacing_m)]
+
+    def stat(v, fn):
+        return float(fn(v)) if v.size else np.nan
+
+    return {
+        "lost_frac": lambda ts: float(np.mean(loss.lost_mask(
+            np.concatenate([e for _, e in _runs(ts, rx, variant, gate)]), spacing_m))),
+        "time_to_loss_s": lambda ts: (lambda v: np.nan if v is None else v)(
+            loss.time_to_loss_s(_runs(ts, rx, variant, gate), spacing_m)),
+        "tracked.err_m.mean": lambda ts: stat(tracked(ts), np.mean),
+        "tracked.err_m.p95": lambda ts: stat(tracked(ts), lambda v: np.percentile(v, 95)),
+        "tracked.err_m.p99": lambda ts: stat(tracked(ts), lambda v: np.percentile(v, 99)),
+    }
+
+
+def _spacing(tracks: list[xr.Dataset]) -> float:
+    spacings = {loss.rrh_spacing_m(t) for t in tracks}
+    if len(spacings) != 1:
+        raise ValueError(f"the tracks come from different RRH spacings: {sorted(spacings)}")
+    return spacings.pop()
 
 
 def _metric_fns(rx: str) -> dict:
@@ -94,14 +150,42 @@ def key_numbers(tracks: list[xr.Dataset], bounds: list[xr.Dataset] | None = None
     out["nr.link.sir_best_db.median"] = KeySpec(
         "nr.link.sir_best_db.median", "dB",
         "median power of the strongest RRH over the sum of all others in range").entry(float(np.median(sir)))
+    spacing = _spacing(tracks)
+    for name, unit, desc, value in (
+            ("nr.track.score_from_s", "s", "tracking errors are scored from this time of the run on", SKIP_S),
+            ("nr.track.lost_threshold_m", "m", "an epoch is lost when its 2-D error exceeds this (half the RRH "
+             "spacing)", spacing / 2),
+            ("nr.track.lost_frac_max", "1", "an all-epoch accuracy is reported only below this lost share",
+             loss.LOST_FRAC_MAX)):
+        out[name] = KeySpec(name, unit, desc).entry(value)
+    variants = [str(v) for v in tracks[0]["variant"].values]
     for rx in [str(r) for r in tracks[0]["receiver"].values]:
         prefix = "nr." if rx == "seed" else f"nr.{rx}."
+        who = "" if rx == "seed" else f" ({rx} receiver)"
         fns = _metric_fns(rx)
+        lost = {}
+        for variant in variants:
+            for gate in (0, 1):
+                track = f"track.{variant}{'_gated' if gate else ''}"
+                lfns = _loss_fns(spacing, rx, variant, gate)
+                for metric, (unit, desc) in TRACK_LOSS_SPECS.items():
+                    name = f"{prefix}{track}.{metric}"
+                    value, se = _per_real(tracks, rx, lfns[metric])
+                    out[name] = KeySpec(name, unit, f"{desc}, EKF {variant}{', gated' if gate else ''}{who}").entry(
+                        value if np.isfinite(value) else None, se if metric != "time_to_loss_s" else None)
+                lost[(variant, gate)] = out[f"{prefix}{track}.lost_frac"]["value"]
         for key, (unit, desc, src, rel) in SPECS.items():
             name = prefix + key
             if rx != "seed":
-                src, rel, desc = None, None, f"{desc} ({rx} receiver)"
+                src, rel, desc = None, None, f"{desc}{who}"
             value, se = _per_real(tracks, rx, fns[key])
+            m = _ACCURACY.match(key)
+            if m:  # an all-epoch accuracy: null where the track is lost too often
+                lf = lost[(m["variant"], int(bool(m["gated"])))]
+                value = loss.accuracy(value, lf)
+                out[name] = KeySpec(name, unit, desc, src, rel).entry(value, se if value is not None else None,
+                                                                      lost_frac=lf)
+                continue
             out[name] = KeySpec(name, unit, desc, src, rel).entry(value if np.isfinite(value) else None, se)
     return out
 
@@ -123,6 +207,10 @@ SENSITIVITY_METRICS = (
 )
 
 
+SENSITIVITY_LOSS_METRICS = ("lost_frac", "time_to_loss_s", "tracked.err_m.mean", "tracked.err_m.p95")
+"""Loss metrics of the sensitivity cases' AOD+TOA trackers (gate off and on)."""
+
+
 def sensitivity_key_numbers(base: xr.Dataset, cases: dict[str, xr.Dataset],
                             n_epochs: int | dict[str, int]) -> dict[str, Any]:
     """Key numbers ``sens.nr.<case>.<receiver>.<metric>`` of the sensitivity cases and of
@@ -138,14 +226,31 @@ def sensitivity_key_numbers(base: xr.Dataset, cases: dict[str, xr.Dataset],
         if ds.sizes["epoch"] < n:
             raise ValueError(f"case {case!r} has {ds.sizes['epoch']} epochs, fewer than n_epochs={n}")
         ds = ds.isel(epoch=slice(0, n))  # a causal tracker: the same as a shorter run
+        spacing = _spacing([ds])
         for rx in [str(r) for r in ds["receiver"].values]:
             fns = _metric_fns(rx)
+            where = f"({rx} receiver, sensitivity case {case}, first {n} epochs of r0)"
+            lost = {}
+            for gate in (0, 1):
+                track = f"track.aod_toa{'_gated' if gate else ''}"
+                lfns = _loss_fns(spacing, rx, "aod_toa", gate)
+                for metric in SENSITIVITY_LOSS_METRICS:
+                    unit, desc = TRACK_LOSS_SPECS[metric]
+                    name = f"sens.nr.{case}.{rx}.{track}.{metric}"
+                    value = lfns[metric]([ds])
+                    out[name] = KeySpec(name, unit, f"{desc}, EKF AOD+TOA{', gated' if gate else ''} {where}").entry(
+                        value if np.isfinite(value) else None)
+                lost[gate] = out[f"sens.nr.{case}.{rx}.{track}.lost_frac"]["value"]
             for metric in SENSITIVITY_METRICS:
                 unit, desc = (SPECS | SENSITIVITY_SPECS)[metric][:2]
                 name = f"sens.nr.{case}.{rx}.{metric}"
                 value = fns[metric]([ds])
-                out[name] = KeySpec(name, unit, f"{desc} ({rx} receiver, sensitivity case {case}, "
-                                    f"first {n} epochs of r0)").entry(value if np.isfinite(value) else None)
+                m = _ACCURACY.match(metric)
+                if m:
+                    lf = lost[int(bool(m["gated"]))]
+                    out[name] = KeySpec(name, unit, f"{desc} {where}").entry(loss.accuracy(value, lf), lost_frac=lf)
+                    continue
+                out[name] = KeySpec(name, unit, f"{desc} {where}").entry(value if np.isfinite(value) else None)
     return out
 
 
