@@ -178,3 +178,31 @@ def test_the_workflow_sets_each_rule_hash_from_its_script(tmp_path):
         path = (wd / "workflow/rules" / script).resolve()
         assert code == script_code_hash(path, wd / "src/railradio"), name
     assert not re.search(r"(?<!script_)code_hash\(", "".join(p.read_text() for p in (ROOT / "workflow/rules").glob("*.smk")))
+
+
+def test_a_data_file_named_by_the_script_itself_counts(tmp_path):
+    scripts = tmp_path / "scripts" / "study"
+    scripts.mkdir(parents=True)
+    (scripts / "reader.py").write_text('import json\nfrom importlib.resources import files\n'
+                                       'json.loads((files("railradio") / "data" / "tdl.json").read_text())\n')
+    assert "data/tdl.json" in script_closure(scripts / "reader.py")
+    a = script_code_hash(scripts / "reader.py")
+    (scripts / "reader.py").write_text((scripts / "reader.py").read_text() + "# edited\n")
+    assert script_code_hash(scripts / "reader.py") != a  # the script's own bytes count
+
+
+def test_third_party_versions_enter_exactly_the_hashes_of_the_rules_that_import_them(monkeypatch):
+    import railradio.codedeps as cd
+
+    rules = rule_scripts()
+    shard, figure = rules["nr_shard"], rules["fusion_figure"]
+    base = {s: script_code_hash(s) for s in (shard, figure)}
+    real = cd._distributions()
+
+    def bumped(top):
+        return {**real, top: tuple((d, v + ".post1") for d, v in real[top])}
+
+    monkeypatch.setattr(cd, "_distributions", lambda: bumped("numba"))
+    assert script_code_hash(shard) != base[shard] and script_code_hash(figure) == base[figure]
+    monkeypatch.setattr(cd, "_distributions", lambda: bumped("matplotlib"))
+    assert script_code_hash(shard) == base[shard] and script_code_hash(figure) != base[figure]

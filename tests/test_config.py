@@ -27,8 +27,9 @@ def _ci():
 
 
 def _with(cfg, dotted, value):
+    """Set a key given as "a.b.c" (or as a tuple of parts, for a key that holds a dot)."""
     node = cfg
-    parts = dotted.split(".")
+    parts = list(dotted) if isinstance(dotted, tuple) else dotted.split(".")
     for p in parts[:-1]:
         node = node[p]
     node[parts[-1]] = value
@@ -182,6 +183,12 @@ def test_schema_rejects_each_kind_of_bad_value(dotted, value, must_mention):
         ({"tunnel.geometry.rx_y_m": 9.0}, ["tunnel.geometry", "outside"]),  # a study's own check
         ({"tunnel.sensitivity.side_wall_slot_z_m": 6.0}, ["tunnel.sensitivity.side_wall_slot_z_m", "outside"]),
         ({"fusion.sensitivity.radii_m": [1000.0]}, ["fusion.sensitivity.radii_m[0]", "d_m"]),
+        ({"nr.sensitivity.epochs": 500}, ["nr.sensitivity.epochs", "main run's 160 epochs"]),
+        ({"chain.speed_halfwidth_kmh": 10.0}, ["chain.speed_halfwidth_kmh", "reaches"]),  # CI: 0-57 km/h
+        ({("handover", "sensitivity", "switches", "radio.spacing_m"): [10.0]},
+         ["handover.sensitivity.switches.radio.spacing_m[0]", ">= 500"]),
+        ({("handover", "sensitivity", "switches", "a3.ttt_s"): [0.33]},  # not a TS 36.331 TimeToTrigger
+         ["handover.sensitivity.switches.a3.ttt_s[0]", "0.32"]),
     ],
 )
 def test_rules_between_keys_name_the_key(changes, must_mention):

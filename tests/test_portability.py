@@ -7,7 +7,8 @@ handled (railradio.workflow.cpu_pins):
   not reorder sums or fuse multiply-adds, so the host build and a build for a generic
   x86-64 (no AVX, no FMA) must give the same numbers: tested here on a CI-scale slice.
 * NumPy's and OpenBLAS's run-time code paths are pinned by the jobs' environment (tested
-  below: the pins are in JOB_ENV, and OpenBLAS's kernels really sum differently).
+  below: the pins are in JOB_ENV and in effect in a job's process, NumPy knows their names,
+  and OpenBLAS's kernels really sum differently).
 * scipy.fft's pocketfft is compiled for SSE2 only and has no run-time dispatch.
 """
 from __future__ import annotations
@@ -20,8 +21,9 @@ import numpy as np
 import pytest
 import xarray as xr
 
+from railradio.arithmetic import beyond_v3, cpu_pins
 from railradio.keynumbers import compare
-from railradio.workflow import JOB_ENV, cpu_pins
+from railradio.workflow import JOB_ENV
 
 from .conftest import COMMAND_TIMEOUT_S, ROOT, copy_workflow, smk, workflow_env
 
@@ -54,11 +56,30 @@ def test_generic_cpu_build_of_the_kernels_gives_the_same_nr_numbers(ci_run, tmp_
 
 
 def test_jobs_pin_numpy_and_openblas_code_paths_on_x86_64_v3():
-    pins = cpu_pins("x86_64", {"avx2", "fma", "sse4_2"})
+    v3 = {"X86_V2": True, "X86_V3": True, "X86_V4": False}
+    pins = cpu_pins("x86_64", v3, ["X86_V3", "X86_V4", "AVX512_ICL", "AVX512_SPR"])
     assert pins == {"NPY_DISABLE_CPU_FEATURES": "X86_V4 AVX512_ICL AVX512_SPR", "OPENBLAS_CORETYPE": "Haswell"}
-    assert cpu_pins("x86_64", {"sse4_2"}) == {}  # the Haswell kernels would not run there
-    assert cpu_pins("aarch64", {"avx2", "fma"}) == {}
+    # NumPy before 2.4 names the AVX-512 features one by one
+    assert beyond_v3(["AVX2", "FMA3", "AVX512F", "AVX512_SKX"]) == ["AVX512F", "AVX512_SKX"]
+    assert cpu_pins("x86_64", {"X86_V2": True, "X86_V3": False}, ["X86_V3"]) == {}  # no Haswell kernels there
+    assert cpu_pins("aarch64", v3, ["X86_V3"]) == {}
     assert all(JOB_ENV.get(k) == v for k, v in cpu_pins().items())
+
+
+def test_the_pins_are_known_to_numpy_and_in_effect_in_a_job():
+    """In a process with the jobs' environment, NumPy accepts every feature name it is
+    asked to disable (an unknown name is only an ImportWarning: made an error here), runs
+    no loop above AVX2, and both OpenBLAS libraries run the Haswell kernels."""
+    if not cpu_pins():
+        pytest.skip("not an x86-64-v3 machine: nothing is pinned")
+    prog = ("import json; from railradio.arithmetic import in_effect, pins_hold; "
+            "print(json.dumps([pins_hold(), in_effect()]))")
+    env = workflow_env(ROOT, **JOB_ENV)
+    run = subprocess.run([sys.executable, "-W", "error::ImportWarning", "-c", prog], env=env, capture_output=True,
+                         text=True, check=False, timeout=COMMAND_TIMEOUT_S)
+    assert run.returncode == 0, run.stderr[-2000:]
+    holds, eff = json.loads(run.stdout)
+    assert holds and eff["numpy_simd"] == "X86_V3" and set(eff["openblas_core"].values()) == {"Haswell"}, eff
 
 
 _BLAS_SUMS = """

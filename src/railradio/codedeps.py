@@ -17,7 +17,9 @@ What counts as reached, from a file F:
   (``"track.py"``, run through :mod:`runpy`);
 * a package data file (``railradio/data/<name>``) whose name appears as a string literal.
 
-Third-party modules are not followed: their versions are pinned by ``constraints.txt``.
+Third-party packages are not followed into their source: the hash holds the installed
+version of each distribution the reached files import, so upgrading numpy re-runs the
+rules that use it and nothing else.
 """
 
 from __future__ import annotations
@@ -153,18 +155,44 @@ def script_closure(script: str | Path, root: Path = SRC_ROOT) -> dict[str, Path]
         out[name] = path
         mods, _ = _references(path, None, root)
         todo.extend(mods - seen)
-    for path in list(out.values()):
+    for path in [script, *out.values()]:
         for d in _data_files(path, root):
             out[f"data/{d.name}"] = d
     return dict(sorted(out.items()))
 
 
+def third_party(script: str | Path, root: Path = SRC_ROOT) -> dict[str, str]:
+    """Installed distributions (name -> version) of the third-party packages that the
+    script and the files of its closure import (``numpy``, ``scipy``, ``numba``, …)."""
+    files = [Path(script).resolve(), *(p for n, p in script_closure(script, root).items() if not n.startswith("data/"))]
+    tops = {n.split(".")[0] for f in files for n in _facts(f)[0]} - {PACKAGE}
+    dists = _distributions()
+    out = {}
+    for top in sorted(tops):
+        for dist, ver in dists.get(top, ()):  # a standard-library module has none
+            out[dist] = ver
+    return dict(sorted(out.items()))
+
+
+@lru_cache(maxsize=1)
+def _distributions() -> dict[str, tuple[tuple[str, str], ...]]:
+    """Top-level import name -> ((distribution, version), ...) of the installed packages."""
+    from importlib.metadata import packages_distributions, version
+
+    return {top: tuple((d, version(d)) for d in sorted(set(ds))) for top, ds in packages_distributions().items()}
+
+
 def script_code_hash(script: str | Path, root: Path = SRC_ROOT) -> str:
-    """SHA-256 (16 hex digits) over the names and bytes of :func:`script_closure`."""
+    """SHA-256 (16 hex digits) over the script's own bytes (Snakemake notices a changed
+    script by its time stamp only), the names and bytes of :func:`script_closure`, and the
+    versions of the third-party distributions they import (:func:`third_party`)."""
     h = hashlib.sha256()
+    h.update(Path(script).read_bytes())
     for name, path in script_closure(script, root).items():
         h.update(name.encode())
         h.update(b"\0")
         h.update(path.read_bytes())
         h.update(b"\0")
+    for dist, ver in third_party(script, root).items():
+        h.update(f"{dist}=={ver}\0".encode())
     return h.hexdigest()[:16]

@@ -19,7 +19,9 @@ from __future__ import annotations
 from collections.abc import Callable, Iterator, Mapping
 from typing import Any
 
-from railradio.config import ConfigError
+import numpy as np
+
+from railradio.config import ConfigError, Validator
 
 Problem = tuple[str, Any, str]
 """(dotted key, its value, what the rule allows)."""
@@ -64,6 +66,17 @@ def _fusion(cfg: Mapping[str, Any]) -> Iterator[Problem]:
                           lambda r=r: ArcGeometry(f["reference"]["d_m"], r, f["cell_radius_factor"]))
 
 
+def main_epochs(nr: Mapping[str, Any]) -> int | None:
+    """Epochs of an nr run: the trajectory's, cut at ``max_epochs`` (None if it is invalid)."""
+    from railradio.nr.simulate import scenario_from_config
+
+    try:
+        n_traj = scenario_from_config(dict(nr)).trajectory.n_epochs
+    except (ValueError, KeyError):
+        return None
+    return n_traj if nr["max_epochs"] is None else min(nr["max_epochs"], n_traj)
+
+
 def nr_problems(nr: Mapping[str, Any], root: str = "nr", main: bool = True) -> Iterator[Problem]:
     """The rules of one nr config (the main run's, ``main=True``, or a merged case's)."""
     from railradio.nr.simulate import scenario_from_config
@@ -84,13 +97,15 @@ def nr_problems(nr: Mapping[str, Any], root: str = "nr", main: bool = True) -> I
     for i, (dur, acc) in enumerate(nr["trajectory"]["phases"]):
         v += dur * acc
         if v < -1e-9:
-            yield f"{root}.trajectory.phases[{i}]", [dur, acc], f"phases that keep the speed >= 0 (this one ends at {v:.3g} m/s)"
+            yield (f"{root}.trajectory.phases[{i}]", [dur, acc],
+                   f"phases that keep the speed >= 0 (this one ends at {v:.3g} m/s)")
     yield from _prefixed(root, _ascending(nr, "tracker.w_distance_edges_m"))
     receivers = {"seed", *nr["receiver_variants"]}
     if "seed" in nr["receiver_variants"]:
         yield f"{root}.receiver_variants.seed", "…", "a name other than 'seed' (the source's receiver, nr.receiver)"
     if nr["imm"]["receiver"] not in receivers:
-        yield f"{root}.imm.receiver", nr["imm"]["receiver"], f"one of {sorted(receivers)} (seed or a receiver_variants name)"
+        yield (f"{root}.imm.receiver", nr["imm"]["receiver"],
+               f"one of {sorted(receivers)} (seed or a receiver_variants name)")
     dt = nr["trajectory"]["dt_s"]
     for i, tau in enumerate(nr["imm"]["sojourn_s"]):
         if tau < dt:
@@ -112,6 +127,10 @@ def _nr(cfg: Mapping[str, Any], schema: Mapping[str, Any]) -> Iterator[Problem]:
                                             "case's: nr.sensitivity.cases.<case>.sync)")
     sens = nr["sensitivity"]
     yield from _at_most(cfg, "nr.sensitivity.n_shards", "nr.sensitivity.epochs")
+    n_main = main_epochs(nr)
+    if n_main is not None and sens["epochs"] > n_main:
+        yield "nr.sensitivity.epochs", sens["epochs"], \
+            f"<= the main run's {n_main} epochs (the cases are compared with its r0 on the same epochs)"
     try:
         cases = nr_cases.merged_cases(nr, schema["properties"]["nr"])
     except ConfigError as exc:
@@ -130,10 +149,28 @@ def _nr(cfg: Mapping[str, Any], schema: Mapping[str, Any]) -> Iterator[Problem]:
             yield f"{key}.reference", sw["reference"], "one of the sweep's cases"
 
 
-def _handover(cfg: Mapping[str, Any]) -> Iterator[Problem]:
+def _handover(cfg: Mapping[str, Any], schema: Mapping[str, Any]) -> Iterator[Problem]:
+    from railradio.config import describe_allowed
     from railradio.handover.params import scenario_from_config
+    from railradio.handover.sensitivity import apply_variant, variants
 
     ho = cfg["handover"]
+    sections = schema["properties"]["handover"]["properties"]
+    for switch, values in ho["sensitivity"]["switches"].items():
+        section, key = switch.split(".")
+        node = sections[section]["properties"][key]
+        for i, v in enumerate(values):  # a switch value must be a valid value of its key
+            if not Validator(node).is_valid(v):
+                yield f"handover.sensitivity.switches.{switch}[{i}]", v, \
+                    f"a value of handover.{switch}: {describe_allowed(node)}"
+    try:
+        base = scenario_from_config(dict(ho))
+    except (ValueError, KeyError):
+        base = None
+    if base is not None:
+        for vid, variant in variants(ho["sensitivity"]).items():
+            yield from _probe(f"handover.sensitivity.switches.{variant.get('switch', vid)}",
+                              lambda variant=variant: apply_variant(base, variant))
     yield from _at_most(cfg, "handover.sweep.n_batches", "handover.sweep.n_blocks")
     yield from _at_most(cfg, "handover.sensitivity.n_blocks", "handover.sweep.n_blocks")
     speeds = ho["sweep"]["speeds_kmh"]
@@ -161,9 +198,19 @@ def _chain(cfg: Mapping[str, Any]) -> Iterator[Problem]:
     if ch["speed_kmh"] not in speeds:
         yield "chain.speed_kmh", ch["speed_kmh"], \
             f"one of handover.sweep.speeds_kmh = {speeds} (the chain reuses its draws)"
-    if "imm" in ch["nr_filters"] and not cfg["nr"]["imm"]:
-        yield "chain.nr_filters", ch["nr_filters"], "ekf only without an nr.imm section"
     yield from _probe("chain", lambda: params_from_config(dict(ch)))
+    # the chain's nr input: epochs of the main run at the chain's speed
+    from railradio.nr.simulate import scenario_from_config
+
+    n_main = main_epochs(cfg["nr"])
+    if n_main is not None:
+        traj = scenario_from_config(dict(cfg["nr"])).trajectory
+        _, v, _ = traj.state(np.arange(n_main) * traj.dt_s)
+        kmh = 3.6 * np.asarray(v)
+        if not np.any(np.abs(kmh - ch["speed_kmh"]) <= ch["speed_halfwidth_kmh"]):
+            yield "chain.speed_halfwidth_kmh", ch["speed_halfwidth_kmh"], (
+                f"a window around chain.speed_kmh = {ch['speed_kmh']} that the nr run reaches (its speeds "
+                f"span {kmh.min():.0f}-{kmh.max():.0f} km/h)")
 
 
 def _tunnel(cfg: Mapping[str, Any]) -> Iterator[Problem]:
@@ -207,7 +254,7 @@ def problems(cfg: Mapping[str, Any], schema: Mapping[str, Any]) -> list[Problem]
     out: list[Problem] = []
     out += _fusion(cfg)
     out += _nr(cfg, schema)
-    out += _handover(cfg)
+    out += _handover(cfg, schema)
     out += _chain(cfg)
     out += _tunnel(cfg)
     return out

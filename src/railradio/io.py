@@ -5,7 +5,8 @@ Every intermediate of the pipeline goes through :func:`write_dataset`:
 * explicit engine (``h5netcdf``), zlib compression of every data variable;
 * CF-style ``units`` and ``long_name`` required on every variable and coordinate;
 * provenance attributes: ``config_json`` (the sub-config used), ``config_sha256``,
-  ``seed_spawn_key``, ``railradio_version``, ``git_commit``;
+  ``seed_spawn_key``, ``railradio_version``, ``git_commit``, ``arithmetic`` (the CPU code
+  paths of NumPy and OpenBLAS the output was computed with);
 * complex variables stored portably as ``<name>_real``/``<name>_imag`` (read back by
   :func:`read_dataset`);
 * atomic: written to a hidden temporary file in the target folder, then renamed, so an
@@ -32,6 +33,7 @@ import numpy as np  # noqa: E402
 import xarray as xr  # noqa: E402
 
 from railradio import __version__
+from railradio.arithmetic import in_effect
 from railradio.rng import canonical_json
 
 ENGINE = "h5netcdf"
@@ -41,6 +43,7 @@ PROVENANCE_ATTRS = (
     "seed_spawn_key",
     "railradio_version",
     "git_commit",
+    "arithmetic",
 )
 
 
@@ -70,6 +73,7 @@ def provenance(config: Mapping[str, Any], key: tuple[int, ...] | None) -> dict[s
         "seed_spawn_key": json.dumps(list(key) if key is not None else None),
         "railradio_version": __version__,
         "git_commit": git_commit(),
+        "arithmetic": json.dumps(in_effect(), sort_keys=True),  # CPU code paths (railradio.arithmetic)
     }
 
 

@@ -6,47 +6,11 @@ Kept free of Snakemake imports so the library stays importable without it.
 from __future__ import annotations
 
 import logging
-import platform
 import signal
 import sys
 from pathlib import Path
 
-
-def _cpu_flags(path: str = "/proc/cpuinfo") -> set[str]:
-    try:
-        with open(path, encoding="utf-8") as fh:
-            for line in fh:
-                if line.startswith("flags"):
-                    return set(line.split(":", 1)[1].split())
-    except OSError:
-        pass
-    return set()
-
-
-def cpu_pins(machine: str | None = None, flags: set[str] | None = None) -> dict[str, str]:
-    """Environment that makes NumPy's and OpenBLAS's arithmetic the same on every x86-64
-    machine with AVX2 and FMA (x86-64-v3: every Intel core since Haswell, every AMD core
-    since Zen), whatever else the CPU has.
-
-    Both libraries pick code paths at run time by the CPU, and the paths round differently:
-
-    * NumPy dispatches its loops (exp, log, sin, cos, …) to AVX-512 code where the CPU has
-      it (``X86_V4`` and later groups); disabled here, every machine runs the AVX2 loops.
-    * OpenBLAS picks its matrix kernels by the CPU (Haswell, SkylakeX, …), and kernels sum
-      in different orders; pinned to the Haswell kernels (the ones a Zen core also gets).
-
-    Empty on other machines (aarch64, x86-64 without AVX2): their arithmetic is their own,
-    and reproduction there holds within the tolerance rule only (``config/README.md``).
-    scipy.fft (SSE2 pocketfft, no run-time dispatch) and numba without ``fastmath`` (no
-    reassociation, no fused multiply-add) need nothing: their results do not depend on
-    the CPU (``tests/test_portability.py``).
-    """
-    machine = platform.machine() if machine is None else machine
-    flags = _cpu_flags() if flags is None else flags
-    if machine not in ("x86_64", "AMD64") or not {"avx2", "fma"} <= flags:
-        return {}
-    return {"NPY_DISABLE_CPU_FEATURES": "X86_V4 AVX512_ICL AVX512_SPR", "OPENBLAS_CORETYPE": "Haswell"}
-
+from railradio.arithmetic import cpu_pins, in_effect, pins_hold
 
 JOB_ENV = {
     # one BLAS/OpenMP thread per job: Snakemake runs jobs in parallel (-j), and a BLAS
@@ -63,11 +27,13 @@ JOB_ENV = {
     # ``malloc_speedup`` ≈ 1); kept as a guard for jobs with large temporaries.
     # Results do not depend on it.
     "GLIBC_TUNABLES": "glibc.malloc.mmap_threshold=268435456:glibc.malloc.trim_threshold=268435456",
-    # the same arithmetic on every machine of the kind (cpu_pins)
+    # the same arithmetic on every machine of the kind (railradio.arithmetic)
     **cpu_pins(),
 }
 """Environment of every workflow job (set by ``workflow/rules/common.smk`` before any job
-starts: glibc, NumPy and OpenBLAS read these variables when a process starts)."""
+starts: glibc, NumPy and OpenBLAS read these variables when a process starts). The CPU
+pins override the environment (results depend on them); ``RAILRADIO_CPU_PINS=0`` leaves
+them out."""
 
 
 def _raise_on_sigterm(signum, frame):  # pragma: no cover - signal path
@@ -92,4 +58,8 @@ def setup_script(log_path: str | None) -> logging.Logger:
         handler = logging.StreamHandler()
     handler.setFormatter(logging.Formatter("%(asctime)s %(levelname)s %(message)s"))
     logger.handlers[:] = [handler]
+    logger.info("arithmetic: %s", in_effect())
+    if not pins_hold():
+        logger.warning("NumPy's or OpenBLAS's CPU code paths are not pinned in this job (%s): its "
+                       "numbers may differ from another machine's beyond rounding", in_effect())
     return logger

@@ -2,13 +2,19 @@
 import os
 from pathlib import Path
 
+from railradio.arithmetic import PIN_KEYS
 from railradio.workflow import JOB_ENV
 
 # One BLAS thread per job, a heap that keeps freed memory, and NumPy's and OpenBLAS's code
 # paths pinned so that the arithmetic does not depend on the CPU (railradio.workflow.JOB_ENV);
-# the jobs' processes inherit it. A value already in the environment wins.
+# the jobs' processes inherit it. A value already in the environment wins, except for the
+# CPU pins, which the numbers depend on (RAILRADIO_CPU_PINS=0 leaves them out).
 for _var, _value in JOB_ENV.items():
-    os.environ.setdefault(_var, _value)
+    if _var in PIN_KEYS:
+        if os.environ.get("RAILRADIO_CPU_PINS", "1") != "0":
+            os.environ[_var] = _value
+    else:
+        os.environ.setdefault(_var, _value)
 
 from railradio.codedeps import script_code_hash
 from railradio.config import load_schema, validate_config

@@ -173,11 +173,8 @@ rule nr_bounds:
         sim=NR_SIM,
         seed=config["seed"],
         n_epochs=NR_EPOCHS,
-        calibrated=(
-            "robust/aod_toa/gate"
-            if "robust" in NR["receiver_variants"]
-            else "seed/aod_toa/gate"
-        ),
+        # the calibration of the tracker the IMM study uses (nr.imm.receiver, AOD+TOA, gated)
+        calibrated=f"{NR['imm']['receiver']}/aod_toa/gate",
     log:
         "results/logs/nr/bounds_{real}.log",
     benchmark:
