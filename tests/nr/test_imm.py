@@ -1,5 +1,7 @@
 """IMM filter, RTS smoother and the lag key numbers (STUDY.md §6 item 3, issue 7)."""
 
+import json
+
 import numpy as np
 import pytest
 import xarray as xr
@@ -307,7 +309,8 @@ def _report_ds(lag: float = 0.4, after_err: float = 1.0) -> xr.Dataset:
                        "mode_prob": (("mode", "epoch"), mu), "t": (("epoch",), t),
                        "q": (("mode",), [0.01, 10.0]),
                        "change_epoch": (("change",), [200]), "delta_a": (("change",), [-0.85])},
-                      coords={"filter": ["ekf", "imm", "rts"], "mode": ["quiet", "manoeuvre"]})
+                      coords={"filter": ["ekf", "imm", "rts"], "mode": ["quiet", "manoeuvre"]},
+                      attrs={"config_json": json.dumps({"sim": {"deployment": {"spacing_m": 500.0}}})})
 
 
 def test_key_numbers_measure_the_lag():

@@ -1,6 +1,8 @@
 """The nr sensitivity sweeps (issue 7): clock-synchronization errors on the measured TOAs,
 their TOA floor, per-case epochs in the sensitivity key numbers, sparse RRHs at the track's
 start, fewer SS beams."""
+import json
+
 import numpy as np
 import pytest
 import xarray as xr
@@ -84,7 +86,8 @@ def _track(n: int, err: float) -> xr.Dataset:
          "aod_err": (("receiver", "epoch", "slot"), np.full((2, n, 3), 0.01)),
          "range_err": (("receiver", "epoch", "slot"), np.full((2, n, 3), 0.4)),
          "t": (("epoch",), np.arange(n) * 0.1)},
-        coords={"receiver": rx, "variant": var, "gate": [0, 1]})
+        coords={"receiver": rx, "variant": var, "gate": [0, 1]},
+        attrs={"config_json": json.dumps({"sim": {"deployment": {"spacing_m": 500.0}}})})
 
 
 def test_sensitivity_key_numbers_cut_each_case_to_its_epochs():
