@@ -243,3 +243,43 @@ def test_snapshot_batch_equals_one_epoch_at_a_time():
         np.testing.assert_allclose(cov[e], c1, rtol=1e-9)
     with pytest.raises(ValueError, match="rrh_xy"):
         snapshot_ls_batch(np.full((1, 3, 2), np.nan), a_all[:1], t_all[:1], DH, cfg, guess[:1])
+
+
+TRUTH_VARS = ("x_true", "v_true", "a_true", "d3d", "toa_true", "aod_true", "rx_power", "sir_best")
+"""What the simulation knows and a receiver does not (the candidate list is the receiver's
+own, tests/nr/test_cellsearch.py)."""
+
+
+def test_the_tracker_sees_no_truth():
+    """track() gives the same tracks, snapshot fixes and NIS when every truth array of the
+    estimates is replaced by NaN and the candidates of each epoch are shuffled: it starts
+    and re-acquires from its own measurements (the strongest measured cell), not from the
+    stored order of the candidates."""
+    import yaml
+
+    from railradio.nr.simulate import scenario_from_config, simulate_epochs
+    from railradio.nr.tracking import TrackerConfig, track
+    from railradio.rng import spawn_key
+
+    from ..conftest import ROOT
+
+    nr = yaml.safe_load((ROOT / "config/config.yaml").read_text())["nr"]
+    scn = scenario_from_config(nr)
+    ds = simulate_epochs(scn, np.arange(2500, 2560), 7, spawn_key("nr", 0)).sel(receiver="robust")
+    blind = ds.copy()
+    for name in TRUTH_VARS:
+        blind[name] = ds[name].copy(data=np.full(ds[name].shape, np.nan))
+    perm = np.argsort(np.random.default_rng(3).random((ds.sizes["epoch"], ds.sizes["cand"])), axis=1)
+    for name, var in blind.data_vars.items():
+        if var.dims == ("epoch", "cand"):
+            blind[name] = var.copy(data=np.take_along_axis(var.values, perm, axis=1))
+    assert not np.array_equal(blind["rrh"].values, ds["rrh"].values)
+    dep = scn.deployment
+    for variant in ("aod", "toa", "aod_toa"):
+        for gate in (False, True):
+            cfg = TrackerConfig(variant=variant, q=1.0, sigma_aod_rad=np.radians(2.0), sigma_toa_s=4e-9, gate=gate)
+            args = (dep.x_m, dep.offset_m, dep.h_bs_m - dep.h_ut_m, scn.trajectory.dt_s, cfg)
+            a, b = track(ds, *args, strength="best_score"), track(blind, *args, strength="best_score")
+            for key in ("state", "nis", "snapshot", "n_used", "reacquired"):
+                np.testing.assert_array_equal(a[key], b[key], err_msg=f"{variant} gate={gate}: {key}")
+            assert np.isfinite(a["state"][-1, 0])

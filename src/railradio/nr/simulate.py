@@ -1,8 +1,11 @@
 """Per-epoch simulation of the nr study: channel, received burst, per-cell estimates.
 
 One call of :func:`simulate_epochs` handles any set of epochs (a shard of the track); every
-random draw is keyed by (realization, epoch) or (realization, RRH), so the result of an
-epoch does not depend on the shard it falls in.
+random draw is keyed by (realization, epoch) or (realization, RRH), and the receiver's
+state restarts at fixed acquisition epochs, so the result of an epoch does not depend on
+the shard it falls in. Synthesis (truth -> burst, :class:`Synthesis`) and estimation
+(burst -> measurements, :class:`Estimator`) are separate: the estimator never receives the
+truth.
 """
 
 from __future__ import annotations
@@ -15,6 +18,7 @@ import xarray as xr
 
 from railradio.constants import SPEED_OF_LIGHT_M_S
 from railradio.nr.antenna import RrhArray, TrainArray
+from railradio.nr.cellsearch import CellSearch, CellSearchConfig, correlation_key, ss_rsrp_db, warmup_start
 from railradio.nr.channel import tdl_profile
 from railradio.nr.geometry import Deployment, Trajectory
 from railradio.nr.link import RadioParams, ShadowingMap, link_budget
@@ -44,7 +48,7 @@ class Scenario:
     variants: tuple = ()
     """Extra receivers run on the same bursts: ((name, ReceiverConfig, detector), ...);
     they must share the decimation and SS-block pattern of ``receiver``."""
-    n_candidates: int = 6
+    cell_search: CellSearchConfig = field(default_factory=CellSearchConfig)
     full_channel_range_m: float = 1500.0
     n_sinusoids: int = 16
     pool_size: int = 256
@@ -57,9 +61,143 @@ class Scenario:
         return tdl_profile(self.tdl, self.delay_spread_s)
 
 
+@dataclass
+class Burst:
+    """One epoch's received burst and the truth it was synthesized from (the truth is for
+    scoring: :class:`Estimator` never receives it)."""
+
+    z: np.ndarray
+    s_min: int
+    x_m: float
+    v_m_s: float
+    a_m_s2: float
+    links: object  # railradio.nr.link.LinkBudget
+
+
+class Synthesis:
+    """Truth -> received burst, epoch by epoch; every draw keyed by (realization, epoch)."""
+
+    def __init__(self, scn: Scenario, seed: int, key: tuple[int, ...]):
+        self.scn, self.seed, self.key = scn, seed, key
+        self.shadow = ShadowingMap(seed, key + (KEY_SHADOWING,), scn.deployment, scn.radio)
+        pool = qpsk_pool(make_rng(seed, key + (KEY_POOL,)), scn.pool_size)
+        self.syn = Synthesizer(scn.receiver, scn.profile, pool, scn.n_sinusoids, scn.full_channel_range_m,
+                               scn.data_beam)
+
+    def __call__(self, epoch: int) -> Burst:
+        scn = self.scn
+        t = epoch * scn.trajectory.dt_s
+        x, v, a = (float(u[0]) for u in scn.trajectory.state(np.array([t])))
+        lb = link_budget(x, v, scn.deployment, scn.radio, scn.rrh_array, scn.train_array, self.shadow,
+                         scn.shadowing)
+        z, s_min = self.syn(lb.links, make_rng(self.seed, self.key + (KEY_EPOCH, int(epoch))), t0_s=t,
+                            d2d_m=lb.link_d2d_m)
+        return Burst(z, s_min, x, v, a, lb)
+
+
+@dataclass
+class EpochEstimates:
+    """What the receiver measured at one epoch: its candidate list and, per receiver and
+    candidate, the correlation estimates (arrays [n_receivers, n_candidates])."""
+
+    cand: np.ndarray
+    acquired: bool
+    ss_rsrp_db: np.ndarray
+    aod_rad: np.ndarray
+    toa_s: np.ndarray
+    peak: np.ndarray
+    best_score: np.ndarray
+    n_detected: np.ndarray
+    corr: np.ndarray | None = None
+
+
+class Estimator:
+    """Burst + deployment + the receiver's own state -> measurements (no truth).
+
+    The cell search (:mod:`railradio.nr.cellsearch`) names the candidate RRHs; every
+    receiver of the scenario correlates the same list. A receiver whose correlation settings
+    equal the cell search's provides the search's statistics (one correlation, not two).
+    """
+
+    def __init__(self, scn: Scenario):
+        self.scn = scn
+        self.receivers = [("seed", scn.receiver, scn.detector)] + list(scn.variants)
+        for _, rc, _ in self.receivers:
+            if rc.decimation != scn.receiver.decimation or rc.ssb_pattern != scn.receiver.ssb_pattern:
+                raise ValueError("receiver variants must share decimation and ssb_pattern")
+        self.cors = [Correlator(rc, det, scn.pfa) for _, rc, det in self.receivers]
+        cs = scn.cell_search
+        cs_rc = cs.receiver_config(scn.receiver)
+        cs_key = correlation_key(cs_rc, cs.detector, cs.pfa)
+        self.cs_shared = next((j for j, (_, rc, det) in enumerate(self.receivers)
+                               if correlation_key(rc, det, scn.pfa) == cs_key), None)
+        cs_cor = self.cors[self.cs_shared] if self.cs_shared is not None else Correlator(cs_rc, cs.detector, cs.pfa)
+        self.search = CellSearch(cs, scn.deployment, cs_cor)
+        self.n_id1, self.n_id2 = scn.deployment.n_id()
+        self.next_epoch: int | None = None
+
+    def start(self, epoch: int) -> int:
+        """The first epoch to process before reporting ``epoch`` (state reset there when a
+        fixed acquisition epoch lies between the last processed epoch and ``epoch``)."""
+        w = warmup_start(epoch, self.scn.cell_search.acquire_every)
+        if self.next_epoch is None or w >= self.next_epoch or epoch < self.next_epoch:
+            self.search.reset()
+            return w
+        return self.next_epoch
+
+    def __call__(self, epoch: int, z: np.ndarray, s_min: int, report: bool = True,
+                 keep_corr: bool = False) -> EpochEstimates | None:
+        """Measure one epoch; ``report=False`` (a replayed warm-up epoch) runs the cell
+        search only."""
+        if self.next_epoch is not None and epoch != self.next_epoch:
+            self.search.reset()
+        self.next_epoch = int(epoch) + 1
+        spectra = {}  # window FFTs shared by correlators with the same window length
+
+        def zf(cor):
+            if cor.n_win not in spectra:
+                spectra[cor.n_win] = cor.window_spectra(z, s_min)
+            return spectra[cor.n_win]
+
+        cs_cor = self.search.correlator
+        cand, acquired = self.search.candidates(epoch, z, s_min, zf(cs_cor))
+        n1, n2 = self.n_id1[cand], self.n_id2[cand]
+        results = {}
+        if self.cs_shared is None or not report:
+            cs_res = cs_cor.correlate(z, s_min, n1, n2, zf=zf(cs_cor))
+        if report:
+            for j, cor in enumerate(self.cors):
+                results[j] = cor.correlate(z, s_min, n1, n2, keep_corr=(j == 0 and keep_corr), zf=zf(cor))
+            if self.cs_shared is not None:
+                cs_res = results[self.cs_shared]
+        rsrp = ss_rsrp_db(cs_res)
+        self.search.update(cand, rsrp)
+        if not report:
+            return None
+        n_r, n_c = len(self.cors), cand.size
+        out = EpochEstimates(cand, acquired, rsrp, *(np.full((n_r, n_c), np.nan) for _ in range(4)),
+                             np.zeros((n_r, n_c), dtype=np.int64))
+        for j, res in results.items():
+            out.aod_rad[j] = res.aod_rad
+            out.toa_s[j] = res.toa_samples / SAMPLE_RATE_HZ
+            out.peak[j] = res.peak_comb
+            out.n_detected[j] = res.detected.sum(axis=1)
+            score = np.where(res.detected, (res.eta - res.mu) / np.maximum(res.sigma, 1e-30), -np.inf)
+            out.best_score[j] = np.where(res.detected.any(axis=1), score.max(axis=1), np.nan)
+        if keep_corr:
+            out.corr = results[0].corr
+        return out
+
+
 def simulate_epochs(scn: Scenario, epochs: np.ndarray, seed: int, key: tuple[int, ...],
                     keep_corr_epochs: tuple[int, ...] = ()) -> xr.Dataset:
     """Simulate the given epochs of one realization.
+
+    Synthesis (:class:`Synthesis`, truth -> burst) and estimation (:class:`Estimator`,
+    burst -> measurements) are separate; the truth of each epoch is kept only to score.
+    Epochs since the last fixed acquisition epoch before each requested one are replayed
+    first (:func:`railradio.nr.cellsearch.warmup_start`), so an epoch's result does not
+    depend on which other epochs are requested.
 
     Parameters
     ----------
@@ -75,94 +213,85 @@ def simulate_epochs(scn: Scenario, epochs: np.ndarray, seed: int, key: tuple[int
     Returns
     -------
     xarray.Dataset
-        Dimensions ``epoch`` × ``cand`` (the ``n_candidates`` RRHs nearest the train):
-        truth (position, speed, acceleration; per candidate 3-D distance, AOD, delay,
-        received power) and estimates (detections, AOD, TOA, combined peak).
+        Dimensions ``epoch`` × ``cand`` (the receiver's neighbour list, its anchor cell
+        first): truth (position, speed, acceleration; per candidate 3-D distance, AOD,
+        delay, received power) and estimates (candidate list, SS-RSRP, detections, AOD,
+        TOA, combined peak).
     """
     epochs = np.asarray(epochs, dtype=np.int64)
-    dep, radio = scn.deployment, scn.radio
-    t = epochs * scn.trajectory.dt_s
-    x, v, a = scn.trajectory.state(t)
-    shadow = ShadowingMap(seed, key + (KEY_SHADOWING,), dep, radio)
-    pool = qpsk_pool(make_rng(seed, key + (KEY_POOL,)), scn.pool_size)
-    syn = Synthesizer(scn.receiver, scn.profile, pool, scn.n_sinusoids, scn.full_channel_range_m,
-                      scn.data_beam)
-    receivers = [("seed", scn.receiver, scn.detector)] + list(scn.variants)
-    for _, rc, _ in receivers:
-        if rc.decimation != scn.receiver.decimation or rc.ssb_pattern != scn.receiver.ssb_pattern:
-            raise ValueError("receiver variants must share decimation and ssb_pattern")
-    cors = [Correlator(rc, det, scn.pfa) for _, rc, det in receivers]
-    n_r = len(receivers)
-    n_e, n_c = epochs.size, scn.n_candidates
-    out = {name: np.full((n_e, n_c), np.nan) for name in ("d3d_m", "aod_true_rad", "rx_power_dbm")}
-    est = {name: np.full((n_r, n_e, n_c), np.nan) for name in ("aod_hat_rad", "toa_hat_s", "peak", "best_score")}
+    if np.any(np.diff(epochs) <= 0):
+        raise ValueError("epochs must be strictly increasing")
+    dep = scn.deployment
+    synth = Synthesis(scn, seed, key)
+    est = Estimator(scn)
+    n_r = len(est.receivers)
+    n_e, n_c = epochs.size, min(scn.cell_search.n_neighbours, dep.n_rrh)
+    truth = {name: np.full(n_e, np.nan) for name in ("x", "v", "a", "sir")}
+    out = {name: np.full((n_e, n_c), np.nan) for name in ("d3d_m", "aod_true_rad", "rx_power_dbm", "ss_rsrp")}
+    meas = {name: np.full((n_r, n_e, n_c), np.nan) for name in ("aod_rad", "toa_s", "peak", "best_score")}
     out["rrh"] = np.zeros((n_e, n_c), dtype=np.int64)
     out["panel"] = np.zeros((n_e, n_c), dtype=np.int64)
-    est["n_detected"] = np.zeros((n_r, n_e, n_c), dtype=np.int64)
-    sinr_proxy = np.full(n_e, np.nan)
-    n_id1, n_id2 = dep.n_id()
+    meas["n_detected"] = np.zeros((n_r, n_e, n_c), dtype=np.int64)
+    acquired = np.zeros(n_e, dtype=bool)
     corr_keep = {}
-    for i, (e, xe, ve) in enumerate(zip(epochs, x, v, strict=True)):
-        lb = link_budget(float(xe), float(ve), dep, radio, scn.rrh_array, scn.train_array, shadow, scn.shadowing)
-        rng = make_rng(seed, key + (KEY_EPOCH, int(e)))
-        z, s_min = syn(lb.links, rng, t0_s=float(t[i]), d2d_m=lb.link_d2d_m)
-        cand = dep.nearest(float(xe), n_c)
-        # a candidate beyond radio.range_m (sparse RRHs near the track's ends) sends nothing:
-        # its truth is the geometry to the reference point, its received power NaN, and a
-        # detection of it a false alarm
+    for i, e in enumerate(epochs):
+        for w in range(est.start(int(e)), int(e)):  # warm-up: the cell search's state at e
+            b = synth(w)
+            est(w, b.z, b.s_min, report=False)
+        b = synth(int(e))
+        m = est(int(e), b.z, b.s_min, keep_corr=int(e) in keep_corr_epochs)
+        cand = m.cand
+        out["rrh"][i], acquired[i], out["ss_rsrp"][i] = cand, m.acquired, m.ss_rsrp_db
+        for name in meas:
+            meas[name][:, i] = getattr(m, name)
+        if m.corr is not None:
+            corr_keep[int(e)] = (m.corr, cand)
+        # truth, for scoring: a candidate beyond radio.range_m (sparse RRHs near the
+        # track's ends) sends nothing: its truth is the geometry to the reference point,
+        # its received power NaN, and a detection of it a false alarm
+        lb = b.links
+        truth["x"][i], truth["v"][i], truth["a"][i] = b.x_m, b.v_m_s, b.a_m_s2
         inr = np.isin(cand, lb.rrh)
         pos = np.searchsorted(lb.rrh, cand[inr])
-        out["rrh"][i] = cand
-        out["d3d_m"][i] = dep.distance_3d_m(np.full(n_c, float(xe)), cand)
-        out["aod_true_rad"][i] = dep.aod_rad(np.full(n_c, float(xe)), cand)
+        out["d3d_m"][i] = dep.distance_3d_m(np.full(n_c, b.x_m), cand)
+        out["aod_true_rad"][i] = dep.aod_rad(np.full(n_c, b.x_m), cand)
         out["d3d_m"][i, inr] = lb.d3d_m[pos]
         out["aod_true_rad"][i, inr] = lb.aod_rad[pos]
         out["rx_power_dbm"][i, inr] = lb.rx_power_dbm[pos]
         if lb.panel is not None:
             out["panel"][i, inr] = lb.panel[pos]
-        spectra = {}  # window FFTs shared by receivers with the same window length
-        for j, cor in enumerate(cors):
-            if cor.n_win not in spectra:
-                spectra[cor.n_win] = cor.window_spectra(z, s_min)
-            res = cor.correlate(z, s_min, n_id1[cand], n_id2[cand],
-                                keep_corr=(j == 0 and int(e) in keep_corr_epochs), zf=spectra[cor.n_win])
-            est["aod_hat_rad"][j, i] = res.aod_rad
-            est["toa_hat_s"][j, i] = res.toa_samples / SAMPLE_RATE_HZ
-            est["peak"][j, i] = res.peak_comb
-            est["n_detected"][j, i] = res.detected.sum(axis=1)
-            score = np.where(res.detected, (res.eta - res.mu) / np.maximum(res.sigma, 1e-30), -np.inf)
-            est["best_score"][j, i] = np.where(res.detected.any(axis=1), score.max(axis=1), np.nan)
-            if res.corr is not None:
-                corr_keep[int(e)] = (res.corr, cand)
         p_all = 10 ** (lb.rx_power_dbm / 10)
-        sinr_proxy[i] = 10 * np.log10(p_all.max() / (p_all.sum() - p_all.max()))
+        truth["sir"][i] = 10 * np.log10(p_all.max() / (p_all.sum() - p_all.max()))
+    t = epochs * scn.trajectory.dt_s
     cd = ("epoch", "cand")
     rd = ("receiver", "epoch", "cand")
     ds = xr.Dataset(
         {
             "t": (("epoch",), t, {"units": "s", "long_name": "time of the burst start (truth instant)"}),
-            "x_true": (("epoch",), x, {"units": "m", "long_name": "true train position along the track"}),
-            "v_true": (("epoch",), v, {"units": "m s-1", "long_name": "true train speed"}),
-            "a_true": (("epoch",), a, {"units": "m s-2", "long_name": "true train acceleration"}),
-            "rrh": (cd, out["rrh"], {"units": "1", "long_name": "candidate RRH index (nearest first)"}),
+            "x_true": (("epoch",), truth["x"], {"units": "m", "long_name": "true train position along the track"}),
+            "v_true": (("epoch",), truth["v"], {"units": "m s-1", "long_name": "true train speed"}),
+            "a_true": (("epoch",), truth["a"], {"units": "m s-2", "long_name": "true train acceleration"}),
+            "rrh": (cd, out["rrh"], {"units": "1", "long_name": "candidate RRH index: the cell search's neighbour list, its anchor cell first"}),
+            "acquired": (("epoch",), acquired, {"units": "1", "long_name": "a blind acquisition (every PCI searched) ran at this epoch"}),
+            "ss_rsrp": (cd, out["ss_rsrp"], {"units": "dB", "long_name": "SS-RSRP of the cell search (SSS despread, best detected block; arbitrary reference common to all cells), NaN if not detected"}),
             "d3d": (cd, out["d3d_m"], {"units": "m", "long_name": "true 3-D train-RRH distance"}),
             "toa_true": (cd, out["d3d_m"] / SPEED_OF_LIGHT_M_S, {"units": "s", "long_name": "true propagation delay"}),
             "aod_true": (cd, out["aod_true_rad"], {"units": "rad", "long_name": "true azimuth of departure at the RRH"}),
-            "rx_power": (cd, out["rx_power_dbm"], {"units": "dBm", "long_name": "received power with the best beam"}),
+            "rx_power": (cd, out["rx_power_dbm"], {"units": "dBm", "long_name": "true received power with the best beam"}),
             "panel": (cd, out["panel"], {"units": "1", "long_name": "train panel receiving the RRH more strongly (0 head, 1 tail); distance, delay and angles are to it"}),
             "train_panel_x": (("panel_id",), np.asarray(scn.train_array.panel_x_m, float),
                               {"units": "m", "long_name": "along-track position of the head (0) and tail (1) panels from the train's reference point"}),
-            "aod_hat": (rd, est["aod_hat_rad"], {"units": "rad", "long_name": "AOD estimate (seed eq. 7), NaN if nothing detected"}),
-            "toa_hat": (rd, est["toa_hat_s"], {"units": "s", "long_name": "TOA estimate (seed eq. 9), NaN if nothing detected"}),
-            "peak": (rd, est["peak"], {"units": "1", "long_name": "combined correlation peak (decimated-rate units)"}),
-            "best_score": (rd, est["best_score"], {"units": "1", "long_name": "largest (eta - mu)/sigma over detected blocks"}),
-            "n_detected": (rd, est["n_detected"], {"units": "1", "long_name": "SS blocks detected (seed eq. 6)"}),
-            "sir_best": (("epoch",), sinr_proxy, {"units": "dB", "long_name": "strongest RRH power over the sum of the others"}),
+            "aod_hat": (rd, meas["aod_rad"], {"units": "rad", "long_name": "AOD estimate (seed eq. 7), NaN if nothing detected"}),
+            "toa_hat": (rd, meas["toa_s"], {"units": "s", "long_name": "TOA estimate (seed eq. 9), NaN if nothing detected"}),
+            "peak": (rd, meas["peak"], {"units": "1", "long_name": "combined correlation peak (decimated-rate units)"}),
+            "best_score": (rd, meas["best_score"], {"units": "1", "long_name": "largest (eta - mu)/sigma over detected blocks"}),
+            "n_detected": (rd, meas["n_detected"], {"units": "1", "long_name": "SS blocks detected (seed eq. 6)"}),
+            "sir_best": (("epoch",), truth["sir"], {"units": "dB", "long_name": "true strongest RRH power over the sum of the others"}),
         },
         coords={
             "epoch": ("epoch", epochs, {"units": "1", "long_name": "measurement epoch index (dt apart)"}),
-            "cand": ("cand", np.arange(n_c), {"units": "1", "long_name": "candidate rank by distance"}),
-            "receiver": ("receiver", [name for name, _, _ in receivers], {"units": "1", "long_name": "receiver variant"}),
+            "cand": ("cand", np.arange(n_c), {"units": "1", "long_name": "place in the neighbour list (0: the anchor cell)"}),
+            "receiver": ("receiver", [name for name, _, _ in est.receivers], {"units": "1", "long_name": "receiver variant"}),
             "panel_id": ("panel_id", [0, 1], {"units": "1", "long_name": "train panel: 0 head, 1 tail"}),
         },
     )
@@ -196,7 +325,8 @@ def scenario_from_config(c: dict) -> Scenario:
                                 subsample=bool(rx["subsample"]), template=rx["template"],
                                 search_lags=search_lags),
         tdl=c["channel"]["tdl"], delay_spread_s=float(c["channel"]["delay_spread_s"]),
-        detector=rx["detector"], pfa=float(rx["pfa"]), n_candidates=int(rx["n_candidates"]),
+        detector=rx["detector"], pfa=float(rx["pfa"]),
+        cell_search=CellSearchConfig(**c.get("cell_search", {})),
         variants=tuple(
             (name, ReceiverConfig(decimation=int(rx["decimation"]), ssb_pattern=rx["ssb_pattern"],
                                   n_blocks=int(c["antenna"]["n_beams"]), toa_blocks=v["toa_blocks"],

@@ -356,6 +356,17 @@ def run_ekf(rrh_xy, aod, toa, dt_s: float, dh_m: float,
     return {"state": states, "cov": covs, "nis": nis, "n_used": used, "reacquired": reacquired}
 
 
+def anchor_x(cand_rrh: NDArray, cand_ok: NDArray, cand_strength: NDArray, rrh_x: NDArray) -> float:
+    """Along-track position [m] of the strongest cell with a measurement (AOD and TOA) among
+    an epoch's candidates: where a receiver without a track places itself (the snapshot
+    fix, the EKF's start); it sees only its measurements and the deployment, no truth.
+    NaN when nothing was measured."""
+    if not cand_ok.any():
+        return float("nan")
+    j = int(np.argmax(np.where(cand_ok, cand_strength, -np.inf)))
+    return float(rrh_x[cand_rrh[j]])
+
+
 def select_measurements(cand_rrh: NDArray, cand_ok: NDArray, cand_strength: NDArray, rrh_x: NDArray,
                         x_pred: float, n_nearest: int = 6, n_use: int = 3) -> NDArray[np.int64]:
     """Candidate columns to use at one epoch: among the detected candidates that are also
@@ -406,8 +417,9 @@ def track_setup(ds, rrh_x: NDArray, rrh_y: float, dh_m: float, cfg: TrackerConfi
         return xy, aod[k, cols], toa[k, cols]
 
     k0 = int(np.argmax(ok.any(axis=1)))
-    xy0, a0, t0 = pick(k0, float(rrh_x[rrh[k0, 0]]))
-    p_fix, cov = snapshot_ls(xy0, a0, t0, dh_m, cfg, np.array([rrh_x[rrh[k0, 0]] + 1.0, 0.0]))
+    x_a = anchor_x(rrh[k0], ok[k0], stren[k0], rrh_x)  # the strongest measured cell, no truth
+    xy0, a0, t0 = pick(k0, x_a)
+    p_fix, cov = snapshot_ls(xy0, a0, t0, dh_m, cfg, np.array([x_a + 1.0, 0.0]))
     s0 = np.array([p_fix[0], p_fix[1], 0.0, 0.0, 0.0, 0.0])
     p0 = np.diag([cov[0, 0], cov[1, 1], 1.0, 1.0, 1.0, 1.0])
     p0[0, 1] = p0[1, 0] = cov[0, 1]
@@ -450,15 +462,20 @@ def track(ds, rrh_x: NDArray, rrh_y: float, dh_m: float, dt_s: float, cfg: Track
     nis[k0:] = out["nis"]
     used = np.zeros(n, dtype=np.int64)
     used[k0:] = out["n_used"]
-    # snapshot LS baseline: no tracking; each fix starts from the strongest cell's own
-    # AOD/TOA closed form x_k + ρ cos θ (ρ the horizontal range)
+    # snapshot LS baseline: no tracking; each epoch's measurements are those around its
+    # strongest measured cell, and each fix starts from that cell's own AOD/TOA closed
+    # form x_k + ρ cos θ (ρ the horizontal range)
     snap = np.full((n, 2), np.nan)
     if snapshot:
+        ok = np.isfinite(ds["aod_hat"].values) & np.isfinite(ds["toa_hat"].values)
+        stren = np.nan_to_num(ds[strength].values, nan=-np.inf)
         xy_all = np.full((n, n_use, 2), np.nan)
         a_all = np.full((n, n_use), np.nan)
         t_all = np.full((n, n_use), np.nan)
         for k in range(n):
-            xy, a_k, t_k = pick(k, float(rrh_x[rrh[k, 0]]))  # the stored candidates are the nearest
+            if not ok[k].any():
+                continue
+            xy, a_k, t_k = pick(k, anchor_x(rrh[k], ok[k], stren[k], rrh_x))
             j = xy.shape[0]
             xy_all[k, :j], a_all[k, :j], t_all[k, :j] = xy, a_k, t_k
         has = np.isfinite(xy_all[:, 0, 0])
