@@ -87,8 +87,8 @@ def test_the_list_moves_only_after_confirmation_and_searches_when_the_anchor_is_
 
 def test_estimates_see_no_truth(monkeypatch):
     """The measurements are bit-identical when everything the synthesis knows (position,
-    speed, acceleration, every link's large-scale truth) is replaced by NaN once the burst
-    is made: the estimator gets the burst, the deployment and its own state only."""
+    speed, acceleration, every link's large-scale truth, the network's serving cell) is
+    replaced by NaN (-1) once the burst is made: the estimator gets the burst, the deployment and its own state only."""
     scn = _scenario(acquire_every=20)
     epochs, key = np.arange(2430, 2450), spawn_key("nr", 0)
     ref = sim.simulate_epochs(scn, epochs, 7, key)
@@ -100,7 +100,7 @@ def test_estimates_see_no_truth(monkeypatch):
         nan = {f.name: np.full(np.shape(getattr(lb, f.name)), np.nan)
                for f in dataclasses.fields(lb)
                if f.name not in ("rrh", "links", "panel", "link_rrh") and getattr(lb, f.name) is not None}
-        return sim.Burst(b.z, b.s_min, np.nan, np.nan, np.nan, dataclasses.replace(lb, **nan))
+        return sim.Burst(b.z, b.s_min, np.nan, np.nan, np.nan, dataclasses.replace(lb, **nan), -1)
 
     monkeypatch.setattr(sim.Synthesis, "__call__", blinded)
     got = sim.simulate_epochs(scn, epochs, 7, key)
@@ -129,14 +129,18 @@ def test_estimates_identical_for_any_shard_count():
             np.testing.assert_array_equal(runs[n_shards][name], ref[name], err_msg=f"{n_shards} shards: {name}")
 
 
-def test_the_anchor_follows_the_train():
-    """Scored with the truth: over 12 s at ~360 km/h the anchor is one of the two RRHs
-    nearest the train at >= 95 % of the epochs, and the list moves along with it."""
+def test_the_list_follows_the_train():
+    """Scored with the truth: over 12 s at ~360 km/h (2.4 RRH spacings) the neighbour list
+    holds the three RRHs nearest the train at every epoch, the anchor never lies more than
+    two spacings away (the RRH beside the train is seen through the flank of the train's
+    panels, tens of dB down, so the anchor is often the next one), and it moves along."""
     scn = _scenario()
-    epochs = np.arange(2300, 2420)
-    ds = sim.simulate_epochs(scn, epochs, 3, spawn_key("nr", 2))
+    dep = scn.deployment
+    ds = sim.simulate_epochs(scn, np.arange(2300, 2420), 3, spawn_key("nr", 2))
     x = ds["x_true"].values
-    near2 = np.argsort(np.abs(scn.deployment.x_m[None, :] - x[:, None]), axis=1)[:, :2]
-    anchor = ds["rrh"].values[:, 0]
-    assert (near2 == anchor[:, None]).any(axis=1).mean() >= 0.95
+    near3 = np.argsort(np.abs(dep.x_m[None, :] - x[:, None]), axis=1)[:, :3]
+    lists = ds["rrh"].values
+    assert all(set(n) <= set(lst) for n, lst in zip(near3, lists, strict=True))
+    anchor = lists[:, 0]
+    assert np.abs(dep.x_m[anchor] - x).max() <= 2 * dep.spacing_m
     assert np.unique(anchor).size >= 3

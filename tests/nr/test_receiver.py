@@ -29,7 +29,7 @@ def _links(tau_samples, amps, beam_amp=None, f_los=(0.0,), doppler=0.0, ids=((5,
 def test_noiseless_toa_within_quantization(decimation, delay):
     rng = np.random.default_rng(1)
     cfg = ReceiverConfig(decimation=decimation, n_blocks=8)
-    syn = Synthesizer(cfg, LOS_ONLY, qpsk_pool(rng, 16))
+    syn = Synthesizer(cfg, LOS_ONLY, qpsk_pool(rng, 16), data_beam="train")
     z, s_min = syn(_links([delay], [1.0]), rng, noise=False)
     res = Correlator(cfg).correlate(z, s_min, np.array([5]), np.array([1]))
     assert res.detected[0].sum() >= 6
@@ -44,7 +44,7 @@ def test_noiseless_aod_within_the_beam_grid():
     cfg = ReceiverConfig(decimation=4)
     from railradio.nr.antenna import RrhArray
     arr = RrhArray()
-    syn = Synthesizer(cfg, LOS_ONLY, qpsk_pool(rng, 16))
+    syn = Synthesizer(cfg, LOS_ONLY, qpsk_pool(rng, 16), data_beam="train")
     cor = Correlator(cfg)
     for aod_deg in (-3.4, -37.0, -91.0, -176.6):
         g = 10 ** (arr.beam_gains_db(np.radians(aod_deg)) / 20)
@@ -69,7 +69,7 @@ def test_fast_receiver_matches_the_brute_force_reference(DEC):
     f_d = 130.0 / 0.01
     links = _links([400.3, 1700.8], [1.0, 0.5], beam_amp=beams, f_los=(0.99 * f_d, 0.98 * f_d),
                    doppler=f_d, ids=((5, 1), (6, 2)))
-    syn = Synthesizer(cfg4, prof, pool)
+    syn = Synthesizer(cfg4, prof, pool, data_beam="train")
     draws = syn.draws(links, rng)
     z4, s_min = syn(links, rng, noise=False, draws=draws)
     z1 = reference_received(cfg1, links, prof, pool, draws, syn._span["symbols"])

@@ -45,7 +45,7 @@ def test_data_beam_policies_and_geometry_bounded_window():
                      ShadowingMap(1, (0,), dep, scn.radio))
     pool = qpsk_pool(np.random.default_rng(0), 16)
     out = {}
-    for policy in ("train", "random", "none"):
+    for policy in ("train", "random", "none"):  # (the serving policy: tests/nr/test_traffic.py)
         syn = Synthesizer(scn.receiver, scn.profile, pool, scn.n_sinusoids, scn.full_channel_range_m, policy)
         draws = syn.draws(lb.links, np.random.default_rng(1))
         out[policy] = syn(lb.links, None, 10.0, noise=False, draws=draws)[0]

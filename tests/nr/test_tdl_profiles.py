@@ -75,7 +75,7 @@ def test_nlos_profile_synthesis_matches_the_reference():
     links = Links(n_id1=np.array([5]), n_id2=np.array([1]), tau_s=np.array([400.3]) / SAMPLE_RATE_HZ,
                   amp=np.array([1.0]), beam_amp=np.ones((1, 64)), data_amp=np.ones(1),
                   f_los_hz=np.array([0.99 * f_d]), phase0=np.zeros(1), doppler_hz=f_d, noise_psd_w_hz=0.0)
-    syn = Synthesizer(cfg, prof, pool)
+    syn = Synthesizer(cfg, prof, pool, data_beam="train")
     draws = syn.draws(links, rng)
     z, s_min = syn(links, rng, noise=False, draws=draws)
     assert np.isfinite(z).all() and np.abs(z).max() > 0

@@ -33,7 +33,7 @@ from numpy.typing import NDArray
 
 from railradio.nr import kernels
 from railradio.nr.channel import TdlProfile, sos_params
-from railradio.nr.numerology import N_FFT, SUBCARRIER_SPACING_HZ, Numerology, ssb_first_symbols
+from railradio.nr.numerology import N_FFT, SUBCARRIER_SPACING_HZ, SYMBOLS_PER_SLOT, Numerology, ssb_first_symbols
 from railradio.nr.ssb import band_bins, burst_grid, reference_waveform
 
 
@@ -156,31 +156,45 @@ class Links:
         return int(self.tau_s.size)
 
 
-DATA_BEAMS = ("train", "random", "none")
+DATA_BEAMS = ("serving", "train", "random", "none")
 
 
 class Synthesizer:
     """Builds received bursts for one receiver configuration (caches per-cell grids).
 
-    ``data_beam``: where each RRH beams the full-buffer data of the symbols without an SS
-    block — ``"train"`` (toward the train: the train is the served user, STUDY.md §2.1),
-    ``"random"`` (a uniformly drawn SS-beam direction per symbol: other users along the
-    track) or ``"none"`` (no data at all, in any symbol: PSS, SSS and PBCH only) [ours].
+    Traffic [ours, by the deployment rule of ``config/README.md``]: the full-buffer data of
+    the resource elements outside the SS blocks (source) go, by ``data_beam``,
+
+    - ``"serving"``: from the serving cell on its best beam toward the train (the train is
+      its user); every other RRH, in each slot (14 symbols, the PDSCH scheduling unit of
+      TS 38.214 §5.1.2) with probability ``load``, toward a uniformly drawn SS-beam
+      direction (its own users along the track), and nothing in its other slots;
+    - ``"train"``: every RRH toward the train (a worst case);
+    - ``"random"``: every RRH as a non-serving one above;
+    - ``"none"``: no data at all (PSS, SSS and PBCH only).
+
+    The random beams and loads are drawn for every RRH whatever the policy, so changing the
+    policy or the serving cell changes no other draw.
     """
 
     def __init__(self, cfg: ReceiverConfig, profile: TdlProfile, pool: NDArray[np.complex64],
                  n_sinusoids: int = 16, full_channel_range_m: float = np.inf,
-                 data_beam: str = "train"):
+                 data_beam: str = "serving", load: float = 1.0):
         if data_beam not in DATA_BEAMS:
             raise ValueError(f"data_beam must be one of {DATA_BEAMS}, got {data_beam!r}")
-        self.data_beam = data_beam
+        if not 0.0 <= load <= 1.0:
+            raise ValueError(f"load must be in [0, 1], got {load!r}")
+        self.data_beam, self.load = data_beam, float(load)
         self.cfg, self.profile = cfg, profile
         self.n_sinusoids = n_sinusoids
         self.full_channel_range_m = full_channel_range_m
         num = cfg.num
-        self.pool_band = np.ascontiguousarray(pool[:, band_bins(num)])  # [P, n]
+        band = pool[:, band_bins(num)]
         if data_beam == "none":
-            self.pool_band = np.zeros_like(self.pool_band)
+            band = np.zeros_like(band)
+        # the last row is empty: the data of an idle slot
+        self.pool_band = np.ascontiguousarray(np.vstack([band, np.zeros((1, band.shape[1]), band.dtype)]))
+        self.idle_row = band.shape[0]
         n = num.n_fft
         self.k = np.fft.fftfreq(n, 1.0 / n)
         self.f_k = self.k * SUBCARRIER_SPACING_HZ
@@ -221,7 +235,9 @@ class Synthesizer:
         long_ramp = np.exp(-2j * np.pi * np.outer(cps[long_rows] - cp0, np.fft.fftfreq(n, 1.0 / n)) / n).astype(np.complex64)
         long_of = np.full(symbols.size, -1, dtype=np.int64)
         long_of[long_rows] = np.arange(long_rows.size)
-        self._span = dict(n_pre=n_pre, symbols=symbols, cps=np.ascontiguousarray(cps, dtype=np.int64),
+        slot = symbols // SYMBOLS_PER_SLOT
+        slot = slot - slot[0]  # each symbol's slot, 0-based
+        self._span = dict(n_pre=n_pre, symbols=symbols, slot=slot, cps=np.ascontiguousarray(cps, dtype=np.int64),
                           starts=np.ascontiguousarray(starts, dtype=np.int64), total=total,
                           cp0=cp0, long_of=long_of, long_ramp=long_ramp, block_of=block_of, s_min=int(symbols[0]))
         self._overlays.clear()
@@ -249,21 +265,29 @@ class Synthesizer:
         return self._overlays[key]
 
     def draws(self, links: Links, rng: np.random.Generator) -> list[dict]:
-        """The random draws of one burst per RRH: data pool indices and fading (α, φ)."""
+        """The random draws of one burst per RRH: data pool indices, fading (α, φ), and per
+        slot the beam and whether the slot carries data (used by non-serving RRHs)."""
         sp = self.span(float(np.max(links.tau_s)) if links.n else 0.0)
+        slot = sp["slot"]
+        n_slots = int(slot.max()) + 1
         out = []
         for _ in range(links.n):
-            idx = rng.integers(0, self.pool_band.shape[0], size=sp["symbols"].size)
+            idx = rng.integers(0, self.idle_row, size=sp["symbols"].size)
             alpha, phi = sos_params(rng, self.profile.powers.size, self.n_sinusoids)
             out.append({"pool_idx": idx, "alpha": alpha, "phi": phi})
-            if self.data_beam == "random":
-                out[-1]["data_beam"] = rng.integers(0, self.cfg.n_blocks, size=sp["symbols"].size)
+        for d in out:  # after the data and fading draws, which therefore do not depend on it
+            d["data_beam"] = rng.integers(0, self.cfg.n_blocks, size=n_slots)[slot]
+            d["busy"] = (rng.random(n_slots) < self.load)[slot]
         return out
 
     def __call__(self, links: Links, rng: np.random.Generator, t0_s: float = 0.0,
                  noise: bool = True, d2d_m: NDArray | None = None,
-                 draws: list[dict] | None = None) -> tuple[NDArray[np.complex64], int]:
+                 draws: list[dict] | None = None,
+                 serving: NDArray[np.bool_] | None = None) -> tuple[NDArray[np.complex64], int]:
         """The received burst at F_s/D (sum over RRHs in range + AWGN).
+
+        ``serving`` [links]: the links of the serving cell (``data_beam="serving"``; none
+        serving when omitted).
 
         Returns ``(z, s_min)``: samples from the CP start of symbol ``s_min`` (negative:
         before the burst's first subframe).
@@ -295,11 +319,14 @@ class Synthesizer:
         ramps = np.exp(-2j * np.pi * np.outer(frac + sp["cp0"], self.k) / n).astype(np.complex64)  # [R, n]
         is_ss = sp["block_of"] >= 0
         ss_amp = links.beam_amp[:, np.maximum(sp["block_of"], 0)]  # [R, S]
-        if self.data_beam == "random":  # "none": the data are zero anyway (zero pool)
-            data_amp = np.stack([links.beam_amp[r][draws[r]["data_beam"]] for r in range(links.n)]) \
-                if links.n else np.zeros((0, symbols.size))
-        else:
-            data_amp = np.broadcast_to(links.data_amp[:, None], ss_amp.shape)
+        at_train = np.zeros(links.n, dtype=bool)  # links whose data go toward the train
+        if self.data_beam == "train":
+            at_train[:] = True
+        elif self.data_beam == "serving" and serving is not None:
+            at_train[:] = np.asarray(serving, dtype=bool)
+        data_amp = np.empty(ss_amp.shape)
+        for r in range(links.n):  # "none": the data are zero anyway (zero pool)
+            data_amp[r] = links.data_amp[r] if at_train[r] else links.beam_amp[r][draws[r]["data_beam"]]
         g_syms = (np.where(is_ss[None, :], ss_amp, data_amp)
                   * (links.amp * n)[:, None]).astype(np.float32)  # × n: unnormalized IFFT
         t_firsts = (num.symbol_start(sp["s_min"]) + n_cs) / fs + t0_s  # [R]
@@ -310,6 +337,8 @@ class Synthesizer:
                 continue
             ov = self.overlay(links.n_id1[r], links.n_id2[r])
             pool_idx, g_r = draws[r]["pool_idx"], g_syms[r]
+            if not at_train[r] and self.data_beam != "none":  # an idle slot sends no data
+                pool_idx = np.where(draws[r]["busy"], pool_idx, self.idle_row)
             if not every:
                 ov = (ov[0][rows],) + ov[1:]
                 pool_idx, g_r = pool_idx[rows], g_r[rows]

@@ -22,9 +22,14 @@ from railradio.nr.ssb import burst_grid, reference_waveform
 
 
 def reference_received(cfg: ReceiverConfig, links: Links, profile: TdlProfile, pool: NDArray[np.complex64],
-                       draws: list[dict], symbols: NDArray[np.int64], t0_s: float = 0.0) -> NDArray[np.complex128]:
+                       draws: list[dict], symbols: NDArray[np.int64], t0_s: float = 0.0,
+                       at_train: NDArray[np.bool_] | None = None) -> NDArray[np.complex128]:
     """Noiseless received samples at the full rate over ``symbols`` (index 0 = CP start of
-    ``symbols[0]``), with the same draws as :meth:`Synthesizer.draws`."""
+    ``symbols[0]``), with the same draws as :meth:`Synthesizer.draws`.
+
+    ``at_train`` [links]: the links whose data go toward the train (``None``: every link,
+    the synthesizer's ``data_beam="train"``); the others send in their busy slots only, on
+    their drawn beam (:class:`railradio.nr.receiver.Synthesizer`)."""
     num = Numerology(1)
     fs = num.sample_rate_hz
     starts = num.symbol_start(symbols) - num.symbol_start(symbols[0])
@@ -34,10 +39,16 @@ def reference_received(cfg: ReceiverConfig, links: Links, profile: TdlProfile, p
     f = sfft.fftfreq(n_pad, 1.0 / fs)
     t = (np.arange(total) + num.symbol_start(symbols[0])) / fs + t0_s
     z = np.zeros(total, dtype=complex)
+    at_train = np.ones(links.n, dtype=bool) if at_train is None else np.asarray(at_train, dtype=bool)
+    pool_ext = np.vstack([pool, np.zeros((1, pool.shape[1]), pool.dtype)])  # last row: an idle slot
     for r in range(links.n):
+        idx, data = draws[r]["pool_idx"], links.data_amp[r]
+        if not at_train[r]:
+            idx = np.where(draws[r]["busy"], idx, pool.shape[0])
+            data = links.beam_amp[r][draws[r]["data_beam"]]
         grid, block_of = burst_grid(num, symbols, cfg.ssb_first, int(links.n_id1[r]), int(links.n_id2[r]),
-                                    pool, draws[r]["pool_idx"])
-        g = np.where(block_of >= 0, links.beam_amp[r][np.maximum(block_of, 0)], links.data_amp[r]) * links.amp[r]
+                                    pool_ext, idx)
+        g = np.where(block_of >= 0, links.beam_amp[r][np.maximum(block_of, 0)], data) * links.amp[r]
         x = np.zeros(total, dtype=complex)
         for i in range(symbols.size):
             y = N_FFT * np.fft.ifft(grid[i]) * g[i]

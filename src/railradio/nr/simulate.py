@@ -25,6 +25,7 @@ from railradio.nr.link import RadioParams, ShadowingMap, link_budget
 from railradio.nr.numerology import SAMPLE_RATE_HZ
 from railradio.nr.receiver import Correlator, ReceiverConfig, Synthesizer
 from railradio.nr.ssb import qpsk_pool
+from railradio.nr.traffic import ServingCell, ServingRule
 from railradio.rng import make_rng
 
 # sub-keys below the realization's spawn key
@@ -53,8 +54,12 @@ class Scenario:
     n_sinusoids: int = 16
     pool_size: int = 256
     shadowing: bool = True
-    data_beam: str = "train"
-    """Beam of the data symbols: train | random | none (:class:`Synthesizer`)."""
+    data_beam: str = "serving"
+    """Where the data go: serving | train | random | none (:class:`Synthesizer`)."""
+    load: float = 1.0
+    """Share of slots in which a non-serving RRH sends data (source: full buffer)."""
+    serving: ServingRule = field(default_factory=ServingRule)
+    """The network's serving-cell rule (:mod:`railradio.nr.traffic`)."""
 
     @cached_property
     def profile(self):
@@ -72,6 +77,8 @@ class Burst:
     v_m_s: float
     a_m_s2: float
     links: object  # railradio.nr.link.LinkBudget
+    serving: int = -1
+    """The network's serving RRH (truth: the receiver does not know it)."""
 
 
 class Synthesis:
@@ -82,17 +89,30 @@ class Synthesis:
         self.shadow = ShadowingMap(seed, key + (KEY_SHADOWING,), scn.deployment, scn.radio)
         pool = qpsk_pool(make_rng(seed, key + (KEY_POOL,)), scn.pool_size)
         self.syn = Synthesizer(scn.receiver, scn.profile, pool, scn.n_sinusoids, scn.full_channel_range_m,
-                               scn.data_beam)
+                               scn.data_beam, scn.load)
+        self.network = ServingCell(scn.serving)
+        self.next_epoch: int | None = None
 
-    def __call__(self, epoch: int) -> Burst:
+    def advance(self, epoch: int):
+        """The truth of ``epoch`` and the network's serving cell there (no waveform):
+        ``(x, v, a, link budget, serving RRH)``."""
         scn = self.scn
+        if self.next_epoch is not None and epoch != self.next_epoch:
+            self.network.reset()
+        self.next_epoch = int(epoch) + 1
         t = epoch * scn.trajectory.dt_s
         x, v, a = (float(u[0]) for u in scn.trajectory.state(np.array([t])))
         lb = link_budget(x, v, scn.deployment, scn.radio, scn.rrh_array, scn.train_array, self.shadow,
                          scn.shadowing)
+        return x, v, a, lb, self.network.update(epoch, lb.rrh, lb.rx_power_dbm)
+
+    def __call__(self, epoch: int) -> Burst:
+        x, v, a, lb, serving = self.advance(epoch)
+        t = epoch * self.scn.trajectory.dt_s
+        link_rrh = lb.rrh if lb.link_rrh is None else lb.link_rrh
         z, s_min = self.syn(lb.links, make_rng(self.seed, self.key + (KEY_EPOCH, int(epoch))), t0_s=t,
-                            d2d_m=lb.link_d2d_m)
-        return Burst(z, s_min, x, v, a, lb)
+                            d2d_m=lb.link_d2d_m, serving=np.asarray(link_rrh) == serving)
+        return Burst(z, s_min, x, v, a, lb, serving)
 
 
 @dataclass
@@ -139,7 +159,8 @@ class Estimator:
     def start(self, epoch: int) -> int:
         """The first epoch to process before reporting ``epoch`` (state reset there when a
         fixed acquisition epoch lies between the last processed epoch and ``epoch``)."""
-        w = warmup_start(epoch, self.scn.cell_search.acquire_every)
+        w = min(warmup_start(epoch, self.scn.cell_search.acquire_every),
+                warmup_start(epoch, self.scn.serving.reset_every))
         if self.next_epoch is None or w >= self.next_epoch or epoch < self.next_epoch:
             self.search.reset()
             return w
@@ -227,6 +248,7 @@ def simulate_epochs(scn: Scenario, epochs: np.ndarray, seed: int, key: tuple[int
     n_r = len(est.receivers)
     n_e, n_c = epochs.size, min(scn.cell_search.n_neighbours, dep.n_rrh)
     truth = {name: np.full(n_e, np.nan) for name in ("x", "v", "a", "sir")}
+    serving = np.full(n_e, -1, dtype=np.int64)
     out = {name: np.full((n_e, n_c), np.nan) for name in ("d3d_m", "aod_true_rad", "rx_power_dbm", "ss_rsrp")}
     meas = {name: np.full((n_r, n_e, n_c), np.nan) for name in ("aod_rad", "toa_s", "peak", "best_score")}
     out["rrh"] = np.zeros((n_e, n_c), dtype=np.int64)
@@ -250,7 +272,7 @@ def simulate_epochs(scn: Scenario, epochs: np.ndarray, seed: int, key: tuple[int
         # track's ends) sends nothing: its truth is the geometry to the reference point,
         # its received power NaN, and a detection of it a false alarm
         lb = b.links
-        truth["x"][i], truth["v"][i], truth["a"][i] = b.x_m, b.v_m_s, b.a_m_s2
+        truth["x"][i], truth["v"][i], truth["a"][i], serving[i] = b.x_m, b.v_m_s, b.a_m_s2, b.serving
         inr = np.isin(cand, lb.rrh)
         pos = np.searchsorted(lb.rrh, cand[inr])
         out["d3d_m"][i] = dep.distance_3d_m(np.full(n_c, b.x_m), cand)
@@ -271,6 +293,7 @@ def simulate_epochs(scn: Scenario, epochs: np.ndarray, seed: int, key: tuple[int
             "x_true": (("epoch",), truth["x"], {"units": "m", "long_name": "true train position along the track"}),
             "v_true": (("epoch",), truth["v"], {"units": "m s-1", "long_name": "true train speed"}),
             "a_true": (("epoch",), truth["a"], {"units": "m s-2", "long_name": "true train acceleration"}),
+            "serving_true": (("epoch",), serving, {"units": "1", "long_name": "the network's serving RRH (truth; -1: none in range)"}),
             "rrh": (cd, out["rrh"], {"units": "1", "long_name": "candidate RRH index: the cell search's neighbour list, its anchor cell first"}),
             "acquired": (("epoch",), acquired, {"units": "1", "long_name": "a blind acquisition (every PCI searched) ran at this epoch"}),
             "ss_rsrp": (cd, out["ss_rsrp"], {"units": "dB", "long_name": "SS-RSRP of the cell search (SSS despread, best detected block; arbitrary reference common to all cells), NaN if not detected"}),
@@ -335,7 +358,8 @@ def scenario_from_config(c: dict) -> Scenario:
             for name, v in c.get("receiver_variants", {}).items()),
         full_channel_range_m=float(c["channel"]["full_channel_range_m"]),
         n_sinusoids=int(c["channel"]["n_sinusoids"]),
-        data_beam=c.get("traffic", {}).get("data_beam", "train"),
+        data_beam=c["traffic"]["data_beam"], load=float(c["traffic"]["load"]),
+        serving=ServingRule(float(c["traffic"]["serving_hysteresis_db"]), int(c["traffic"]["serving_reset_every"])),
     )
 
 
