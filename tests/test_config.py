@@ -160,6 +160,8 @@ def test_schema_rejects_each_kind_of_bad_value(dotted, value, must_mention):
         ({"nr.n_shards": 500}, ["nr.n_shards", "160 epochs"]),  # shards <= epochs (CI: 160)
         ({"nr.sensitivity.n_shards": 100}, ["nr.sensitivity.n_shards", "<= nr.sensitivity.epochs = 60"]),
         ({"nr.calibration.epochs": 100000}, ["nr.calibration.epochs", "trajectory"]),
+        ({"nr.calibration.trajectory.phases": [[10.0, 1.0], [20.0, -1.0]]},
+         ["nr.calibration.trajectory.phases[1]", "speed >= 0"]),
         ({"chain.sigmas_m": [0.0, 20.0, 2.0]}, ["chain.sigmas_m", "ascending"]),
         ({"nr.tracker.w_distance_edges_m": [750.0, 250.0]}, ["nr.tracker.w_distance_edges_m", "ascending"]),
         ({"nr.imm.receiver": "fancy"}, ["nr.imm.receiver", "robust"]),  # a name that does not exist

@@ -131,10 +131,10 @@ def test_intermediates_are_self_explaining(ci_run):
     # trajectory, samples, 2 calibration + 2 evaluation shards, 1 track, 1 bounds, 1 IMM/RTS
     assert len(nr_paths) == 1 + 1 + 2 + 2 + 1 + 1 + 1
     case_paths = sorted((ci_run / "results/nr/cases").rglob("*.nc"))
-    # 15 cases with their own bursts: 2 calibration + 1 evaluation shard, 1 track each;
+    # 17 cases with their own bursts: 2 calibration + 1 evaluation shard, 1 track each;
     # 7 cases that read another run's bursts (w_distance, sweep_ref, the 4 clock-sync cases,
     # panels_200m_point): their track only
-    assert len(case_paths) == 15 * (2 + 1 + 1) + 7
+    assert len(case_paths) == 17 * (2 + 1 + 1) + 7
     paths += nr_paths + case_paths
     for study, n_min in (("handover", 10), ("tunnel", 10), ("sens/fusion", 5), ("chain", 1)):
         found = sorted((ci_run / "results" / study).rglob("*.nc"))

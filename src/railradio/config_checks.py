@@ -79,7 +79,7 @@ def main_epochs(nr: Mapping[str, Any]) -> int | None:
 
 def nr_problems(nr: Mapping[str, Any], root: str = "nr", main: bool = True) -> Iterator[Problem]:
     """The rules of one nr config (the main run's, ``main=True``, or a merged case's)."""
-    from railradio.nr.simulate import scenario_from_config
+    from railradio.nr.simulate import calibration_trajectory, scenario_from_config
 
     try:
         scn = scenario_from_config(dict(nr))
@@ -90,15 +90,18 @@ def nr_problems(nr: Mapping[str, Any], root: str = "nr", main: bool = True) -> I
     n_epochs = n_traj if nr["max_epochs"] is None else min(nr["max_epochs"], n_traj)
     if main and nr["n_shards"] > n_epochs:
         yield f"{root}.n_shards", nr["n_shards"], f"<= the run's {n_epochs} epochs (one epoch per shard at least)"
-    if nr["calibration"]["epochs"] > n_traj:
+    n_cal = calibration_trajectory(dict(nr)).n_epochs
+    if nr["calibration"]["epochs"] > n_cal:
         yield f"{root}.calibration.epochs", nr["calibration"]["epochs"], \
-            f"<= the trajectory's {n_traj} epochs"
-    v = 0.0
-    for i, (dur, acc) in enumerate(nr["trajectory"]["phases"]):
-        v += dur * acc
-        if v < -1e-9:
-            yield (f"{root}.trajectory.phases[{i}]", [dur, acc],
-                   f"phases that keep the speed >= 0 (this one ends at {v:.3g} m/s)")
+            f"<= the calibration trajectory's {n_cal} epochs"
+    for where, phases in (("trajectory.phases", nr["trajectory"]["phases"]),
+                          ("calibration.trajectory.phases", nr["calibration"]["trajectory"]["phases"])):
+        v = 0.0
+        for i, (dur, acc) in enumerate(phases):
+            v += dur * acc
+            if v < -1e-9:
+                yield (f"{root}.{where}[{i}]", [dur, acc],
+                       f"phases that keep the speed >= 0 (this one ends at {v:.3g} m/s)")
     yield from _prefixed(root, _ascending(nr, "tracker.w_distance_edges_m"))
     receivers = {"seed", *nr["receiver_variants"]}
     if "seed" in nr["receiver_variants"]:

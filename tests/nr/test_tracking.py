@@ -283,3 +283,50 @@ def test_the_tracker_sees_no_truth():
             for key in ("state", "nis", "snapshot", "n_used", "reacquired"):
                 np.testing.assert_array_equal(a[key], b[key], err_msg=f"{variant} gate={gate}: {key}")
             assert np.isfinite(a["state"][-1, 0])
+
+
+def test_inlier_sigma_ignores_outliers_a_mad_does_not():
+    """40 % of gross errors (another RRH's peak): the inliers' σ is recovered to 3 %, while
+    1.4826 · MAD is inflated by more than a third."""
+    from railradio.nr.tracking import inlier_sigma
+
+    rng = np.random.default_rng(11)
+    e = np.concatenate([rng.standard_normal(12000) * 2.0, rng.uniform(-3000, 3000, 8000)])
+    sig, frac = inlier_sigma(e, 0.99)
+    assert sig == pytest.approx(2.0, rel=0.03)
+    assert frac == pytest.approx(0.6, abs=0.01)
+    assert 1.4826 * np.median(np.abs(e - np.median(e))) > 1.33 * 2.0
+    assert inlier_sigma(np.zeros(10))[0] == 0.0
+
+
+def test_nees_position_is_the_quadratic_form():
+    from railradio.nr.tracking import nees_position
+
+    rng = np.random.default_rng(2)
+    state = rng.standard_normal((5, 6))
+    a = rng.standard_normal((5, 6, 6))
+    cov = a @ np.swapaxes(a, 1, 2) + np.eye(6)
+    x = rng.standard_normal(5)
+    e = np.stack([state[:, 0] - x, state[:, 1]], axis=1)
+    ref = np.einsum("ei,eij,ej->e", e, np.linalg.inv(cov[:, :2, :2]), e)
+    np.testing.assert_allclose(nees_position(state, cov, x), ref, rtol=1e-10)
+    state[0] = np.nan
+    assert np.isnan(nees_position(state, cov, x)[0])
+
+
+def test_q_search_widens_past_a_winning_edge_and_reports_monotone_costs(monkeypatch):
+    """When the grid's edge wins, the calibration tries decades beyond it; a cost that keeps
+    falling to the search limit is reported as monotone and on the edge."""
+    from railradio.nr import tracking as tr
+
+    monkeypatch.setattr(tr, "measurement_errors", lambda ds, strength, with_distance: (
+        np.full(100, 0.01), np.full(100, 1.0), np.full(100, 100.0)))
+    monkeypatch.setattr(tr, "track", lambda ds, *a, cfg=None, **k: {"q": a[4].q} if cfg is None else {"q": cfg.q})
+    args = (None, "aod_toa", np.arange(3) * 500.0, 15.0, 7.5, 0.1)
+    for optimum, edge in ((1e3, False), (1e9, True)):
+        monkeypatch.setattr(tr, "_nees_cost", lambda ds, out, o=optimum: abs(np.log10(out["q"] / o)))
+        search = {}
+        cfg = tr.calibrate(*args, q_grid=np.array([0.01, 1.0, 100.0]), gate=True, search=search)
+        assert cfg.q == (optimum if not edge else tr.Q_SEARCH_LIMITS[1])
+        assert search["at_edge"] is edge and search["monotone"] is edge
+        assert max(search["q"]) == (1e4 if not edge else tr.Q_SEARCH_LIMITS[1])

@@ -94,8 +94,9 @@ rule nr_shard:
 
 
 rule nr_cal_shard:
-    """A shard of the calibration run (the first epochs, its own random key); scheduled
-    first so that the calibration overlaps the evaluation shards."""
+    """A shard of the calibration run (its own trajectory, nr.calibration.trajectory, and
+    its own random key); scheduled first so that the calibration overlaps the evaluation
+    shards."""
     output:
         "results/nr/estimates/{real}/s{shard}.nc",
     params:
@@ -103,6 +104,7 @@ rule nr_cal_shard:
         seed=config["seed"],
         n_epochs=NR["calibration"]["epochs"],
         n_shards=NR_CAL_SHARDS,
+        calibration=NR["calibration"],
     log:
         "results/logs/nr/shard_{real}_s{shard}.log",
     benchmark:
@@ -245,6 +247,7 @@ rule nr_case_shard:
         seed=config["seed"],
         n_epochs=lambda w: NR_CASE_N_CAL[w.case] if w.real == "cal" else NR_CASE_N[w.case],
         n_shards=lambda w: nr_cases.case_n_shards(NR_CASES[w.case], NR, NR_SENS, w.real, NR_CAL_SHARDS),
+        calibration=lambda w: NR_CASES[w.case]["calibration"] if w.real == "cal" else None,
     log:
         "results/logs/nr/cases/{case}_shard_{real}_s{shard}.log",
     benchmark:

@@ -60,6 +60,15 @@ TRACK_LOSS_SPECS = {
 }
 """Per tracker (receiver × variant × gate): ``track.<variant>[_gated].<metric>``."""
 
+CONSISTENCY_SPECS = {
+    "nis.mean": ("1", "mean NIS per measurement dimension over the epochs with an update (1 for a consistent "
+                      "filter)", "nis", False),
+    "nees.mean": ("1", "mean position NEES per dimension over the epochs not lost (1 for a consistent filter)",
+                  "nees", True),
+}
+"""Filter consistency per tracker (unit, description, track variable, over tracked epochs
+only), where the track datasets carry it."""
+
 
 def _runs(ts: list[xr.Dataset], rx: str, variant: str, gate: int) -> list[tuple[np.ndarray, np.ndarray]]:
     """(t, 2-D error) of each realization after the first SKIP_S seconds."""
@@ -89,6 +98,24 @@ def _loss_fns(spacing_m: float, rx: str, variant: str, gate: int) -> dict:
         "tracked.err_m.p95": lambda ts: stat(tracked(ts), lambda v: np.percentile(v, 95)),
         "tracked.err_m.p99": lambda ts: stat(tracked(ts), lambda v: np.percentile(v, 99)),
     }
+
+
+def _consistency_fn(spacing_m: float, rx: str, variant: str, gate: int, var: str, tracked_only: bool):
+    """Mean of a consistency variable after SKIP_S (over the epochs not lost if asked)."""
+
+    def fn(ts):
+        vals = []
+        for t in ts:
+            keep = t["t"].values >= SKIP_S
+            v = t[var].sel(receiver=rx, variant=variant, gate=gate).values[keep]
+            if tracked_only:
+                err = t["pos_err"].sel(receiver=rx, variant=variant, gate=gate).values[keep]
+                v = v[~loss.lost_mask(err, spacing_m)]
+            vals.append(v[np.isfinite(v)])
+        v = np.concatenate(vals)
+        return float(np.mean(v)) if v.size else np.nan
+
+    return fn
 
 
 def _spacing(tracks: list[xr.Dataset]) -> float:
@@ -174,6 +201,14 @@ def key_numbers(tracks: list[xr.Dataset], bounds: list[xr.Dataset] | None = None
                     out[name] = KeySpec(name, unit, f"{desc}, EKF {variant}{', gated' if gate else ''}{who}").entry(
                         value if np.isfinite(value) else None, se if metric != "time_to_loss_s" else None)
                 lost[(variant, gate)] = out[f"{prefix}{track}.lost_frac"]["value"]
+                for metric, (unit, desc, var, tracked_only) in CONSISTENCY_SPECS.items():
+                    if var not in tracks[0]:
+                        continue
+                    name = f"{prefix}{track}.{metric}"
+                    fn = _consistency_fn(spacing, rx, variant, gate, var, tracked_only)
+                    value, se = _per_real(tracks, rx, fn)
+                    out[name] = KeySpec(name, unit, f"{desc}, EKF {variant}{', gated' if gate else ''}{who}").entry(
+                        value if np.isfinite(value) else None, se)
         for key, (unit, desc, src, rel) in SPECS.items():
             name = prefix + key
             if rx != "seed":

@@ -363,6 +363,13 @@ def scenario_from_config(c: dict) -> Scenario:
     )
 
 
+def calibration_trajectory(c: dict) -> Trajectory:
+    """The calibration run's own trajectory (``calibration.trajectory`` of the ``nr``
+    config), sampled at the evaluation's ``trajectory.dt_s``."""
+    return Trajectory(tuple(tuple(map(float, p)) for p in c["calibration"]["trajectory"]["phases"]),
+                      float(c["trajectory"]["dt_s"]))
+
+
 def shard_epochs(n_epochs: int, n_shards: int, shard: int) -> np.ndarray:
     """Epoch indices of one shard: contiguous, near-equal blocks."""
     if not 0 <= shard < n_shards:

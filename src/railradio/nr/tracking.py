@@ -416,21 +416,35 @@ def track_setup(ds, rrh_x: NDArray, rrh_y: float, dh_m: float, cfg: TrackerConfi
         xy = np.stack([x_k, np.full(cols.size, rrh_y)], axis=1) if cols.size else np.zeros((0, 2))
         return xy, aod[k, cols], toa[k, cols]
 
-    k0 = int(np.argmax(ok.any(axis=1)))
-    x_a = anchor_x(rrh[k0], ok[k0], stren[k0], rrh_x)  # the strongest measured cell, no truth
-    xy0, a0, t0 = pick(k0, x_a)
-    p_fix, cov = snapshot_ls(xy0, a0, t0, dh_m, cfg, np.array([x_a + 1.0, 0.0]))
-    s0 = np.array([p_fix[0], p_fix[1], 0.0, 0.0, 0.0, 0.0])
-    p0 = np.diag([cov[0, 0], cov[1, 1], 1.0, 1.0, 1.0, 1.0])
-    p0[0, 1] = p0[1, 0] = cov[0, 1]
-
     def snapshot_fix(k: int, x_pred: float):
+        """LS fix from the measurements picked around ``x_pred``, started at the strongest
+        one's own closed form x_k + ρ (cos θ, sin θ) (ρ the horizontal range); None when
+        nothing is measured or the LS runs away (farther from that RRH than its measured
+        range plus 1 km)."""
         xy, a_k, t_k = pick(k, x_pred)
         if xy.shape[0] == 0:
             return None
         rho = np.sqrt(max((SPEED_OF_LIGHT_M_S * t_k[0]) ** 2 - dh_m**2, 1.0))
         guess = np.array([xy[0, 0] + rho * np.cos(a_k[0]), xy[0, 1] + rho * np.sin(a_k[0])])
-        return snapshot_ls(xy, a_k, t_k, dh_m, cfg, guess)
+        fix, cov = snapshot_ls(xy, a_k, t_k, dh_m, cfg, guess)
+        if not (np.all(np.isfinite(fix)) and np.all(np.isfinite(cov))
+                and np.hypot(*(fix - xy[0])) <= rho + 1000.0):
+            return None
+        return fix, cov
+
+    # the start: the first epoch whose strongest measured cell gives a fix (no truth)
+    k0, start = 0, None
+    for k in np.flatnonzero(ok.any(axis=1)):
+        start = snapshot_fix(int(k), anchor_x(rrh[k], ok[k], stren[k], rrh_x))
+        if start is not None:
+            k0 = int(k)
+            break
+    if start is None:  # nothing measured anywhere: the filter starts at the first RRH, uninformed
+        start = (np.array([rrh_x[0], 0.0]), np.eye(2) * 1e12)
+    p_fix, cov = start
+    s0 = np.array([p_fix[0], p_fix[1], 0.0, 0.0, 0.0, 0.0])
+    p0 = np.diag([cov[0, 0], cov[1, 1], 1.0, 1.0, 1.0, 1.0])
+    p0[0, 1] = p0[1, 0] = cov[0, 1]
 
     return pick, snapshot_fix, k0, s0, p0, rrh.shape[0]
 
@@ -458,6 +472,8 @@ def track(ds, rrh_x: NDArray, rrh_y: float, dh_m: float, dt_s: float, cfg: Track
                   reacquire=lambda k: snapshot_fix(k + k0, state_now["x"]) if cfg.gate else None)
     state = np.full((n, 6), np.nan)
     state[k0:] = out["state"]
+    cov = np.full((n, 6, 6), np.nan)
+    cov[k0:] = out["cov"]
     nis = np.full(n, np.nan)
     nis[k0:] = out["nis"]
     used = np.zeros(n, dtype=np.int64)
@@ -486,7 +502,20 @@ def track(ds, rrh_x: NDArray, rrh_y: float, dh_m: float, dt_s: float, cfg: Track
             snap[has], _ = snapshot_ls_batch(xy_all[has], a_all[has], t_all[has], dh_m, cfg, guess)
     reac = np.zeros(n, dtype=bool)
     reac[k0:] = out["reacquired"]
-    return {"state": state, "nis": nis, "n_used": used, "snapshot": snap, "k0": k0, "reacquired": reac}
+    return {"state": state, "cov": cov, "nis": nis, "n_used": used, "snapshot": snap, "k0": k0,
+            "reacquired": reac}
+
+
+def nees_position(state: NDArray, cov: NDArray, x_true: NDArray) -> NDArray[np.float64]:
+    """Normalized estimation error squared of the 2-D position, eᵀ P_pos⁻¹ e per epoch
+    (e = estimate − truth, the train at y = 0); χ²₂-distributed for a consistent filter
+    (mean 2). NaN before the track starts. Scoring only: it uses the truth."""
+    e = np.stack([state[:, 0] - np.asarray(x_true, float), state[:, 1]], axis=1)
+    p = cov[:, :2, :2]
+    det = p[:, 0, 0] * p[:, 1, 1] - p[:, 0, 1] * p[:, 1, 0]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        q = (p[:, 1, 1] * e[:, 0] ** 2 - 2 * p[:, 0, 1] * e[:, 0] * e[:, 1] + p[:, 0, 0] * e[:, 1] ** 2) / det
+    return np.where(np.isfinite(q), q, np.nan)
 
 
 def measurement_errors(ds, strength: str = "peak", n_use: int = 3, flat: bool = True,
@@ -510,15 +539,45 @@ def measurement_errors(ds, strength: str = "peak", n_use: int = 3, flat: bool = 
     return e_aod[sel_ok], e_rng[sel_ok]
 
 
+def inlier_sigma(e: NDArray, gate_prob: float = 0.99, n_iter: int = 50) -> tuple[float, float]:
+    """Standard deviation of the inliers of errors ``e`` and their share: the errors a χ²₁
+    gate at ``gate_prob`` keeps (|e − median| ≤ k σ, k = √χ²₁(gate_prob)), with σ the
+    inliers' own spread corrected for the truncation at ±k (a normal truncated there has
+    variance σ² [1 − 2kφ(k)/(2Φ(k) − 1)]); a fixed point started from 1.4826 · MAD. The
+    outliers (another RRH's peak, a false detection) then do not set W [ours]."""
+    from scipy.stats import norm
+
+    e = np.asarray(e, float)
+    e = e[np.isfinite(e)]
+    if e.size == 0:
+        return float("nan"), 0.0
+    k = float(np.sqrt(chi2.ppf(gate_prob, 1)))
+    shrink = 1.0 - 2 * k * norm.pdf(k) / (2 * norm.cdf(k) - 1)
+    c = float(np.median(e))
+    sig = 1.4826 * float(np.median(np.abs(e - c)))
+    inl = np.ones(e.size, dtype=bool)
+    for _ in range(n_iter):
+        if not sig > 0:
+            break
+        inl = np.abs(e - c) <= k * sig
+        new = float(np.std(e[inl]) / np.sqrt(shrink)) if inl.sum() > 1 else sig
+        c = float(np.mean(e[inl]))
+        if abs(new - sig) <= 1e-9 * sig:
+            sig = new
+            break
+        sig = new
+    return sig, float(inl.mean())
+
+
 def robust_sigmas(e_aod_rad: NDArray, e_range_m: NDArray, dist_m: NDArray,
                   distance_edges_m: tuple[float, ...] = (), min_per_bin: int = 50,
-                  fs_hz: float = 245.76e6) -> tuple[float, float, dict]:
-    """σ_AOD [rad] and σ_TOA [s] as robust standard deviations (1.4826 · MAD) of calibration
-    errors, σ_TOA floored at the integer-sample quantization 1/(√12 F_s); with
+                  fs_hz: float = 245.76e6, gate_prob: float = 0.99) -> tuple[float, float, dict]:
+    """σ_AOD [rad] and σ_TOA [s] of the calibration errors' inliers (:func:`inlier_sigma`
+    at ``gate_prob``), σ_TOA floored at the integer-sample quantization 1/(√12 F_s); with
     ``distance_edges_m`` also per bin of ``dist_m`` (a bin with fewer than ``min_per_bin``
     errors takes the overall values), returned as :class:`TrackerConfig` keyword arguments."""
     def mad(e):
-        return 1.4826 * float(np.median(np.abs(e - np.median(e)))) if e.size else np.nan
+        return inlier_sigma(e, gate_prob)[0] if e.size else np.nan
 
     floor = 1.0 / (np.sqrt(12) * fs_hz)
     s_aod = max(mad(e_aod_rad), 1e-4)
@@ -539,42 +598,76 @@ def robust_sigmas(e_aod_rad: NDArray, e_range_m: NDArray, dist_m: NDArray,
                               sigma_aod_bins_rad=tuple(a_bins), sigma_toa_bins_s=tuple(t_bins))
 
 
+Q_SEARCH_LIMITS = (1e-6, 1e6)
+"""The widest q [m² s⁻⁵] the calibration searches when its grid's edge wins [ours]."""
+
+
+def _nees_cost(ds, out) -> float:
+    """|log(median NEES / median χ²₂)| of the position over the calibration run's tracked
+    epochs: 0 for a filter whose covariance matches its errors."""
+    nees = nees_position(out["state"], out["cov"], ds["x_true"].values)
+    nees = nees[np.isfinite(nees)]
+    if nees.size < 10:
+        return np.inf
+    return abs(float(np.log(np.median(nees) / chi2.median(2))))
+
+
 def calibrate(ds, variant: str, rrh_x: NDArray, rrh_y: float, dh_m: float, dt_s: float,
               q_grid: NDArray, gate: bool, strength: str = "peak", fs_hz: float = 245.76e6,
-              distance_edges_m: tuple[float, ...] = (), min_per_bin: int = 50) -> TrackerConfig:
+              distance_edges_m: tuple[float, ...] = (), min_per_bin: int = 50,
+              gate_prob: float = 0.99, search: dict | None = None) -> TrackerConfig:
     """Measurement and process noise from a calibration run (never the evaluation run).
 
-    σ_AOD, σ_TOA: robust standard deviations (1.4826 · median absolute deviation) of the
-    selected measurements' errors, the TOA one floored at the integer-sample quantization
-    1/(√12 F_s); with ``distance_edges_m``, also per bin of the true 2-D distance (a bin with
-    fewer than ``min_per_bin`` measurements takes the overall values); q: the value of
-    ``q_grid`` whose mean normalized innovation squared (NIS / measurement dimension) on the
-    calibration run is closest to 1.
+    W: σ_AOD, σ_TOA of the inliers of the selected measurements' errors, those a χ² gate
+    at ``gate_prob`` keeps (:func:`inlier_sigma`), the TOA one floored at the
+    integer-sample quantization 1/(√12 F_s); with ``distance_edges_m``, also per bin of the
+    true 2-D distance (a bin with fewer than ``min_per_bin`` measurements takes the overall
+    values). q: the value whose position NEES on the calibration run (whose truth is
+    legitimately known) is consistent, |log(median NEES / median χ²₂)| smallest, over
+    ``q_grid``; when an edge of the grid wins, the grid is extended by decades beyond it up
+    to :data:`Q_SEARCH_LIMITS`. ``search`` (a dict) receives the q values tried, their
+    costs, whether the winner sits on the searched range's edge and whether the cost is
+    monotone in q there (the finding to report instead of a q).
     """
     e_aod, e_rng, d3 = measurement_errors(ds, strength, with_distance=True)
     dist = np.sqrt(np.maximum(d3**2 - dh_m**2, 0.0))  # 2-D, as the tracker predicts it
-    s_aod, s_toa, bins = robust_sigmas(e_aod, e_rng, dist, distance_edges_m, min_per_bin, fs_hz)
-    per = sum(VARIANTS[variant])
-    best, best_cost = None, np.inf
-    most_used, most_used_cfg = -1, None
-    for q in q_grid:
-        cfg = TrackerConfig(variant=variant, q=float(q), sigma_aod_rad=s_aod, sigma_toa_s=s_toa, gate=gate,
-                            **bins)
-        out = track(ds, rrh_x, rrh_y, dh_m, dt_s, cfg, strength=strength, snapshot=False)
-        used = out["n_used"] > 0
-        if used.sum() > most_used:
-            most_used, most_used_cfg = int(used.sum()), cfg
-        if used.sum() < 10:  # too few accepted updates to judge the NIS
-            continue
-        nnis = out["nis"][used] / (per * out["n_used"][used])
-        cost = abs(np.log(np.mean(nnis)))
-        if cost < best_cost:
-            best, best_cost = cfg, cost
-    if best is None:  # the tracker loses the train whatever q: keep the q it used most
-        if most_used_cfg is None:
-            raise ValueError("q_grid must not be empty")
-        return most_used_cfg
-    return best
+    s_aod, s_toa, bins = robust_sigmas(e_aod, e_rng, dist, distance_edges_m, min_per_bin, fs_hz, gate_prob)
+    qs = sorted(float(q) for q in q_grid)
+    if not qs:
+        raise ValueError("q_grid must not be empty")
+    cost: dict[float, float] = {}
+
+    def cfg_of(q):
+        return TrackerConfig(variant=variant, q=q, sigma_aod_rad=s_aod, sigma_toa_s=s_toa, gate=gate,
+                             gate_prob=gate_prob, **bins)
+
+    def run(q):
+        if q not in cost:
+            cost[q] = _nees_cost(ds, track(ds, rrh_x, rrh_y, dh_m, dt_s, cfg_of(q), strength=strength,
+                                           snapshot=False))
+        return cost[q]
+
+    for q in qs:
+        run(q)
+    lo, hi = Q_SEARCH_LIMITS
+    while True:
+        tried = sorted(cost)
+        best = min(tried, key=lambda q: (cost[q], q))
+        if best == tried[0] and best / 10 >= lo and np.isfinite(cost[best]):
+            run(best / 10)
+        elif best == tried[-1] and best * 10 <= hi and np.isfinite(cost[best]):
+            run(best * 10)
+        else:
+            break
+    tried = sorted(cost)
+    c = np.array([cost[q] for q in tried])
+    if search is not None:
+        fin = np.isfinite(c)
+        d = np.diff(c[fin])
+        search.update(q=tried, cost=[float(v) if np.isfinite(v) else None for v in c],
+                      at_edge=bool(best in (tried[0], tried[-1])),
+                      monotone=bool(d.size > 0 and (np.all(d <= 0) or np.all(d >= 0))))
+    return cfg_of(best)
 
 
 KEY_SYNC = 4

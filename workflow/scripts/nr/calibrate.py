@@ -23,10 +23,12 @@ for rx in ds["receiver"].values:
     for variant in smk.params.variants:
         for gate in (False, True):  # each tracker calibrated as it will run
             name = f"{rx}/{variant}/{'gate' if gate else 'nogate'}"
+            search = {}
             cfg = calibrate(dsr, variant, dep.x_m, dep.offset_m, dep.h_bs_m - dep.h_ut_m,
                             scn.trajectory.dt_s, np.asarray(smk.params.tracker["q_grid"]), gate,
                             smk.params.selection[str(rx)],
-                            distance_edges_m=tuple(smk.params.tracker["w_distance_edges_m"]))
-            out[name] = cfg.record()
+                            distance_edges_m=tuple(smk.params.tracker["w_distance_edges_m"]),
+                            gate_prob=float(smk.params.tracker["gate_prob"]), search=search)
+            out[name] = cfg.record() | {"q_search": search}
             log.info("%s: %s", name, out[name])
 write_json(smk.output[0], out)

@@ -1,11 +1,12 @@
 """Adapter: one track shard -> results/nr/estimates/{real}/s{shard}.nc."""
+import dataclasses
 import sys
 
 sys.path.insert(0, str(__import__("pathlib").Path(__file__).parent))
 from common import scenario  # noqa: E402
 
 from railradio.io import write_dataset  # noqa: E402
-from railradio.nr.simulate import shard_epochs, simulate_epochs  # noqa: E402
+from railradio.nr.simulate import calibration_trajectory, shard_epochs, simulate_epochs  # noqa: E402
 from railradio.rng import spawn_key  # noqa: E402
 from railradio.workflow import setup_script  # noqa: E402
 
@@ -13,6 +14,9 @@ smk = snakemake  # noqa: F821
 log = setup_script(smk.log[0])
 scn = scenario(smk)
 real = smk.wildcards.real
+if real == "cal":  # the calibration run's own trajectory
+    scn = dataclasses.replace(scn, trajectory=calibration_trajectory({"calibration": smk.params.calibration,
+                                                                       "trajectory": smk.params.sim["trajectory"]}))
 # realization r<i> -> ID i; the calibration run has its own ID (another seed key)
 rid = 1000 if real == "cal" else int(real[1:])
 key = spawn_key("nr", rid)

@@ -9,7 +9,7 @@ sys.path.insert(0, str(__import__("pathlib").Path(__file__).parent))
 from common import read_shards, scenario  # noqa: E402
 
 from railradio.io import write_dataset  # noqa: E402
-from railradio.nr.tracking import TrackerConfig, measurement_errors, track  # noqa: E402
+from railradio.nr.tracking import VARIANTS, TrackerConfig, measurement_errors, nees_position, track  # noqa: E402
 from railradio.workflow import setup_script  # noqa: E402
 
 smk = snakemake  # noqa: F821
@@ -24,6 +24,8 @@ receivers = [str(r) for r in ds["receiver"].values]
 variants = [str(v) for v in smk.params.variants]
 n = ds.sizes["epoch"]
 err = np.full((len(receivers), len(variants), 2, n), np.nan)
+nis = np.full((len(receivers), len(variants), 2, n), np.nan)
+nees = np.full((len(receivers), len(variants), 2, n), np.nan)
 snap = np.full((len(receivers), len(variants), n), np.nan)
 meas_aod = np.full((len(receivers), n, 3), np.nan)
 meas_rng = np.full((len(receivers), n, 3), np.nan)
@@ -39,12 +41,17 @@ for i, rx in enumerate(receivers):
             out = track(dsr, dep.x_m, dep.offset_m, dep.h_bs_m - dep.h_ut_m, scn.trajectory.dt_s, cfg,
                         strength=smk.params.selection[str(rx)], snapshot=(g == 0))
             err[i, j, g] = np.hypot(out["state"][:, 0] - x_true, out["state"][:, 1])
+            upd = out["n_used"] > 0
+            nis[i, j, g, upd] = out["nis"][upd] / (sum(VARIANTS[variant]) * out["n_used"][upd])
+            nees[i, j, g] = nees_position(out["state"], out["cov"], x_true) / 2  # scoring only
             if g == 0:
                 snap[i, j] = np.hypot(out["snapshot"][:, 0] - x_true, out["snapshot"][:, 1])
             log.info("%s %s gate=%s: mean error %.3f m", rx, variant, gate, np.nanmean(err[i, j, g]))
 dims = ("receiver", "variant", "gate", "epoch")
 res = xr.Dataset(
     {"pos_err": (dims, err, {"units": "m", "long_name": "2-D EKF position error at the burst start"}),
+     "nis": (dims, nis, {"units": "1", "long_name": "NIS per measurement dimension (NaN: no update)"}),
+     "nees": (dims, nees, {"units": "1", "long_name": "position NEES per dimension (estimate against truth, P_pos)"}),
      "snap_err": (("receiver", "variant", "epoch"), snap, {"units": "m", "long_name": "2-D snapshot least-squares position error"}),
      "aod_err": (("receiver", "epoch", "slot"), meas_aod, {"units": "rad", "long_name": "AOD error of the measured RRHs (NaN: not detected)"}),
      "range_err": (("receiver", "epoch", "slot"), meas_rng, {"units": "m", "long_name": "TOA range error of the measured RRHs (NaN: not detected)"}),
