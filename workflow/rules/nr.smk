@@ -221,10 +221,12 @@ rule nr_figures:
 
 
 rule nr_key_numbers:
-    """Key numbers nr.* pooled over the realizations, with their spread."""
+    """Key numbers nr.* pooled over the realizations, with their spread, and the
+    calibrated W and q of every tracker."""
     input:
         tracks=expand("results/nr/track/{real}.nc", real=NR_REALS),
         bounds=expand("results/nr/bounds/{real}.nc", real=NR_REALS),
+        calibration="results/nr/calibration.json",
     output:
         "results/nr/key_numbers.json",
     log:

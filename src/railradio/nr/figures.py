@@ -114,21 +114,29 @@ def plot_error_vs_time(track: xr.Dataset, pdf: str, png: str, bounds: xr.Dataset
 
 def plot_sensitivity(numbers: dict, cases: list[str], pdf: str, png: str) -> None:
     """Sensitivity cases beside the base run: TOA range error p95 and gated EKF mean error
-    per receiver (key numbers ``sens.nr.<case>.<receiver>.*``)."""
-    rxs = sorted({k.split(".")[3] for k in numbers if k.startswith("sens.nr.")}, key=lambda r: r != "seed")
+    per receiver (key numbers ``sens.nr.<case>.<receiver>.*``); a tracker whose all-epoch
+    accuracy is null because it loses the train is marked with its lost share."""
+    rxs = sorted({k.split(".")[3] for k in numbers if k.startswith("sens.nr.")} - {"bound"},
+                 key=lambda r: r != "seed")
     panels = (("meas.toa_err_m.p95", "TOA range error p95 [m]"),
-              ("track.aod_toa_gated.err_m.mean", "gated EKF AOD+TOA mean error [m]"))
-    fig, axes = plotting.figure(ncols=2, figsize=(6.8, 3.0))
+              ("track.aod_toa_gated.err_m.mean", "gated EKF AOD+TOA\nmean error [m]"))
+    fig, axes = plotting.figure(nrows=2, figsize=(7.2, 4.6), sharex=True)
     width = 0.8 / max(len(rxs), 1)
     x = np.arange(len(cases))
     for ax, (metric, label) in zip(axes, panels, strict=True):
         for i, rx in enumerate(rxs):
             vals = [numbers.get(f"sens.nr.{c}.{rx}.{metric}", {}).get("value") for c in cases]
-            ax.bar(x + (i - (len(rxs) - 1) / 2) * width, [np.nan if v is None else v for v in vals],
-                   width, label=f"{rx} receiver")
+            xs = x + (i - (len(rxs) - 1) / 2) * width
+            ax.bar(xs, [np.nan if v is None else v for v in vals], width, color=f"C{i}", label=f"{rx} receiver")
+            if metric.startswith("track."):
+                for xi, c, v in zip(xs, cases, vals, strict=True):
+                    lost = numbers.get(f"sens.nr.{c}.{rx}.track.aod_toa_gated.lost_frac", {}).get("value")
+                    if v is None and lost is not None:
+                        ax.text(xi, 0.03, f"lost {100 * lost:.0f} %", transform=ax.get_xaxis_transform(),
+                                rotation=90, ha="center", va="bottom", fontsize=6, color=f"C{i}")
         ax.set_yscale("log")
-        ax.set_xticks(x, [c.replace("_", "\n") for c in cases], fontsize=7)
         ax.set_ylabel(label)
+    axes[-1].set_xticks(x, cases, fontsize=7, rotation=35, ha="right")
     axes[0].legend(fontsize=7)
     plotting.save(fig, pdf, png)
 

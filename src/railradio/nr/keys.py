@@ -225,6 +225,52 @@ def key_numbers(tracks: list[xr.Dataset], bounds: list[xr.Dataset] | None = None
     return out
 
 
+CALIBRATION_SPECS = {
+    "q": ("m2 s-5", "white-jerk intensity q calibrated on the calibration run (position NEES consistency)"),
+    "q_at_edge": ("1", "1 if the calibrated q sits on an edge of the searched range (grid widened by decades up to "
+                       "1e-6 ... 1e6), else 0"),
+    "q_cost_monotone": ("1", "1 if the consistency cost is monotone in q over the searched range (no q "
+                             "is identified), else 0"),
+    "q_cost": ("1", "|log(median NEES / median chi2_2)| of the calibration run at the calibrated q (0: consistent)"),
+    "sigma_aod_deg": ("deg", "calibrated AOD standard deviation (inliers of the calibration run's errors)"),
+    "sigma_range_m": ("m", "calibrated TOA range standard deviation (inliers of the calibration run's errors)"),
+}
+"""Per tracker ``cal.<variant>[_gated].<metric>``, from ``calibration.json``."""
+
+
+def calibration_key_numbers(cal: dict[str, dict]) -> dict[str, Any]:
+    """The calibrated W and q of every tracker (``receiver/variant/gate|nogate`` records of
+    ``calibration.json``) as key numbers."""
+    out: dict[str, Any] = {}
+    for name, rec in cal.items():
+        rx, variant, gate = name.split("/")
+        prefix = "nr." if rx == "seed" else f"nr.{rx}."
+        track = f"cal.{variant}{'_gated' if gate == 'gate' else ''}"
+        search = rec.get("q_search", {})
+        i = search["q"].index(rec["q"]) if rec["q"] in search.get("q", []) else None
+        values = {
+            "q": rec["q"],
+            "q_at_edge": float(search["at_edge"]) if search else None,
+            "q_cost_monotone": float(search["monotone"]) if search else None,
+            "q_cost": search["cost"][i] if i is not None else None,
+            "sigma_aod_deg": float(np.degrees(rec["sigma_aod_rad"])),
+            "sigma_range_m": rec["sigma_toa_s"] * SPEED_OF_LIGHT_M_S,
+        }
+        who = "" if rx == "seed" else f" ({rx} receiver)"
+        for metric, (unit, desc) in CALIBRATION_SPECS.items():
+            key = f"{prefix}{track}.{metric}"
+            out[key] = KeySpec(key, unit, f"{desc}, EKF {variant}{', gated' if gate == 'gate' else ''}{who}").entry(
+                values[metric])
+    edges = [k for k in out if k.endswith(".q_at_edge") and out[k]["value"] == 1.0]
+    for key, desc, value in (
+            ("nr.cal.n_trackers", "trackers calibrated (receiver x measurement set x gate)", len(cal)),
+            ("nr.cal.n_q_at_edge", "calibrated q on an edge of the searched range", len(edges)),
+            ("nr.cal.n_q_at_edge_monotone", "of those, with a cost monotone in q (no q identified)",
+             sum(out[k[: -len("q_at_edge")] + "q_cost_monotone"]["value"] == 1.0 for k in edges))):
+        out[key] = KeySpec(key, "1", desc).entry(float(value))
+    return out
+
+
 SENSITIVITY_SPECS = {
     "meas.toa_err_m.median_abs": ("m", "median |TOA range error| of the measured RRHs (valid TOAs)"),
 }
