@@ -336,8 +336,7 @@ def scenario_from_config(c: dict) -> Scenario:
     search_lags = (None if rx.get("search_range_m") is None
                    else int(np.ceil(rx["search_range_m"] / SPEED_OF_LIGHT_M_S * SAMPLE_RATE_HZ)))
     return Scenario(
-        trajectory=Trajectory(tuple(tuple(map(float, p)) for p in c["trajectory"]["phases"]),
-                              float(c["trajectory"]["dt_s"])),
+        trajectory=_trajectory(c["trajectory"]["phases"], c["trajectory"]["dt_s"]),
         deployment=Deployment(**{k: float(v) for k, v in c["deployment"].items()}),
         radio=RadioParams(**{k: float(v) for k, v in c["radio"].items()}),
         rrh_array=RrhArray(n_elements=int(c["antenna"]["rrh_elements"]), n_beams=int(c["antenna"]["n_beams"])),
@@ -366,8 +365,12 @@ def scenario_from_config(c: dict) -> Scenario:
 def calibration_trajectory(c: dict) -> Trajectory:
     """The calibration run's own trajectory (``calibration.trajectory`` of the ``nr``
     config), sampled at the evaluation's ``trajectory.dt_s``."""
-    return Trajectory(tuple(tuple(map(float, p)) for p in c["calibration"]["trajectory"]["phases"]),
-                      float(c["trajectory"]["dt_s"]))
+    return _trajectory(c["calibration"]["trajectory"]["phases"], c["trajectory"]["dt_s"])
+
+
+def _trajectory(phases, dt_s) -> Trajectory:
+    """A :class:`Trajectory` from config phases ``[[duration s, acceleration m/s²], ...]``."""
+    return Trajectory(tuple(tuple(map(float, p)) for p in phases), float(dt_s))
 
 
 def shard_epochs(n_epochs: int, n_shards: int, shard: int) -> np.ndarray:

@@ -576,12 +576,12 @@ def robust_sigmas(e_aod_rad: NDArray, e_range_m: NDArray, dist_m: NDArray,
     at ``gate_prob``), σ_TOA floored at the integer-sample quantization 1/(√12 F_s); with
     ``distance_edges_m`` also per bin of ``dist_m`` (a bin with fewer than ``min_per_bin``
     errors takes the overall values), returned as :class:`TrackerConfig` keyword arguments."""
-    def mad(e):
+    def spread(e):
         return inlier_sigma(e, gate_prob)[0] if e.size else np.nan
 
     floor = 1.0 / (np.sqrt(12) * fs_hz)
-    s_aod = max(mad(e_aod_rad), 1e-4)
-    s_toa = max(mad(e_range_m) / SPEED_OF_LIGHT_M_S, floor)
+    s_aod = max(spread(e_aod_rad), 1e-4)
+    s_toa = max(spread(e_range_m) / SPEED_OF_LIGHT_M_S, floor)
     if not distance_edges_m:
         return s_aod, s_toa, {}
     b = np.searchsorted(np.asarray(distance_edges_m, float), dist_m)
@@ -592,8 +592,8 @@ def robust_sigmas(e_aod_rad: NDArray, e_range_m: NDArray, dist_m: NDArray,
             a_bins.append(s_aod)
             t_bins.append(s_toa)
         else:
-            a_bins.append(max(mad(e_aod_rad[m]), 1e-4))
-            t_bins.append(max(mad(e_range_m[m]) / SPEED_OF_LIGHT_M_S, floor))
+            a_bins.append(max(spread(e_aod_rad[m]), 1e-4))
+            t_bins.append(max(spread(e_range_m[m]) / SPEED_OF_LIGHT_M_S, floor))
     return s_aod, s_toa, dict(distance_edges_m=tuple(float(x) for x in distance_edges_m),
                               sigma_aod_bins_rad=tuple(a_bins), sigma_toa_bins_s=tuple(t_bins))
 
