@@ -127,15 +127,21 @@ def test_ci_numbers_consistent_with_published_paper_scale(ci_run):
 def test_intermediates_are_self_explaining(ci_run):
     paths = sorted((ci_run / "results/fusion").rglob("*.nc"))
     assert len(paths) == 4 + 4 + 4 + 1 + 3
-    nr_paths = sorted(p for p in (ci_run / "results/nr").rglob("*.nc") if "cases" not in p.parts)
+    nr_paths = sorted(p for p in (ci_run / "results/nr").rglob("*.nc")
+                      if "cases" not in p.parts and "map" not in p.parts)
     # trajectory, samples, 2 calibration + 2 evaluation shards, 1 track, 1 bounds, 1 IMM/RTS
     assert len(nr_paths) == 1 + 1 + 2 + 2 + 1 + 1 + 1
     case_paths = sorted((ci_run / "results/nr/cases").rglob("*.nc"))
-    # 17 cases with their own bursts: 2 calibration + 1 evaluation shard, 1 track each;
+    # 14 cases with their own bursts: 2 calibration + 1 evaluation shard, 1 track each;
     # 7 cases that read another run's bursts (w_distance, sweep_ref, the 4 clock-sync cases,
     # panels_200m_point): their track only
-    assert len(case_paths) == 17 * (2 + 1 + 1) + 7
-    paths += nr_paths + case_paths
+    assert len(case_paths) == 14 * (2 + 1 + 1) + 7
+    map_paths = sorted((ci_run / "results/nr/map").rglob("*.nc"))
+    # CI's map (M_T = 32 only): 7 cells, 4 with their own segment bursts (2 shards each: 3
+    # data rows and the SSS template; the default and the selection-only cell read others'),
+    # 5 calibration runs (one per burst set), 7 tracks
+    assert len(map_paths) == 4 * 2 + 5 + 7
+    paths += nr_paths + case_paths + map_paths
     for study, n_min in (("handover", 10), ("tunnel", 10), ("sens/fusion", 5), ("chain", 1)):
         found = sorted((ci_run / "results" / study).rglob("*.nc"))
         assert len(found) >= n_min, (study, len(found))
@@ -149,6 +155,7 @@ def test_intermediates_are_self_explaining(ci_run):
     for name in ("fusion_rmse_vs_distance", "fusion_rmse_vs_tdoa_error", "fusion_rmse_vs_aoa_error",
                  "nr_trajectory", "nr_burst_correlation", "nr_measurement_error_cdf",
                  "nr_position_error_cdf", "nr_position_error_vs_time", "nr_sensitivity", "nr_imm_lag",
+                 "nr_reproduction_map",
                  "handover_cost_vs_m", "handover_pingpong_vs_speed", "handover_rsrp_gap_vs_speed",
                  "handover_delay_vs_speed", "handover_interruption_vs_speed",
                  "tunnel_rssi_map", "tunnel_delay_spread", "tunnel_gdop", "tunnel_position_error_cdf",

@@ -94,9 +94,12 @@ def nr_problems(nr: Mapping[str, Any], root: str = "nr", main: bool = True) -> I
     if nr["calibration"]["epochs"] > n_cal:
         yield f"{root}.calibration.epochs", nr["calibration"]["epochs"], \
             f"<= the calibration trajectory's {n_cal} epochs"
-    for where, phases in (("trajectory.phases", nr["trajectory"]["phases"]),
-                          ("calibration.trajectory.phases", nr["calibration"]["trajectory"]["phases"])):
-        v = 0.0
+    mp = nr["map"]
+    for where, phases, v0 in (("trajectory.phases", nr["trajectory"]["phases"], 0.0),
+                              ("calibration.trajectory.phases", nr["calibration"]["trajectory"]["phases"],
+                               nr["calibration"]["trajectory"].get("v0_m_s", 0.0)),
+                              ("map.calibration.phases", mp["calibration"]["phases"], mp["calibration"]["v0_m_s"])):
+        v = float(v0)
         for i, (dur, acc) in enumerate(phases):
             v += dur * acc
             if v < -1e-9:
@@ -141,6 +144,7 @@ def _nr(cfg: Mapping[str, Any], schema: Mapping[str, Any]) -> Iterator[Problem]:
         return
     for name, case in cases.items():
         yield from nr_problems(case, root=f"nr.sensitivity.cases.{name}", main=False)
+    yield from _nr_map(nr, schema, n_main)
     for name, sw in sens["sweeps"].items():
         key = f"nr.sensitivity.sweeps.{name}"
         bad = [c for c in sw["cases"] if c != "base" and c not in cases]
@@ -150,6 +154,43 @@ def _nr(cfg: Mapping[str, Any], schema: Mapping[str, Any]) -> Iterator[Problem]:
             yield f"{key}.values", sw["values"], f"one value per case ({len(sw['cases'])})"
         if sw.get("reference") is not None and sw["reference"] not in sw["cases"]:
             yield f"{key}.reference", sw["reference"], "one of the sweep's cases"
+
+
+def _nr_map(nr: Mapping[str, Any], schema: Mapping[str, Any], n_main: int | None) -> Iterator[Problem]:
+    """The reproduction map: a segment inside the main run, blocks that fit it, the main
+    run's M_T among the mapped ones, every cell a valid nr config."""
+    from railradio.nr import reproduction_map as nr_map
+    from railradio.nr.keys import SKIP_S
+    from railradio.nr.simulate import Trajectory
+
+    mp = nr["map"]
+    first, end = mp["segment"]
+    if not first < end:
+        yield "nr.map.segment", mp["segment"], "[first, end) with first < end"
+        return
+    if n_main is not None and end > n_main:
+        yield "nr.map.segment", mp["segment"], f"an end <= the main run's {n_main} epochs (the default cell is its r0)"
+    scored = end - first - int(round(SKIP_S / nr["trajectory"]["dt_s"]))
+    if mp["block_epochs"] > scored:
+        yield "nr.map.block_epochs", mp["block_epochs"], f"<= the segment's {scored} scored epochs"
+    if mp["n_shards"] > end - first:
+        yield "nr.map.n_shards", mp["n_shards"], f"<= the segment's {end - first} epochs"
+    c = mp["calibration"]
+    n_cal = Trajectory(tuple(tuple(map(float, p)) for p in c["phases"]), float(nr["trajectory"]["dt_s"]),
+                       v0_m_s=float(c["v0_m_s"])).n_epochs
+    if c["epochs"] > n_cal:
+        yield "nr.map.calibration.epochs", c["epochs"], f"<= its trajectory's {n_cal} epochs"
+    if nr["antenna"]["rrh_elements"] not in mp["rrh_elements"]:
+        yield "nr.map.rrh_elements", mp["rrh_elements"], \
+            f"a list holding the main run's nr.antenna.rrh_elements = {nr['antenna']['rrh_elements']} (the default cell)"
+        return
+    try:
+        cells = nr_map.cells(dict(nr), schema["properties"]["nr"])
+    except ConfigError as exc:
+        yield "nr.map.data", "…", str(exc).replace("invalid configuration:\n  ", "")
+        return
+    for name, cell in cells.items():
+        yield from nr_problems(cell, root=f"nr.map ({name})", main=False)
 
 
 def _handover(cfg: Mapping[str, Any], schema: Mapping[str, Any]) -> Iterator[Problem]:

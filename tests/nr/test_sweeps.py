@@ -167,7 +167,7 @@ def test_case_scheduling_reuses_bursts_and_cuts_epochs():
     assert nc.case_n_shards(cases["speed_500"], nr, sens, "r0", 2) == \
         max(1, round(sens["n_shards"] * 1150 / sens["epochs"]))
     assert nc.case_n_shards(cases["speed_500"], nr, dict(sens, n_shards=10), "r0", 2) == 5
-    assert nc.case_n_shards(cases["data_none"], nr, sens, "r0", 2) == sens["n_shards"]
+    assert nc.case_n_shards(cases["load_half"], nr, sens, "r0", 2) == sens["n_shards"]
     # a case with an earlier case's bursts reads that case's shards
     assert nc.case_inputs("panels_200m_point", cases, nr, sens, "r0", n_main, 2)[0].startswith(
         "results/nr/cases/panels_200m/")

@@ -330,3 +330,24 @@ def test_q_search_widens_past_a_winning_edge_and_reports_monotone_costs(monkeypa
         assert cfg.q == (optimum if not edge else tr.Q_SEARCH_LIMITS[1])
         assert search["at_edge"] is edge and search["monotone"] is edge
         assert max(search["q"]) == (1e4 if not edge else tr.Q_SEARCH_LIMITS[1])
+
+
+def test_q_search_monotone_means_falling_to_the_limit_from_the_grid_edge(monkeypatch):
+    """A cost that wobbles inside the grid but falls at every decade from the grid's edge to
+    the search limit is monotone toward the edge (no q identified); a flat cost, whose
+    tie-break walks to the lower limit, is on the edge but not monotone."""
+    from railradio.nr import tracking as tr
+
+    monkeypatch.setattr(tr, "measurement_errors", lambda ds, strength, with_distance: (
+        np.full(100, 0.01), np.full(100, 1.0), np.full(100, 100.0)))
+    monkeypatch.setattr(tr, "track", lambda ds, *a, cfg=None, **k: {"q": a[4].q} if cfg is None else {"q": cfg.q})
+    args = (None, "aod_toa", np.arange(3) * 500.0, 15.0, 7.5, 0.1)
+    wobble = {0.01: 12.0, 1.0: 12.5, 100.0: 7.0}
+    monkeypatch.setattr(tr, "_nees_cost", lambda ds, out: wobble.get(out["q"], abs(np.log10(out["q"] / 1e9))))
+    search = {}
+    tr.calibrate(*args, q_grid=np.array([0.01, 1.0, 100.0]), gate=True, search=search)
+    assert search["at_edge"] and search["monotone"]
+    monkeypatch.setattr(tr, "_nees_cost", lambda ds, out: 1.0)
+    search = {}
+    cfg = tr.calibrate(*args, q_grid=np.array([0.01, 1.0, 100.0]), gate=True, search=search)
+    assert cfg.q == pytest.approx(tr.Q_SEARCH_LIMITS[0]) and search["at_edge"] and not search["monotone"]

@@ -183,3 +183,59 @@ def plot_sweeps(numbers: dict, sweeps: dict, sync_sigma_s: dict, pdf: str, png: 
                 ax.set_ylabel(label, fontsize=7)
     axes[0][0].legend(fontsize=6)
     plotting.save(fig, pdf, png)
+
+
+def plot_reproduction_map(numbers: dict, cells: list[str], receivers: dict[str, list[str]], pdf: str,
+                          png: str) -> None:
+    """The reproduction map (key numbers ``nr.map.<cell>.<receiver>.*``): one grid per
+    receiver, a row per map cell and a column per source claim, each square coloured by
+    the claim's status (holds / not resolved / fails) and labelled with the measured value
+    (its bootstrap interval in the key numbers); a lost tracker is labelled with its lost
+    share."""
+    from matplotlib.patches import Patch
+
+    from railradio.nr.reproduction_map import CLAIMS, FAILS, HOLDS, STATUS_NAMES, UNRESOLVED
+
+    colours = {HOLDS: "#9ecae1", UNRESOLVED: "#e8e8e8", FAILS: "#fdae6b"}  # blue / grey / orange
+    names = list(receivers)
+    n_rows = [len(receivers[r]) for r in names]
+    height = 0.3 * max(n_rows) + 2.0
+    fig, axes = plotting.figure(ncols=len(names), figsize=(4.6 * len(names), height),
+                                squeeze=False, gridspec_kw={"width_ratios": [1] * len(names)})
+    for ax, rx in zip(axes[0], names, strict=True):
+        rows = receivers[rx]
+        for i, cell in enumerate(rows):
+            for j, (cname, claim) in enumerate(CLAIMS.items()):
+                p = f"nr.map.{cell}.{rx}"
+                st = numbers[f"{p}.claim.{cname}"]["value"]
+                e = numbers[f"{p}.{claim.metric}"]
+                if e["value"] is None and e.get("lost_frac"):
+                    text = f"lost\n{100 * e['lost_frac']:.0f}%"
+                elif e["value"] is None:
+                    text = "--"
+                elif claim.unit == "1":
+                    text = f"{100 * e['value']:.0f}%"
+                else:
+                    text = f"{e['value']:.2g}" if abs(e["value"]) < 10 else f"{e['value']:.0f}"
+                ax.add_patch(_square(j, i, colours[st]))
+                ax.text(j + 0.5, i + 0.5, text, ha="center", va="center", fontsize=5.5, linespacing=0.9)
+        ax.set_xlim(0, len(CLAIMS))
+        ax.set_ylim(len(rows), 0)
+        ax.set_xticks(np.arange(len(CLAIMS)) + 0.5)
+        ax.set_xticklabels([c.label for c in CLAIMS.values()], rotation=45, ha="right", fontsize=7)
+        ax.set_yticks(np.arange(len(rows)) + 0.5)
+        ax.set_yticklabels(rows, fontsize=7)
+        ax.tick_params(length=0)
+        ax.grid(False)
+        ax.set_title("source's receiver (no gate)" if rx == "seed" else f"our receiver ({rx}, gated)", fontsize=9)
+    fig.legend(handles=[Patch(facecolor=colours[s], label=STATUS_NAMES[s]) for s in (HOLDS, UNRESOLVED, FAILS)],
+               loc="lower center", ncol=3, fontsize=7, frameon=False, bbox_to_anchor=(0.5, 0.0))
+    fig.subplots_adjust(bottom=1.5 / height, top=1 - 0.35 / height, wspace=0.45)
+    plotting.save(fig, pdf, png)
+
+
+def _square(x: float, y: float, colour: str):
+    """A unit square of the map at (x, y)."""
+    from matplotlib.patches import Rectangle
+
+    return Rectangle((x, y), 1, 1, facecolor=colour, edgecolor="white", linewidth=1.0)

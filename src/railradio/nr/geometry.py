@@ -28,11 +28,15 @@ class Trajectory:
         Measurement interval [s] (seed: 0.1 s).
     x0_m
         Start position [m].
+    v0_m_s
+        Start speed [m/s] (0: from rest, as the seed's trajectory; a short run at speed
+        otherwise).
     """
 
     phases: tuple[tuple[float, float], ...]
     dt_s: float = 0.1
     x0_m: float = 0.0
+    v0_m_s: float = 0.0
 
     def __post_init__(self) -> None:
         if not self.phases:
@@ -42,6 +46,8 @@ class Trajectory:
                 raise ValueError(f"phase durations must be > 0 [s], got {dur!r}")
         if not self.dt_s > 0:
             raise ValueError(f"dt_s must be > 0, got {self.dt_s!r}")
+        if not self.v0_m_s >= 0:
+            raise ValueError(f"v0_m_s must be >= 0 [m/s], got {self.v0_m_s!r}")
 
     @property
     def duration_s(self) -> float:
@@ -60,7 +66,7 @@ class Trajectory:
         x = np.full_like(t, self.x0_m)
         v = np.zeros_like(t)
         a = np.zeros_like(t)
-        t0, x_start, v_start = 0.0, self.x0_m, 0.0
+        t0, x_start, v_start = 0.0, self.x0_m, self.v0_m_s
         for i, (dur, acc) in enumerate(self.phases):
             last = i == len(self.phases) - 1
             sel = (t >= t0) & ((t < t0 + dur) | last)

@@ -229,8 +229,8 @@ CALIBRATION_SPECS = {
     "q": ("m2 s-5", "white-jerk intensity q calibrated on the calibration run (position NEES consistency)"),
     "q_at_edge": ("1", "1 if the calibrated q sits on an edge of the searched range (grid widened by decades up to "
                        "1e-6 ... 1e6), else 0"),
-    "q_cost_monotone": ("1", "1 if the consistency cost is monotone in q over the searched range (no q "
-                             "is identified), else 0"),
+    "q_cost_monotone": ("1", "1 if the search reached the limit of its range with the consistency cost falling "
+                             "at every decade from the grid's edge on (no q is identified), else 0"),
     "q_cost": ("1", "|log(median NEES / median chi2_2)| of the calibration run at the calibrated q (0: consistent)"),
     "sigma_aod_deg": ("deg", "calibrated AOD standard deviation (inliers of the calibration run's errors)"),
     "sigma_range_m": ("m", "calibrated TOA range standard deviation (inliers of the calibration run's errors)"),

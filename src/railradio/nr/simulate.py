@@ -365,12 +365,14 @@ def scenario_from_config(c: dict) -> Scenario:
 def calibration_trajectory(c: dict) -> Trajectory:
     """The calibration run's own trajectory (``calibration.trajectory`` of the ``nr``
     config), sampled at the evaluation's ``trajectory.dt_s``."""
-    return _trajectory(c["calibration"]["trajectory"]["phases"], c["trajectory"]["dt_s"])
+    tr = c["calibration"]["trajectory"]
+    return _trajectory(tr["phases"], c["trajectory"]["dt_s"], tr.get("v0_m_s", 0.0))
 
 
-def _trajectory(phases, dt_s) -> Trajectory:
-    """A :class:`Trajectory` from config phases ``[[duration s, acceleration m/s²], ...]``."""
-    return Trajectory(tuple(tuple(map(float, p)) for p in phases), float(dt_s))
+def _trajectory(phases, dt_s, v0_m_s: float = 0.0) -> Trajectory:
+    """A :class:`Trajectory` from config phases ``[[duration s, acceleration m/s²], ...]``
+    and a start speed [m/s]."""
+    return Trajectory(tuple(tuple(map(float, p)) for p in phases), float(dt_s), v0_m_s=float(v0_m_s))
 
 
 def shard_epochs(n_epochs: int, n_shards: int, shard: int) -> np.ndarray:

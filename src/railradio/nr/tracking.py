@@ -119,11 +119,14 @@ class TrackerConfig:
     distance_edges_m: tuple[float, ...] = ()
     sigma_aod_bins_rad: tuple[float, ...] = ()
     sigma_toa_bins_s: tuple[float, ...] = ()
+    start_speed_sigma_m_s: float = 1.0
+    """σ of the initial speed [m/s] about 0: 1 for a start from rest (the seed's
+    trajectory); large for a start at an unknown speed (the reproduction map's segment)."""
 
     def __post_init__(self) -> None:
         if self.variant not in VARIANTS:
             raise ValueError(f"variant must be one of {sorted(VARIANTS)}, got {self.variant!r}")
-        for name in ("q", "sigma_aod_rad", "sigma_toa_s"):
+        for name in ("q", "sigma_aod_rad", "sigma_toa_s", "start_speed_sigma_m_s"):
             if not getattr(self, name) > 0:
                 raise ValueError(f"{name} must be > 0, got {getattr(self, name)!r}")
         nb = len(self.distance_edges_m) + 1
@@ -443,7 +446,8 @@ def track_setup(ds, rrh_x: NDArray, rrh_y: float, dh_m: float, cfg: TrackerConfi
         start = (np.array([rrh_x[0], 0.0]), np.eye(2) * 1e12)
     p_fix, cov = start
     s0 = np.array([p_fix[0], p_fix[1], 0.0, 0.0, 0.0, 0.0])
-    p0 = np.diag([cov[0, 0], cov[1, 1], 1.0, 1.0, 1.0, 1.0])
+    sv2 = cfg.start_speed_sigma_m_s**2
+    p0 = np.diag([cov[0, 0], cov[1, 1], sv2, 1.0, 1.0, 1.0])
     p0[0, 1] = p0[1, 0] = cov[0, 1]
 
     return pick, snapshot_fix, k0, s0, p0, rrh.shape[0]
@@ -518,6 +522,16 @@ def nees_position(state: NDArray, cov: NDArray, x_true: NDArray) -> NDArray[np.f
     return np.where(np.isfinite(q), q, np.nan)
 
 
+def selected(ds, strength: str = "peak", n_use: int = 3) -> tuple[NDArray, NDArray]:
+    """The candidates a receiver measures per epoch: ``(order, ok)``, [epoch, n_use] column
+    indices of the ``n_use`` strongest by ``strength`` among those with an AOD and a TOA,
+    and whether each holds a measurement."""
+    ok = np.isfinite(ds["aod_hat"].values) & np.isfinite(ds["toa_hat"].values)
+    s = np.where(ok, np.nan_to_num(ds[strength].values, nan=-np.inf), -np.inf)
+    order = np.argsort(-s, axis=1)[:, :n_use]
+    return order, np.take_along_axis(ok, order, axis=1)
+
+
 def measurement_errors(ds, strength: str = "peak", n_use: int = 3, flat: bool = True,
                        with_distance: bool = False) -> tuple[NDArray, ...]:
     """AOD [rad, wrapped] and TOA range [m] errors of the measurements the tracker would use
@@ -526,10 +540,7 @@ def measurement_errors(ds, strength: str = "peak", n_use: int = 3, flat: bool = 
     returns (flat only) the true 3-D distances [m] of those measurements."""
     aod = ds["aod_hat"].values
     toa = ds["toa_hat"].values
-    ok = np.isfinite(aod) & np.isfinite(toa)
-    s = np.where(ok, np.nan_to_num(ds[strength].values, nan=-np.inf), -np.inf)
-    order = np.argsort(-s, axis=1)[:, :n_use]
-    sel_ok = np.take_along_axis(ok, order, axis=1)
+    order, sel_ok = selected(ds, strength, n_use)
     e_aod = wrap_rad(np.take_along_axis(aod - ds["aod_true"].values, order, axis=1))
     e_rng = np.take_along_axis(toa - ds["toa_true"].values, order, axis=1) * SPEED_OF_LIGHT_M_S
     if not flat:
@@ -615,7 +626,8 @@ def _nees_cost(ds, out) -> float:
 def calibrate(ds, variant: str, rrh_x: NDArray, rrh_y: float, dh_m: float, dt_s: float,
               q_grid: NDArray, gate: bool, strength: str = "peak", fs_hz: float = 245.76e6,
               distance_edges_m: tuple[float, ...] = (), min_per_bin: int = 50,
-              gate_prob: float = 0.99, search: dict | None = None) -> TrackerConfig:
+              gate_prob: float = 0.99, search: dict | None = None,
+              start_speed_sigma_m_s: float = 1.0) -> TrackerConfig:
     """Measurement and process noise from a calibration run (never the evaluation run).
 
     W: σ_AOD, σ_TOA of the inliers of the selected measurements' errors, those a χ² gate
@@ -627,7 +639,8 @@ def calibrate(ds, variant: str, rrh_x: NDArray, rrh_y: float, dh_m: float, dt_s:
     ``q_grid``; when an edge of the grid wins, the grid is extended by decades beyond it up
     to :data:`Q_SEARCH_LIMITS`. ``search`` (a dict) receives the q values tried, their
     costs, whether the winner sits on the searched range's edge and whether the cost is
-    monotone in q there (the finding to report instead of a q).
+    monotone toward it (the search reached the limit with the cost falling at every decade
+    from the grid's edge on: no q is identified, the finding to report instead of a q).
     """
     e_aod, e_rng, d3 = measurement_errors(ds, strength, with_distance=True)
     dist = np.sqrt(np.maximum(d3**2 - dh_m**2, 0.0))  # 2-D, as the tracker predicts it
@@ -639,7 +652,7 @@ def calibrate(ds, variant: str, rrh_x: NDArray, rrh_y: float, dh_m: float, dt_s:
 
     def cfg_of(q):
         return TrackerConfig(variant=variant, q=q, sigma_aod_rad=s_aod, sigma_toa_s=s_toa, gate=gate,
-                             gate_prob=gate_prob, **bins)
+                             gate_prob=gate_prob, start_speed_sigma_m_s=start_speed_sigma_m_s, **bins)
 
     def run(q):
         if q not in cost:
@@ -662,11 +675,17 @@ def calibrate(ds, variant: str, rrh_x: NDArray, rrh_y: float, dh_m: float, dt_s:
     tried = sorted(cost)
     c = np.array([cost[q] for q in tried])
     if search is not None:
-        fin = np.isfinite(c)
-        d = np.diff(c[fin])
+        # monotone toward the edge: the search widened to the limit and the cost fell at
+        # every decade from the grid's edge on (no minimum inside the limits)
+        if best == tried[-1] and best * 10 > hi:
+            toward = c[np.asarray(tried) >= qs[-1]]
+        elif best == tried[0] and best / 10 < lo:
+            toward = c[np.asarray(tried) <= qs[0]][::-1]
+        else:
+            toward = np.array([])
         search.update(q=tried, cost=[float(v) if np.isfinite(v) else None for v in c],
                       at_edge=bool(best in (tried[0], tried[-1])),
-                      monotone=bool(d.size > 0 and (np.all(d <= 0) or np.all(d >= 0))))
+                      monotone=bool(toward.size > 1 and np.all(np.isfinite(toward)) and np.all(np.diff(toward) < 0)))
     return cfg_of(best)
 
 

@@ -1,0 +1,175 @@
+"""The reproduction map: its cells, the block bootstrap and the claim rule."""
+import numpy as np
+import pytest
+import yaml
+
+from railradio.config import ConfigError, load_schema, validate_config
+from railradio.config_checks import check_config
+from railradio.nr import reproduction_map as rm
+from railradio.nr.geometry import Trajectory
+from railradio.rng import make_rng
+
+from ..conftest import ROOT
+
+SCHEMA = load_schema(ROOT / "workflow/schemas/config.schema.yaml")
+
+
+def _paper():
+    return validate_config(yaml.safe_load((ROOT / "config/config.yaml").read_text()), SCHEMA)
+
+
+@pytest.fixture(scope="module")
+def nr_and_schema():
+    return _paper()["nr"], SCHEMA["properties"]["nr"]
+
+
+def test_cells_and_the_bursts_they_share(nr_and_schema):
+    nr, schema = nr_and_schema
+    cells = rm.cells(nr, schema)
+    # M_T x data = 16, then the source receiver's template x selection less the default pair
+    assert len(cells) == 4 * 4 + 3
+    assert rm.default_cell(nr) == "mt32_others_random"
+    assert cells["mt8_all_train"]["antenna"]["rrh_elements"] == 8
+    assert cells["mt8_all_train"]["traffic"]["data_beam"] == "train"
+    assert cells["mt64_serving_only"]["traffic"]["load"] == 0.0
+    # the default cell and the selection-only cell read the main run's bursts
+    assert rm.burst_owner("mt32_others_random", cells, nr) is None
+    assert rm.burst_owner("tpl_pss_sss_sel_peak", cells, nr) is None
+    # the SSS-template cells share one burst set; their selection is the tracker's
+    assert rm.burst_owner("tpl_sss_sel_peak", cells, nr) == rm.burst_owner("tpl_sss_sel_ss_rsrp", cells, nr)
+    assert rm.calibration_owner("tpl_pss_sss_sel_peak", cells) == "mt32_others_random"
+    assert rm.burst_owner("mt16_none", cells, nr) == "mt16_none"
+    assert rm.cell_receivers("tpl_sss_sel_peak", nr) == ["seed"]
+    assert rm.cell_receivers("mt16_none", nr) == ["seed", "robust"]
+
+
+def test_calibration_run_spans_the_segment_accelerations(nr_and_schema):
+    nr, _ = nr_and_schema
+    c = nr["map"]["calibration"]
+    tr = Trajectory(tuple(map(tuple, c["phases"])), nr["trajectory"]["dt_s"], v0_m_s=c["v0_m_s"])
+    assert tr.n_epochs >= c["epochs"]
+    _, v, a = tr.state(tr.times_s())
+    assert v[0] == c["v0_m_s"] and np.all(np.diff(v) >= 0)
+    assert set(np.round(a, 6)) == {0.5, 0.0, 0.2}
+    # the main run's speeds over the segment contain the calibration run's
+    main = Trajectory(tuple(map(tuple, nr["trajectory"]["phases"])), nr["trajectory"]["dt_s"])
+    first, end = nr["map"]["segment"]
+    _, vs, acc = main.state(main.times_s()[first:end])
+    assert vs.min() <= v.min() and v.max() <= vs.max() and vs.max() >= 300 / 3.6
+    assert np.any(np.diff(acc) != 0)
+
+
+def test_block_bootstrap_draws_whole_blocks():
+    idx = rm.block_indices(make_rng(1, (0,)), 103, 10, 50)
+    assert idx.shape == (50, 103)
+    assert idx.min() >= 0 and idx.max() < 103
+    # each block of 10 is consecutive epochs
+    blocks = idx[:, :100].reshape(50, 10, 10)
+    assert np.all(np.diff(blocks, axis=2) == 1)
+    with pytest.raises(ValueError, match="block"):
+        rm.block_indices(make_rng(1, (0,)), 5, 10, 50)
+    with pytest.raises(ValueError, match="n_boot"):
+        rm.block_indices(make_rng(1, (0,)), 50, 10, 0)
+
+
+def test_claim_rule():
+    low = rm.CLAIMS["toa_p95"]  # < 1.6 m
+    assert rm.status(low, 1.0, 1.5, False) == rm.HOLDS
+    assert rm.status(low, 1.7, 2.0, False) == rm.FAILS
+    assert rm.status(low, 1.5, 1.7, False) == rm.UNRESOLVED
+    assert rm.status(low, 1.0, 1.5, True) == rm.FAILS  # a lost tracker fails
+    high = rm.CLAIMS["submeter"]  # ≈ 75 %, higher is better
+    assert rm.status(high, 0.8, 0.9, False) == rm.HOLDS
+    assert rm.status(high, 0.5, 0.7, False) == rm.FAILS
+    assert rm.status(high, 0.7, 0.8, False) == rm.UNRESOLVED
+    assert rm.status(high, None, None, False) == rm.UNRESOLVED
+    rank = rm.CLAIMS["toa_beats_aod"]
+    assert rm.status(rank, -2.0, -0.1, False) == rm.HOLDS
+    assert rm.status(rank, 0.0, 0.0, False) == rm.FAILS  # both lost alike: no ranking
+    assert rm.status(rank, -0.1, 0.2, False) == rm.UNRESOLVED
+
+
+def _errors(n, rng, scale_toa=0.3, scale_aod=2.0, fused=0.2):
+    aod = np.radians(rng.normal(0, 0.5, (n, 3)))
+    rngm = rng.normal(0, 0.5, (n, 3))
+    return aod, rngm, {"aod": np.abs(rng.normal(0, scale_aod, n)), "toa": np.abs(rng.normal(0, scale_toa, n)),
+                       "aod_toa": np.abs(rng.normal(0, fused, n))}
+
+
+def test_cell_key_numbers_mark_what_holds_and_what_is_lost():
+    rng = np.random.default_rng(3)
+    aod, rngm, pos = _errors(600, rng)
+    nums = rm.cell_key_numbers("c", "seed", aod, rngm, pos, 500.0, make_rng(1, (0,)), 50, 400, 0.95, "test")
+    p = "nr.map.c.seed"
+    for metric in rm.METRICS:
+        e, lo, hi = (nums[f"{p}.{metric}{s}"]["value"] for s in ("", ".lo", ".hi"))
+        assert lo <= e <= hi, metric
+    assert nums[f"{p}.claim.aod_p95"]["value"] == rm.HOLDS  # |N(0, 0.5°)| p95 ≈ 0.98° < 1.3°
+    assert nums[f"{p}.claim.toa_p95"]["value"] == rm.HOLDS  # 0.98 m < 1.6 m
+    assert nums[f"{p}.claim.ekf_mean"]["value"] == rm.HOLDS  # 0.16 m
+    assert nums[f"{p}.claim.toa_beats_aod"]["value"] == rm.HOLDS
+    assert nums[f"{p}.claim.fusion_best"]["value"] == rm.HOLDS
+    # the fused tracker lost on 5 % of the epochs: no accuracy, its claims fail
+    pos["aod_toa"][::20] = 1e6  # spread along the run: every resample holds about 5 %
+    nums = rm.cell_key_numbers("c", "seed", aod, rngm, pos, 500.0, make_rng(1, (0,)), 50, 400, 0.95, "test")
+    assert nums[f"{p}.track.aod_toa.lost_frac"]["value"] == pytest.approx(0.05)
+    assert nums[f"{p}.track.aod_toa.err_m.mean"]["value"] is None
+    assert nums[f"{p}.track.aod_toa.err_m.mean"]["lost_frac"] == pytest.approx(0.05)
+    for c in ("ekf_mean", "ekf_p95", "ekf_p99", "submeter"):
+        assert nums[f"{p}.claim.{c}"]["value"] == rm.FAILS
+    # clipped at 250 m, 5 % lost epochs add 12.5 m: fusion no longer best
+    assert nums[f"{p}.claim.fusion_best"]["value"] == rm.FAILS
+    assert all(e["value"] is None or abs(e["value"]) < 1e4 for e in nums.values())
+
+
+def test_summary_counts_cells(nr_and_schema):
+    nr, _ = nr_and_schema
+    nums = {}
+    rng = np.random.default_rng(4)
+    cells = ["mt32_others_random", "tpl_sss_sel_peak"]
+    for c in cells:
+        for rx in rm.cell_receivers(c, nr):
+            nums |= rm.cell_key_numbers(c, rx, *_errors(300, rng), 500.0, make_rng(1, (0,)), 50, 100, 0.95, "t")
+    s = rm.summary_key_numbers(nums, cells, nr)
+    assert s["nr.map.seed.n_cells"]["value"] == 2 and s["nr.map.robust.n_cells"]["value"] == 1
+    for rx in ("seed", "robust"):
+        for c in rm.CLAIMS:
+            assert sum(s[f"nr.map.{rx}.{c}.n_{w}"]["value"] for w in ("holds", "fails", "unresolved")) == \
+                s[f"nr.map.{rx}.n_cells"]["value"]
+
+
+def test_config_checks_name_the_map_keys():
+    cfg = _paper()
+    cfg["nr"]["map"]["segment"] = [1500, 9000]
+    cfg["nr"]["map"]["rrh_elements"] = [8, 16]
+    with pytest.raises(ConfigError) as exc:
+        check_config(cfg, SCHEMA)
+    assert "nr.map.segment" in str(exc.value) and "nr.map.rrh_elements" in str(exc.value)
+    cfg = _paper()
+    cfg["nr"]["map"]["block_epochs"] = 5000
+    with pytest.raises(ConfigError, match="nr.map.block_epochs"):
+        check_config(cfg, SCHEMA)
+
+
+def test_diagnostics_split_endfire_from_broadside():
+    aod_true = np.radians(np.array([[1.0, 90.0, 178.5]] * 4))  # 1 and 1.5 deg from the track
+    err = np.radians(np.array([[2.0, 0.1, 3.0]] * 4))
+    n_det = np.array([[5, 3, 7]] * 4)
+    d = rm.diagnostic_key_numbers("c", "seed", err, aod_true, n_det, "t")
+    p = "nr.map.c.seed.diag"
+    assert d[f"{p}.aod_err_deg.median_endfire"]["value"] == pytest.approx(2.5)
+    assert d[f"{p}.aod_err_deg.median_broadside"]["value"] == pytest.approx(0.1)
+    assert d[f"{p}.frac_endfire"]["value"] == pytest.approx(2 / 3)
+    assert d[f"{p}.n_detected.median"]["value"] == 5
+
+
+def test_shard_paths_reuse_the_main_run_and_other_cells(nr_and_schema):
+    nr, schema = nr_and_schema
+    cells = rm.cells(nr, schema)
+    n_main = 5775
+    # segment 1500..2499 lies in the main run's second of four shards
+    assert rm.shard_paths("mt32_others_random", "r0", cells, nr, n_main) == ["results/nr/estimates/r0/s1.nc"]
+    assert rm.shard_paths("tpl_sss_sel_ss_rsrp", "r0", cells, nr, n_main) == [
+        f"results/nr/map/tpl_sss_sel_peak/estimates/r0/s{k}.nc" for k in range(nr["map"]["n_shards"])]
+    assert rm.shard_paths("tpl_pss_sss_sel_peak", "cal", cells, nr, n_main) == [
+        "results/nr/map/mt32_others_random/estimates/cal/s0.nc"]
