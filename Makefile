@@ -61,7 +61,8 @@ publish: numbers  ## copy the paper-scale key numbers to paper/numbers.json (com
 	cp results/key_numbers.json paper/numbers.json
 
 GALLERY := fusion_rmse_vs_distance nr_position_error_cdf nr_sensitivity tunnel_position_error_cdf \
-           tunnel_seed_vs_physical handover_interruption_vs_speed nr_sweeps chain_success_vs_sigma
+           tunnel_seed_vs_physical handover_interruption_vs_speed nr_sweeps chain_success_vs_sigma \
+           nr_reproduction_map
 
 dag: $(STAMP)  ## docs/rulegraph.png: the rules and their dependencies (no Graphviz needed)
 	$(BIN)/snakemake --rulegraph --workflow-profile workflow/profiles/default 2>/dev/null > results/rulegraph.dot

@@ -26,6 +26,7 @@ Statuses are key numbers: 1 holds, 0 not resolved, -1 fails.
 from __future__ import annotations
 
 import copy
+import re
 from dataclasses import dataclass
 from typing import Any
 
@@ -37,6 +38,8 @@ from railradio.nr import loss
 from railradio.nr.workflow import sim_config
 
 HOLDS, UNRESOLVED, FAILS = 1.0, 0.0, -1.0
+CELL_KEY = re.compile(r"^nr\.map\.(mt\d+|tpl)_")
+"""A per-cell key of the map (``nr.map.<cell>.*``; the per-receiver counts are not)."""
 STATUS_NAMES = {HOLDS: "holds", UNRESOLVED: "not resolved", FAILS: "fails"}
 
 
