@@ -137,10 +137,10 @@ def test_intermediates_are_self_explaining(ci_run):
     # panels_200m_point): their track only
     assert len(case_paths) == 14 * (2 + 1 + 1) + 7
     map_paths = sorted((ci_run / "results/nr/map").rglob("*.nc"))
-    # CI's map (M_T = 32 only): 7 cells, 4 with their own segment bursts (2 shards each: 3
-    # data rows and the SSS template; the default and the selection-only cell read others'),
-    # 5 calibration runs (one per burst set), 7 tracks
-    assert len(map_paths) == 4 * 2 + 5 + 7
+    # the map's 19 cells: 16 with their own segment bursts (2 shards each: 15 M_T x data
+    # cells and the SSS template; the default and the selection-only cells read others'),
+    # 17 calibration runs (one per burst set), 19 tracks
+    assert len(map_paths) == 16 * 2 + 17 + 19
     paths += nr_paths + case_paths + map_paths
     for study, n_min in (("handover", 10), ("tunnel", 10), ("sens/fusion", 5), ("chain", 1)):
         found = sorted((ci_run / "results" / study).rglob("*.nc"))
