@@ -161,7 +161,7 @@ def _nr_map(nr: Mapping[str, Any], schema: Mapping[str, Any], n_main: int | None
     run's M_T among the mapped ones, every cell a valid nr config."""
     from railradio.nr import reproduction_map as nr_map
     from railradio.nr.keys import SKIP_S
-    from railradio.nr.simulate import Trajectory
+    from railradio.nr.simulate import calibration_trajectory
 
     mp = nr["map"]
     first, end = mp["segment"]
@@ -176,8 +176,8 @@ def _nr_map(nr: Mapping[str, Any], schema: Mapping[str, Any], n_main: int | None
     if mp["n_shards"] > end - first:
         yield "nr.map.n_shards", mp["n_shards"], f"<= the segment's {end - first} epochs"
     c = mp["calibration"]
-    n_cal = Trajectory(tuple(tuple(map(float, p)) for p in c["phases"]), float(nr["trajectory"]["dt_s"]),
-                       v0_m_s=float(c["v0_m_s"])).n_epochs
+    n_cal = calibration_trajectory({"calibration": nr_map.calibration_section(dict(nr)),
+                                    "trajectory": nr["trajectory"]}).n_epochs
     if c["epochs"] > n_cal:
         yield "nr.map.calibration.epochs", c["epochs"], f"<= its trajectory's {n_cal} epochs"
     if nr["antenna"]["rrh_elements"] not in mp["rrh_elements"]:

@@ -185,8 +185,7 @@ def plot_sweeps(numbers: dict, sweeps: dict, sync_sigma_s: dict, pdf: str, png: 
     plotting.save(fig, pdf, png)
 
 
-def plot_reproduction_map(numbers: dict, cells: list[str], receivers: dict[str, list[str]], pdf: str,
-                          png: str) -> None:
+def plot_reproduction_map(numbers: dict, receivers: dict[str, list[str]], pdf: str, png: str) -> None:
     """The reproduction map (key numbers ``nr.map.<cell>.<receiver>.*``): one grid per
     receiver, a row per map cell and a column per source claim, each square coloured by
     the claim's status (holds / not resolved / fails) and labelled with the measured value

@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import copy
 import re
+import warnings
 from dataclasses import dataclass
 from typing import Any
 
@@ -104,8 +105,7 @@ def cells(nr: dict, nr_schema: dict) -> dict[str, dict[str, Any]]:
     for m in mp["rrh_elements"]:
         for data, traffic in mp["data"].items():
             out[f"mt{m}_{data}"] = {"antenna": {"rrh_elements": m}, "traffic": dict(traffic)}
-    first = next(iter(mp["data"]))
-    default = dict(out[f"mt{nr['antenna']['rrh_elements']}_{first}"])
+    default = dict(out[default_cell(nr)])
     for t in mp["templates"]:
         for s in mp["selections"]:
             if (t, s) != (nr["receiver"]["template"], nr["receiver"]["selection"]):
@@ -192,12 +192,9 @@ def block_indices(rng: np.random.Generator, n: int, block: int, n_boot: int) -> 
 
 def _nanq(x: np.ndarray, q: float) -> np.ndarray:
     """q-th percentile along the last axis, ignoring NaN (NaN where nothing is finite)."""
-    with np.errstate(all="ignore"):
-        import warnings
-
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", RuntimeWarning)
-            return np.nanpercentile(x, q, axis=-1)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # "All-NaN slice": NaN is the answer
+        return np.nanpercentile(x, q, axis=-1)
 
 
 def cell_metrics(aod_err_rad: np.ndarray, range_err_m: np.ndarray, pos_err_m: dict[str, np.ndarray],

@@ -37,7 +37,7 @@ cal = {}
 for i, (rx, gate) in enumerate(receivers.items()):
     dsr, calr = seg.sel(receiver=rx), cal_ds.sel(receiver=rx)
     aod[i], rng[i] = measurement_errors(dsr, sel[rx], flat=False)
-    order, ok = selected(dsr, sel[rx])
+    order, ok = selected(dsr, sel[rx])  # the same RRHs: their truth and detections
     aod_true[i] = np.where(ok, np.take_along_axis(dsr["aod_true"].values, order, axis=1), np.nan)
     n_det[i] = np.where(ok, np.take_along_axis(dsr["n_detected"].values, order, axis=1), 0)
     for j, variant in enumerate(VARIANTS):

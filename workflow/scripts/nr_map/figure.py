@@ -12,4 +12,4 @@ with open(smk.input[0], encoding="utf-8") as fh:
 nr = dict(smk.params.nr)
 cells = list(smk.params.cells)
 rows = {rx: [c for c in cells if rx in cell_receivers(c, nr)] for rx in receivers(nr)}
-plot_reproduction_map(numbers, cells, rows, smk.output.pdf, smk.output.png)
+plot_reproduction_map(numbers, rows, smk.output.pdf, smk.output.png)
