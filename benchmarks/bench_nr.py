@@ -120,7 +120,7 @@ def main() -> None:
         link_budget(float(xe), float(ve), dep, scn.radio, scn.rrh_array, scn.train_array, shadow)
     # warm-up (untimed): load the compiled kernels, cache the cells' grids and spectra
     lb = link_budget(float(x[0]), float(v[0]), dep, scn.radio, scn.rrh_array, scn.train_array, shadow)
-    cand = np.searchsorted(lb.rrh, dep.nearest(float(x[0]), scn.n_candidates))
+    cand = np.searchsorted(lb.rrh, dep.nearest(float(x[0]), scn.cell_search.n_neighbours))
     for syn, cor in ((fast_syn, fast_cor), (full_syn, None)):
         z, s_min = syn(lb.links, rng, t0_s=float(t_traj[0]))
         if cor is not None:
@@ -130,7 +130,7 @@ def main() -> None:
         t0 = time.perf_counter()
         lb = link_budget(float(xe), float(ve), dep, scn.radio, scn.rrh_array, scn.train_array, shadow)
         d2d = np.hypot(dep.x_m[lb.rrh] - xe, dep.offset_m)
-        cand = dep.nearest(float(xe), scn.n_candidates)
+        cand = dep.nearest(float(xe), scn.cell_search.n_neighbours)
         pos = np.searchsorted(lb.rrh, cand)
         t1 = time.perf_counter()
         draws = fast_syn.draws(lb.links, rng)
