@@ -33,6 +33,9 @@ def _scn(**joint):
     (350.0, replace(_scn(), execution=replace(Scenario().execution, failure_rule="rlf"))),
     (150.0, replace(_scn(), execution=replace(Scenario().execution, failure_rule="rlf", rlf_t310_s=0.4,
                                                rlf_eval_s=0.12))),
+    (350.0, replace(_scn(), execution=replace(Scenario().execution, failure_rule="rlm"))),
+    (100.0, replace(_scn(), execution=replace(Scenario().execution, failure_rule="rlm", rlf_t310_s=0.2,
+                                               rlm_n310=3, rlm_n311=2))),
 ])
 def test_vectorized_engine_equals_the_per_step_loop(speed, scn):
     kin = kinematics(scn, speed)

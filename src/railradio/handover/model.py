@@ -9,6 +9,7 @@ consume identical draws.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -21,6 +22,7 @@ from railradio.handover.radio import (
     shadowing_fields,
     sinr_db,
 )
+from railradio.handover.rlm import first_rlf, indications
 from railradio.handover.train import Kinematics, gnss_error_m
 from railradio.rng import make_rng, spawn_key, stable_id
 
@@ -166,19 +168,47 @@ def rlf_window_samples(ex, period_s: float) -> tuple[int, int]:
     return max(1, int(round(ex.rlf_eval_s / period_s))), int(round(ex.rlf_t310_s / period_s))
 
 
+def rlm_positions_m(kin: Kinematics, indication_s: float) -> np.ndarray:
+    """Positions [m] of the ``rlm`` rule's indications: every v·``indication_s`` from the
+    start of the shadowing grid (behind the rearmost node at t = 0, where the serving link
+    is strong) to its end."""
+    g = kin.grid
+    step = kin.speed_m_s * indication_s
+    x_end = g.x_min_m + g.step_m * (g.n - 1)
+    return g.x_min_m + step * np.arange(int(math.floor((x_end - g.x_min_m) / step)) + 1)
+
+
+def rlm_failure_x_m(ctx: BlockContext) -> np.ndarray:
+    """Where each run's serving link declares radio-link failure [m], [B] (inf: never):
+    :mod:`railradio.handover.rlm` on the serving SINR along the track (cached per block)."""
+    sc = ctx.scn
+    cfg = sc.execution.rlm(sc.radio)
+    key = ("rlm_x", cfg)
+    if key not in ctx._cache:
+        x = rlm_positions_m(ctx.kin, cfg.indication_s)
+        r_s, r_t = ctx.true_rsrp_dbm(np.arange(ctx.n_runs)[:, None], x[None, :])
+        oos, ins = indications(sinr_db(r_s, r_t, sc.radio), cfg)
+        j = first_rlf(oos, ins, cfg)
+        ctx._cache[key] = np.where(j < x.size, x[np.minimum(j, x.size - 1)], np.inf)
+    return ctx._cache[key]
+
+
 def serving_ok(ctx: BlockContext, run: np.ndarray, hb_m: np.ndarray) -> np.ndarray:
     """bool: the serving link has not failed at a command at true position ``hb_m``.
 
     ``instant`` (STUDY.md §5): SINR_serving(H_b) ≥ Q_out.  ``rlf``: radio-link failure only
     after a T310-long run of out-of-sync evaluations — the link has failed iff every
     n_eval-sample mean (dB) of the serving SINR at the positions H_b − j·v·T_m, whose windows
-    end at j = 0…n_t310, is below Q_out.
+    end at j = 0…n_t310, is below Q_out.  ``rlm``: radio-link monitoring (TS 36.133 §7.6,
+    TS 36.331 §5.3.11) has declared failure before H_b (:func:`rlm_failure_x_m`).
     """
     sc = ctx.scn
     rd, ex = sc.radio, sc.execution
     if ex.failure_rule == "instant":
         r_s, r_t = ctx.true_rsrp_dbm(run, hb_m)
         return sinr_db(r_s, r_t, rd) >= rd.q_out_db
+    if ex.failure_rule == "rlm":
+        return np.asarray(hb_m, dtype=float) < rlm_failure_x_m(ctx)[run]
     n_eval, n_t = rlf_window_samples(ex, ctx.kin.period_s)
     step = ctx.kin.speed_m_s * ctx.kin.period_s
     x = hb_m[:, None] - step * np.arange(n_eval + n_t)[None, :]          # [n, J], j = 0 at H_b

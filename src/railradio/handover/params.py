@@ -12,6 +12,8 @@ import math
 from dataclasses import asdict, dataclass, field, replace
 from typing import Any
 
+from railradio.handover.rlm import RlmConfig
+
 KMH = 1.0 / 3.6
 """m/s per km/h."""
 
@@ -172,10 +174,19 @@ class Execution:
         N310/T310-like, TS 36.331 §5.3.11 with TS 36.133 §7.6 evaluation): every
         ``rlf_eval_s`` average of the serving SINR (in dB, on the T_m samples the train
         crossed) ending within the last ``rlf_t310_s`` before the command is below Q_out [ours].
+        ``rlm``: radio-link monitoring as 3GPP defines it (:mod:`railradio.handover.rlm`):
+        indications every ``rlm_indication_s`` along the train's path from the start of the
+        crossing, out-of-sync when the ``rlf_eval_s`` mean of the serving SINR is below
+        Q_out, in-sync when the ``rlm_qin_eval_s`` mean is above Q_in, N310/N311 counters
+        and T310 = ``rlf_t310_s``; the serving link has failed at a command when radio-link
+        failure was declared before it.
     rlf_t310_s, rlf_eval_s
-        T310-like window (the out-of-sync time until radio-link failure) and the evaluation
-        period of one out-of-sync indication [3GPP: T310 1 s is a common setting; 200 ms
+        T310 (the out-of-sync time until radio-link failure) and the Qout evaluation period
+        of one out-of-sync indication [3GPP: T310 1 s, TS 36.331 §9.2.5 default; 200 ms
         Qout evaluation, TS 36.133 §7.6].
+    rlm_indication_s, rlm_qin_eval_s, rlm_n310, rlm_n311
+        ``rlm`` rule: interval between indications (TS 36.213 §4.2.1: 10 ms), Qin
+        evaluation period (TS 36.133 §7.6: 100 ms), N310 and N311 (TS 36.331 §9.2.5: 1, 1).
     """
 
     t0_s: float = 0.030
@@ -185,6 +196,10 @@ class Execution:
     failure_rule: str = "instant"
     rlf_t310_s: float = 1.0
     rlf_eval_s: float = 0.2
+    rlm_indication_s: float = 0.010
+    rlm_qin_eval_s: float = 0.100
+    rlm_n310: int = 1
+    rlm_n311: int = 1
 
     def __post_init__(self) -> None:
         _check("t0_s", self.t0_s, 0.0, 1.0)
@@ -192,9 +207,21 @@ class Execution:
         if not isinstance(self.max_attempts, int) or not 1 <= self.max_attempts <= 100:
             raise ValueError(f"max_attempts must be an integer in 1..100, got {self.max_attempts!r}")
         _check("pingpong_window_s", self.pingpong_window_s, 0.0, 60.0)
-        _choice("failure_rule", self.failure_rule, ("instant", "rlf"))
+        _choice("failure_rule", self.failure_rule, ("instant", "rlf", "rlm"))
         _check("rlf_t310_s", self.rlf_t310_s, 0.0, 10.0)
         _check("rlf_eval_s", self.rlf_eval_s, 0.0, 2.0, lo_open=True)
+        _check("rlm_indication_s", self.rlm_indication_s, 0.0, 1.0, lo_open=True)
+        _check("rlm_qin_eval_s", self.rlm_qin_eval_s, 0.0, 2.0, lo_open=True)
+        for name in ("rlm_n310", "rlm_n311"):
+            v = getattr(self, name)
+            if not isinstance(v, int) or not 1 <= v <= 20:
+                raise ValueError(f"{name} must be an integer in 1..20 (TS 36.331 §6.3.6), got {v!r}")
+
+    def rlm(self, radio: Radio) -> RlmConfig:
+        """The ``rlm`` rule's constants, with Q_out and Q_in from ``radio``."""
+        return RlmConfig(indication_s=self.rlm_indication_s, qout_eval_s=self.rlf_eval_s,
+                         qin_eval_s=self.rlm_qin_eval_s, q_out_db=radio.q_out_db, q_in_db=radio.q_in_db,
+                         n310=self.rlm_n310, n311=self.rlm_n311, t310_s=self.rlf_t310_s)
 
 
 @dataclass(frozen=True)

@@ -15,6 +15,7 @@ import numpy as np
 from railradio.constants import SPEED_OF_LIGHT_M_S
 from railradio.handover.model import Draws
 from railradio.handover.params import Scenario
+from railradio.handover.rlm import first_rlf_reference
 from railradio.handover.train import Kinematics
 
 
@@ -106,6 +107,8 @@ class _Run:
         ex, rd = self.scn.execution, self.scn.radio
         if ex.failure_rule == "instant":
             return self.sinr(0, hb) >= rd.q_out_db
+        if ex.failure_rule == "rlm":
+            return hb < self.rlm_failure_x()
         n_eval = max(1, round(ex.rlf_eval_s / self.tm))
         n_t = round(ex.rlf_t310_s / self.tm)
         step = self.v * self.tm
@@ -114,6 +117,27 @@ class _Run:
             if sum(sinrs[end:end + n_eval]) / n_eval >= rd.q_out_db:
                 return True  # an in-sync evaluation within T310: no radio-link failure
         return False
+
+    def rlm_failure_x(self) -> float:
+        """Where radio-link monitoring declares the serving link failed (inf: never):
+        indications every v·T_ind from the grid's start, window means by plain sums, the
+        N310/N311/T310 procedure step by step."""
+        if not hasattr(self, "_rlm_x"):
+            cfg = self.scn.execution.rlm(self.scn.radio)
+            step = self.v * cfg.indication_s
+            x_end = self.g_x0 + self.g_dx * (self.g_n - 1)
+            xs = [self.g_x0 + step * j for j in range(int(math.floor((x_end - self.g_x0) / step)) + 1)]
+            sinrs = [self.sinr(0, x) for x in xs]
+            n_out, n_in = cfg.samples(cfg.qout_eval_s), cfg.samples(cfg.qin_eval_s)
+            oos, ins = [], []
+            for j in range(len(xs)):
+                o = j + 1 >= n_out and sum(sinrs[j + 1 - n_out:j + 1]) / n_out < cfg.q_out_db
+                i = j + 1 >= n_in and sum(sinrs[j + 1 - n_in:j + 1]) / n_in > cfg.q_in_db
+                oos.append(o)
+                ins.append(i and not o)
+            j_rlf = first_rlf_reference(oos, ins, cfg)
+            self._rlm_x = xs[j_rlf] if j_rlf < len(xs) else math.inf
+        return self._rlm_x
 
     # --- execution ----------------------------------------------------------------------
     def execute(self, hb: float, retry_ok) -> tuple[int, bool, float]:
