@@ -17,7 +17,9 @@ from railradio.handover.reference import simulate_reference
 from railradio.handover.train import kinematics
 
 ALL = ("joint", "a3", "distance")
-COMPARED = ("command_x_m", "attempts", "success", "pingpong", "delay_s", "completion_x_m", "rsrp_gap_db")
+COMPARED = ("command_x_m", "attempts", "success", "pingpong", "delay_s", "completion_x_m", "rsrp_gap_db",
+            "delay_all_s", "delay_trigger_s")
+EX = Scenario().execution
 
 
 def _scn(**joint):
@@ -27,13 +29,15 @@ def _scn(**joint):
 
 @pytest.mark.parametrize(("speed", "scn"), [
     (350.0, _scn()),
-    (120.0, _scn(wslr="mean", retry_rule="completed")),
+    (120.0, replace(_scn(wslr="mean", retry_rule="completed"), execution=replace(EX, retry="joint_band", failure_rule="instant"))),
+    (380.0, replace(_scn(), execution=replace(EX, retry="joint_band"))),
     (460.0, _scn(band_fit="offset", measurements="raw", gaph_variant="narrow")),
-    (250.0, replace(Scenario().with_weights(1, 0.5), a3=replace(Scenario().a3, ttt_s=0.04))),
+    (250.0, replace(Scenario().with_weights(1, 0.5), a3=replace(Scenario().a3, ttt_s=0.04),
+                    execution=replace(EX, failure_rule="instant", max_attempts=10))),
     (350.0, replace(_scn(), execution=replace(Scenario().execution, failure_rule="rlf"))),
     (150.0, replace(_scn(), execution=replace(Scenario().execution, failure_rule="rlf", rlf_t310_s=0.4,
                                                rlf_eval_s=0.12))),
-    (350.0, replace(_scn(), execution=replace(Scenario().execution, failure_rule="rlm"))),
+    (350.0, replace(_scn(), execution=replace(EX, failure_rule="rlm", max_attempts=4, reestablish_s=0.1))),
     (100.0, replace(_scn(), execution=replace(Scenario().execution, failure_rule="rlm", rlf_t310_s=0.2,
                                                rlm_n310=3, rlm_n311=2))),
 ])

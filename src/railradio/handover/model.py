@@ -159,6 +159,8 @@ class Execution:
     completion_x_m: np.ndarray  # He of the successful (or last) attempt [m]
     delay_s: np.ndarray        # command to completion, NaN if failed
     gap_db: np.ndarray         # true RSRP_s − RSRP_t at completion_x_m [dB]
+    delay_all_s: np.ndarray    # command (or earlier RLF) to completion incl. re-establishment [s]
+    t_detect_s: np.ndarray     # failure detection after the first command [s] (NaN: success)
 
 
 def rlf_window_samples(ex, period_s: float) -> tuple[int, int]:
@@ -219,14 +221,52 @@ def serving_ok(ctx: BlockContext, run: np.ndarray, hb_m: np.ndarray) -> np.ndarr
     return np.any(avg >= rd.q_out_db, axis=1)
 
 
+def rlm_failure_time_s(ctx: BlockContext, run: np.ndarray, hb_m: np.ndarray) -> np.ndarray:
+    """Time [s] from a command at true position ``hb_m`` to the serving link's radio-link
+    failure (negative: declared before it; inf: never) under the ``rlm`` rule."""
+    return (rlm_failure_x_m(ctx)[run] - np.asarray(hb_m, dtype=float)) / ctx.kin.speed_m_s
+
+
+def execution_samples(ex, indication_s: float) -> int:
+    """Indications during one execution (T0) under the ``rlm`` rule: round(T0/T_ind) ≥ 1."""
+    return max(1, int(round(ex.t0_s / indication_s)))
+
+
+def target_ok(ctx: BlockContext, run: np.ndarray, hb_m: np.ndarray) -> np.ndarray:
+    """bool: access to the target succeeds for an execution commanded at ``hb_m``.
+
+    ``rlm``: the mean (dB) of the target's SINR at the execution's indications
+    H_b + j·v·T_ind, j = 1…n (n = round(T0/T_ind), the last at H_e), is at least Q_out
+    (TR 36.839's T304 rule).  ``instant``/``rlf``: SINR_target(H_e) ≥ Q_in.
+    """
+    sc = ctx.scn
+    rd, ex = sc.radio, sc.execution
+    v = ctx.kin.speed_m_s
+    hb = np.asarray(hb_m, dtype=float)
+    if ex.failure_rule != "rlm":
+        he = hb + v * ex.t0_s
+        r_s, r_t = ctx.true_rsrp_dbm(run, he)
+        return sinr_db(r_t, r_s, rd) >= rd.q_in_db
+    t_ind = ex.rlm_indication_s
+    n = execution_samples(ex, t_ind)
+    x = hb[:, None] + v * t_ind * np.arange(1, n + 1)[None, :]
+    r_s, r_t = ctx.true_rsrp_dbm(run[:, None], x)
+    return np.mean(sinr_db(r_t, r_s, rd), axis=1) >= rd.q_out_db
+
+
 def execute(ctx: BlockContext, run: np.ndarray, hb_m: np.ndarray, retry_allowed) -> Execution:
     """Execute handovers commanded at true positions ``hb_m`` (flat arrays, one per crossing).
 
-    Attempt a succeeds iff the serving link holds at Hb_a (:func:`serving_ok`: by default
-    SINR_serving(Hb_a) ≥ Q_out) and SINR_target(He_a) ≥ Q_in, with
-    He_a = Hb_a + v·T0 [seed eq. 2]; a failed attempt is followed by another at
-    Hb_{a+1} = He_a + v·TZ when ``retry_allowed(a, serving_ok, hb_next_m)`` (bool array)
-    says so.  Delay of a success at attempt a: a·T0 + (a−1)·TZ.
+    Attempt a succeeds iff the serving link holds at Hb_a (:func:`serving_ok`) and access
+    to the target succeeds (:func:`target_ok`), with He_a = Hb_a + v·T0 [seed eq. 2]; a
+    failed attempt is followed by another at Hb_{a+1} = He_a + v·TZ when
+    ``retry_allowed(a, serving_ok, hb_next_m)`` (bool array) says so.  Delay of a success
+    at attempt a: a·T0 + (a−1)·TZ.  A handover whose last attempt fails is recovered by
+    re-establishment, ``reestablish_s`` after the failure is detected: the radio-link
+    failure when the serving link had failed (``rlm``: when it was declared; the other rules:
+    at the command), else the end of the failed execution.  ``delay_all_s`` is, for every
+    handover, the time to completion (that recovery included) from the first command, or
+    from the radio-link failure when that came first (the command then cannot be received).
     """
     sc = ctx.scn
     rd, ex = sc.radio, sc.execution
@@ -235,26 +275,35 @@ def execute(ctx: BlockContext, run: np.ndarray, hb_m: np.ndarray, retry_allowed)
     attempts = np.zeros(n, dtype=np.int64)
     success = np.zeros(n, dtype=bool)
     he_final = np.full(n, np.nan)
+    t_detect = np.full(n, np.nan)              # failure detection, s after the first command
     done = np.zeros(n, dtype=bool)
-    hb = hb_m.astype(float).copy()
-    max_a = max(ex.max_attempts, 2)
-    for a in range(1, max_a + 1):
+    hb0 = hb_m.astype(float)
+    hb = hb0.copy()
+    for a in range(1, ex.max_attempts + 1):
         act = ~done
         if not act.any():
             break
         he = hb + v * ex.t0_s
-        r_s_e, r_t_e = ctx.true_rsrp_dbm(run, he)
         s_ok = serving_ok(ctx, run, hb)
-        t_ok = sinr_db(r_t_e, r_s_e, rd) >= rd.q_in_db
+        t_ok = target_ok(ctx, run, hb)
         ok = act & s_ok & t_ok
         hb_next = he + v * ex.tz_s
-        retry = act & ~ok & (a < max_a) & retry_allowed(a, s_ok, hb_next)
+        retry = act & ~ok & (a < ex.max_attempts) & retry_allowed(a, s_ok, hb_next)
         stop = act & (ok | ~retry)
         attempts[stop] = a
         success[ok] = True
         he_final[stop] = he[stop]
+        fail = stop & ~ok
+        if fail.any():
+            if ex.failure_rule == "rlm":
+                t_rlf = rlm_failure_time_s(ctx, run[fail], hb0[fail])
+            else:
+                t_rlf = (hb[fail] - hb0[fail]) / v
+            t_exec = (he[fail] - hb0[fail]) / v
+            t_detect[fail] = np.where(s_ok[fail], t_exec, t_rlf)
         done |= stop
         hb = np.where(retry, hb_next, hb)
     delay = np.where(success, attempts * ex.t0_s + (attempts - 1) * ex.tz_s, np.nan)
+    delay_all = np.where(success, delay, ex.reestablish_s + np.maximum(t_detect, 0.0))
     r_s, r_t = ctx.true_rsrp_dbm(run, he_final)
-    return Execution(attempts, success, he_final, delay, r_s - r_t)
+    return Execution(attempts, success, he_final, delay, r_s - r_t, delay_all, t_detect)

@@ -165,21 +165,30 @@ class Execution:
     tz_s
         interval before a second attempt TZ [seed: 50 ms].
     max_attempts
-        attempts of the A3 and distance policies while the serving link holds [ours].
+        attempts of every policy: a failed attempt is followed by another after TZ while
+        the serving link holds, up to this many [seed eq. 9: one second attempt, so 2].
+    retry
+        ``common`` (the default): that rule for every policy; ``joint_band``: the earlier
+        joint-only rule as a case — the joint policy makes one second attempt whenever its
+        execution (or completion, ``joint.retry_rule``) lies before PR, whether or not the
+        serving link holds; A3 and distance keep the common rule.
     pingpong_window_s
-        a return to the previous cell within this time of completion is a ping-pong [ours].
+        a handover back to the previous cell within this time of completion is a
+        ping-pong [TR 36.839's minimum time of stay, 1 s].
     failure_rule
-        when the serving link counts as failed at a command: ``instant`` (STUDY.md §5, the
-        default): its local-mean SINR at H_b is below Q_out; ``rlf`` (radio-link failure,
-        N310/T310-like, TS 36.331 §5.3.11 with TS 36.133 §7.6 evaluation): every
-        ``rlf_eval_s`` average of the serving SINR (in dB, on the T_m samples the train
-        crossed) ending within the last ``rlf_t310_s`` before the command is below Q_out [ours].
-        ``rlm``: radio-link monitoring as 3GPP defines it (:mod:`railradio.handover.rlm`):
-        indications every ``rlm_indication_s`` along the train's path from the start of the
-        crossing, out-of-sync when the ``rlf_eval_s`` mean of the serving SINR is below
-        Q_out, in-sync when the ``rlm_qin_eval_s`` mean is above Q_in, N310/N311 counters
-        and T310 = ``rlf_t310_s``; the serving link has failed at a command when radio-link
-        failure was declared before it.
+        when an attempt fails.  ``rlm`` (the default, the 3GPP procedures): radio-link
+        monitoring (:mod:`railradio.handover.rlm`: indications every ``rlm_indication_s``
+        along the train's path from the start of the crossing, out-of-sync when the
+        ``rlf_eval_s`` mean of the serving SINR is below Q_out, in-sync when the
+        ``rlm_qin_eval_s`` mean is above Q_in, N310/N311 and T310 = ``rlf_t310_s``,
+        TS 36.133 §7.6, TS 36.331 §5.3.11); an attempt fails if radio-link failure was
+        declared before its command (the command cannot be received), or if the target's
+        SINR, averaged over the execution's indications (the random access while T304
+        runs), is below Q_out (TR 36.839's handover-failure rule).
+        ``instant`` (STUDY.md §5's earlier rule, a case): the serving local-mean SINR at
+        H_b is below Q_out, or the target's at H_e below Q_in.  ``rlf`` (a case): as
+        ``instant`` but the serving link fails only after a T310-long run of
+        ``rlf_eval_s`` out-of-sync evaluations before the command [ours].
     rlf_t310_s, rlf_eval_s
         T310 (the out-of-sync time until radio-link failure) and the Qout evaluation period
         of one out-of-sync indication [3GPP: T310 1 s, TS 36.331 §9.2.5 default; 200 ms
@@ -187,26 +196,38 @@ class Execution:
     rlm_indication_s, rlm_qin_eval_s, rlm_n310, rlm_n311
         ``rlm`` rule: interval between indications (TS 36.213 §4.2.1: 10 ms), Qin
         evaluation period (TS 36.133 §7.6: 100 ms), N310 and N311 (TS 36.331 §9.2.5: 1, 1).
+    reestablish_s
+        recovery after a failed handover (every attempt failed): RRC connection
+        re-establishment (TS 36.331 §5.3.7) completes this long after the failure is
+        detected (the radio-link failure, or the end of the last failed execution); the
+        time counts in the command-to-completion delay of all handovers.  TS 36.133
+        §6.1.2.1: 50 ms + T_identify (100 ms, a cell measured in the last 5 s) + T_SI +
+        T_PRACH, with T_SI = 80 ms (one SIB1 period, TS 36.331 §5.2.1.2) and T_PRACH =
+        10 ms (one PRACH opportunity per frame) [ours] = 240 ms.
     """
 
     t0_s: float = 0.030
     tz_s: float = 0.050
-    max_attempts: int = 10
+    max_attempts: int = 2
+    retry: str = "common"
     pingpong_window_s: float = 1.0
-    failure_rule: str = "instant"
+    failure_rule: str = "rlm"
     rlf_t310_s: float = 1.0
     rlf_eval_s: float = 0.2
     rlm_indication_s: float = 0.010
     rlm_qin_eval_s: float = 0.100
     rlm_n310: int = 1
     rlm_n311: int = 1
+    reestablish_s: float = 0.240
 
     def __post_init__(self) -> None:
         _check("t0_s", self.t0_s, 0.0, 1.0)
         _check("tz_s", self.tz_s, 0.0, 1.0)
         if not isinstance(self.max_attempts, int) or not 1 <= self.max_attempts <= 100:
             raise ValueError(f"max_attempts must be an integer in 1..100, got {self.max_attempts!r}")
+        _choice("retry", self.retry, ("common", "joint_band"))
         _check("pingpong_window_s", self.pingpong_window_s, 0.0, 60.0)
+        _check("reestablish_s", self.reestablish_s, 0.0, 10.0)
         _choice("failure_rule", self.failure_rule, ("instant", "rlf", "rlm"))
         _check("rlf_t310_s", self.rlf_t310_s, 0.0, 10.0)
         _check("rlf_eval_s", self.rlf_eval_s, 0.0, 2.0, lo_open=True)

@@ -41,6 +41,7 @@ class Command:
     k: np.ndarray                      # [B, N] sample of the first command
     retry: object                      # callable(a, serving_ok, hb_next_m, flat_sel) -> bool
     extras: dict = field(default_factory=dict)  # name -> (dims, array, units, long_name)
+    k_trigger: np.ndarray | None = None  # [B, N] start of the period that led to the command (None: k)
 
 
 class Policy(ABC):
@@ -62,7 +63,8 @@ class Policy(ABC):
         max_a = ctx.scn.execution.max_attempts
 
         def retry(a, serving_ok, hb_next_m, sel):
-            # A3 / distance: retried after TZ as long as the serving link holds
+            # every policy (execution.retry = common): retried after TZ while the serving
+            # link holds
             return serving_ok & (a < max_a)
         return retry
 
@@ -119,7 +121,9 @@ class A3Policy(Policy):
     def command(self, ctx: BlockContext) -> Command:
         n_ttt = ttt_samples(ctx.scn.a3.ttt_s, ctx.kin.period_s)
         k = first_true(held_for(self._entering(ctx, True), n_ttt), default=ctx.kin.n_samples - 1)
-        return Command(k, self._standard_retry(ctx))
+        # the trigger: the first of the n_ttt samples whose entering condition held (the
+        # start of the time-to-trigger that produced the report)
+        return Command(k, self._standard_retry(ctx), k_trigger=np.maximum(k - (n_ttt - 1), 0))
 
     def returns(self, ctx, k_from, t_complete_s):
         n_ttt = ttt_samples(ctx.scn.a3.ttt_s, ctx.kin.period_s)
@@ -307,11 +311,14 @@ class JointPolicy(Policy):
         pr_flat = np.repeat(band.pr_m, ctx.n_nodes)
         back = v * ex.t0_s if jt.retry_rule == "completed" else 0.0
 
-        def retry(a, serving_ok, hb_next_m, sel):
-            # one second attempt, which must be executed (or completed) before PR (seed eq. 9),
-            # judged from the estimated position at the command plus v(T0 + TZ)
+        def band_retry(a, serving_ok, hb_next_m, sel):
+            # execution.retry = joint_band (the earlier joint-only rule, a case): one second
+            # attempt, which must be executed (or completed) before PR (seed eq. 9), judged
+            # from the estimated position at the command plus v(T0 + TZ), serving link or not
             est = xhat_cmd[sel] + v * (ex.t0_s + ex.tz_s) * a + back
             return (a < 2) & (est <= pr_flat[sel])
+
+        retry = band_retry if ex.retry == "joint_band" else self._standard_retry(ctx)
 
         extras = {
             "band_pl_m": (("run",), band.pl_m, "m", "execution band left edge PL (head's fit)"),
@@ -350,6 +357,11 @@ def run_policy(policy: Policy, ctx: BlockContext) -> dict[str, tuple]:
 
     ex = execute(ctx, run, hb, retry)
     t_cmd = kin.t_s[k]
+    k_trig = (cmd.k if cmd.k_trigger is None else cmd.k_trigger).ravel()
+    # trigger to completion, from the radio-link failure when that came before the trigger
+    lead = t_cmd - kin.t_s[k_trig]
+    delay_trigger = np.where(ex.success, lead + ex.delay_all_s,
+                             ctx.scn.execution.reestablish_s + np.maximum(ex.t_detect_s + lead, 0.0))
     t_complete = t_cmd + np.nan_to_num(ex.delay_s)
     k_from = np.ceil(t_complete / kin.period_s - 1e-9).astype(np.intp)
     pp = policy.returns(ctx, k_from.reshape(b_n, n_n), t_complete.reshape(b_n, n_n)).ravel() & ex.success
@@ -366,6 +378,12 @@ def run_policy(policy: Policy, ctx: BlockContext) -> dict[str, tuple]:
         "success": (("run", "node"), sh(ex.success).astype(np.int8), "1", "1 if the handover succeeded"),
         "delay_s": (("run", "node"), sh(ex.delay_s), "s",
                     "first command to completion incl. retries (NaN: failed)"),
+        "delay_all_s": (("run", "node"), sh(ex.delay_all_s), "s",
+                        "first command, or an earlier radio-link failure, to completion, a failed "
+                        "handover's re-establishment included"),
+        "delay_trigger_s": (("run", "node"), sh(delay_trigger), "s",
+                            "trigger (A3: start of the time-to-trigger; else the command), or an earlier "
+                            "radio-link failure, to completion, all handovers"),
         "pingpong": (("run", "node"), sh(pp).astype(np.int8), "1",
                      "1 if commanded back to the previous cell within the ping-pong window"),
         "rsrp_gap_db": (("run", "node"), sh(ex.gap_db), "dB",

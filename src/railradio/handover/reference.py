@@ -140,29 +140,46 @@ class _Run:
         return self._rlm_x
 
     # --- execution ----------------------------------------------------------------------
-    def execute(self, hb: float, retry_ok) -> tuple[int, bool, float]:
-        """(attempts, success, completion position) from a first command at hb."""
+    def target_ok(self, hb: float) -> bool:
+        """Access to the target succeeds for an execution commanded at hb: rlm, the mean
+        target SINR at the execution's indications (the last at He) >= Q_out; the other
+        rules, the target SINR at He >= Q_in."""
         ex, rd = self.scn.execution, self.scn.radio
-        max_a = max(ex.max_attempts, 2)
+        if ex.failure_rule != "rlm":
+            return self.sinr(1, hb + self.v * ex.t0_s) >= rd.q_in_db
+        n = max(1, round(ex.t0_s / ex.rlm_indication_s))
+        vals = [self.sinr(1, hb + self.v * ex.rlm_indication_s * j) for j in range(1, n + 1)]
+        return sum(vals) / n >= rd.q_out_db
+
+    def execute(self, hb: float, retry_ok) -> tuple[int, bool, float, float]:
+        """(attempts, success, completion position, time of completion after the first
+        command — a failure's detection plus re-establishment) from a first command at hb."""
+        ex = self.scn.execution
+        hb0 = hb
         a = 1
         while True:
             he = hb + self.v * ex.t0_s
             s_ok = self.serving_ok(hb)
-            t_ok = self.sinr(1, he) >= rd.q_in_db
-            if s_ok and t_ok:
-                return a, True, he
+            if s_ok and self.target_ok(hb):
+                return a, True, he, a * ex.t0_s + (a - 1) * ex.tz_s
             hb_next = he + self.v * ex.tz_s
-            if a < max_a and retry_ok(a, s_ok, hb_next):
+            if a < ex.max_attempts and retry_ok(a, s_ok, hb_next):
                 a += 1
                 hb = hb_next
                 continue
-            return a, False, he
+            if s_ok:
+                t_fail = (he - hb0) / self.v
+            elif ex.failure_rule == "rlm":
+                t_fail = (self.rlm_failure_x() - hb0) / self.v
+            else:
+                t_fail = (hb - hb0) / self.v
+            return a, False, he, t_fail + ex.reestablish_s
 
 
-def _outcome(run: _Run, i: int, k_cmd: int, retry_ok, returns) -> dict:
+def _outcome(run: _Run, i: int, k_cmd: int, retry_ok, returns, k_trig: int | None = None) -> dict:
     ex = run.scn.execution
     hb = run.x_true(i, k_cmd)
-    attempts, ok, he = run.execute(hb, retry_ok)
+    attempts, ok, he, t_done_rel = run.execute(hb, retry_ok)
     delay = attempts * ex.t0_s + (attempts - 1) * ex.tz_s if ok else math.nan
     t_done = k_cmd * run.tm + (delay if ok else 0.0)
     pp = False
@@ -170,8 +187,16 @@ def _outcome(run: _Run, i: int, k_cmd: int, retry_ok, returns) -> dict:
         k = math.ceil(t_done / run.tm - 1e-9)
         pp = returns(i, k, t_done)
     gap = run.true_rsrp(0, he) - run.true_rsrp(1, he)
+    k_trig = k_cmd if k_trig is None else k_trig
+    # the interruption starts at the first command or trigger, or at an earlier radio-link
+    # failure (the completion minus the re-establishment time is the failure's detection)
+    t_fail = t_done_rel - ex.reestablish_s
+    lead = (k_cmd - k_trig) * run.tm
+    start_all = 0.0 if ok else min(0.0, t_fail)
+    start_trig = -lead if ok else min(-lead, t_fail)
     return {"k": k_cmd, "command_x_m": hb, "attempts": attempts, "success": ok, "delay_s": delay,
-            "pingpong": pp, "completion_x_m": he, "rsrp_gap_db": gap}
+            "pingpong": pp, "completion_x_m": he, "rsrp_gap_db": gap,
+            "delay_all_s": t_done_rel - start_all, "delay_trigger_s": t_done_rel - start_trig}
 
 
 def _a3(run: _Run) -> list[dict]:
@@ -182,12 +207,16 @@ def _a3(run: _Run) -> list[dict]:
     out = []
     for i in range(sc.train.n_nodes):
         f = run.filt[i]
-        count, k_cmd = 0, run.k_n - 1
+        count, k_cmd, k_trig = 0, run.k_n - 1, None
         for k in range(run.k_n):
             count = count + 1 if f[1][k] - hys > f[0][k] + off else 0  # A3-1, Mn = target
+            if count == 1:
+                k_trig = k  # the time-to-trigger starts
             if count >= n_ttt:
                 k_cmd = k
                 break
+        if count < n_ttt:  # never reported: the command defaults to the last sample
+            k_trig = max(k_cmd - (n_ttt - 1), 0)
 
         def returns(i, k0, t_done, f=f):
             count = 0
@@ -199,7 +228,7 @@ def _a3(run: _Run) -> list[dict]:
                     return True
             return False
 
-        out.append(_outcome(run, i, k_cmd, lambda a, s_ok, hb: s_ok and a < ex.max_attempts, returns))
+        out.append(_outcome(run, i, k_cmd, lambda a, s_ok, hb: s_ok and a < ex.max_attempts, returns, k_trig))
     return out
 
 
@@ -336,6 +365,8 @@ def _joint(run: _Run) -> list[dict]:
         back = v * ex.t0_s if jt.retry_rule == "completed" else 0.0
 
         def retry_ok(a, s_ok, hb, x_cmd_hat=x_cmd_hat):
+            if ex.retry == "common":
+                return s_ok and a < ex.max_attempts
             return a < 2 and x_cmd_hat + v * (ex.t0_s + ex.tz_s) * a + back <= pr
 
         out.append(_outcome(run, i, ks[i], retry_ok, lambda i, k0, t: False))

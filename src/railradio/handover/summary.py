@@ -3,7 +3,9 @@
 Definitions [ours]: success = the handover completed (at any permitted attempt);
 interruption = 1 − success; ping-pong = a successful handover followed by a command back
 to the previous cell within the window, over all node crossings; delay = first command to
-completion incl. retries (successful handovers); RSRP-GAP = |serving − target| true
+completion incl. retries (successful handovers); delay_all = first command to completion over
+every handover, a failed one's re-establishment included; delay_trigger = the same from the
+trigger (A3: the start of its time-to-trigger); RSRP-GAP = |serving − target| true
 local-mean power at completion.  Intervals: Wilson with the clustered effective sample size
 (:mod:`railradio.handover.stats`).
 """
@@ -16,13 +18,13 @@ import xarray as xr
 from railradio.handover.stats import clustered_mean, clustered_rate
 
 RATES = ("success", "pingpong", "retried")
-MEANS = ("delay_ms", "rsrp_gap_db", "attempts")
+MEANS = ("delay_ms", "delay_all_ms", "delay_trigger_ms", "rsrp_gap_db", "attempts")
 
 
 def policy_metrics(ds: xr.Dataset, policy: str, level: float = 0.95) -> dict[str, float]:
     """Metrics of one policy from a per-handover dataset (variables ``<policy>__<name>``)."""
     v = {name: ds[f"{policy}__{name}"].values for name in
-         ("success", "pingpong", "attempts", "delay_s", "rsrp_gap_db")}
+         ("success", "pingpong", "attempts", "delay_s", "delay_all_s", "delay_trigger_s", "rsrp_gap_db")}
     out: dict[str, float] = {}
     events = {"success": v["success"], "pingpong": v["pingpong"], "retried": v["attempts"] > 1}
     for name, e in events.items():
@@ -31,7 +33,9 @@ def policy_metrics(ds: xr.Dataset, policy: str, level: float = 0.95) -> dict[str
                     f"{name}_neff": r["n_eff"]})
     out["n_handovers"] = float(v["success"].size)
     out["n_runs"] = float(v["success"].shape[0])
-    for name, values in (("delay_ms", 1e3 * v["delay_s"]), ("rsrp_gap_db", np.abs(v["rsrp_gap_db"])),
+    for name, values in (("delay_ms", 1e3 * v["delay_s"]), ("delay_all_ms", 1e3 * v["delay_all_s"]),
+                         ("delay_trigger_ms", 1e3 * v["delay_trigger_s"]),
+                         ("rsrp_gap_db", np.abs(v["rsrp_gap_db"])),
                          ("attempts", v["attempts"].astype(float))):
         m = clustered_mean(values)
         out[name], out[f"{name}_se"] = m["mean"], m["se"]
@@ -42,6 +46,8 @@ UNITS = {"success": ("1", "handover success rate"),
          "pingpong": ("1", "ping-pong rate (return within the window)"),
          "retried": ("1", "share of handovers needing a second attempt"),
          "delay_ms": ("ms", "mean handover delay (command to completion, successful)"),
+         "delay_all_ms": ("ms", "mean command-to-completion time, all handovers (re-establishment included)"),
+         "delay_trigger_ms": ("ms", "mean trigger-to-completion time, all handovers"),
          "rsrp_gap_db": ("dB", "mean |RSRP-GAP| at completion"),
          "attempts": ("1", "mean execution attempts"),
          "n_handovers": ("1", "node handovers simulated"),
