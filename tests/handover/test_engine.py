@@ -181,3 +181,39 @@ def test_rlf_rule_fails_only_after_a_t310_run_of_out_of_sync():
     inst = replace(scn, execution=replace(scn.execution, failure_rule="instant"))
     ctx.scn = inst
     np.testing.assert_array_equal(serving_ok(ctx, np.arange(3), np.full(3, hb)), [False, False, True])
+
+
+@pytest.mark.parametrize("speed", [100.0, 250.0, 350.0, 500.0])
+@pytest.mark.parametrize("m", [1, 3])
+def test_noise_free_joint_handover_completes_at_zero_rsrp_gap(speed, m):
+    """Without shadowing, measurement noise or position error (the default geometry, 30 m
+    offset, and the k = 4 L3 filter), the joint decision's handover *completes* at the point
+    where the true mean RSRP gap is zero, within the one-sample quantization of its command,
+    and its execution starts v·T0 before that (the band is shifted back by v·T0, seed eq. 2)."""
+    base = Scenario().with_weights(m, 0.5)
+    scn = replace(base, radio=replace(base.radio, shadow_sigma_db=0.0, meas_sigma_db=0.0),
+                  train=replace(base.train, gnss_sigma_m=0.0))
+    kin = kinematics(scn, speed)
+    out = run_policy(make_policy("joint"), build_context(scn, kin, draw_block(1, speed, 0, 2, kin, 8)))
+    # the zero of the true mean gap, by bisection on the model
+    lo, hi = 1.0, scn.radio.spacing_m - 1.0
+    for _ in range(80):
+        mid = 0.5 * (lo + hi)
+        p_s, p_t = mean_rsrp_dbm(np.array([mid]), scn.radio)
+        lo, hi = (mid, hi) if p_s[0] > p_t[0] else (lo, mid)
+    x0 = 0.5 * (lo + hi)
+    step = kin.speed_m_s * kin.period_s
+    he, hb = out["completion_x_m"][1], out["command_x_m"][1]
+    assert np.all(out["success"][1] == 1) and np.all(out["attempts"][1] == 1)
+    np.testing.assert_allclose(he - hb, kin.speed_m_s * scn.execution.t0_s, rtol=0, atol=1e-9)
+    # the head's band midpoint X_m (execution point) is the zero-gap point shifted back by v·T0,
+    # up to the fit's model error: the band model omits the 30 m offset, which biases â by
+    # <= 0.07 dB here, <= 2 m at the gap's slope of 0.04 dB/m
+    xm_done = out["band_xm_m"][1] + kin.speed_m_s * scn.execution.t0_s
+    assert np.all(np.abs(xm_done - x0) <= 2.0), xm_done - x0
+    # every node completes within one sample of that point (its command is the first sample
+    # at or past X_m; the predecessors' deviations are zero, so there is no correction)
+    assert np.all((he >= xm_done[:, None] - 1e-6) & (he < xm_done[:, None] + step + 1e-6)), (he - x0, step)
+    # and the true gap there is that distance times the gap's slope at x0
+    slope_db_m = 2 * 10 * scn.radio.pathloss_exponent / np.log(10) * (x0 / (x0 ** 2 + scn.radio.offset_m ** 2))
+    assert np.all(np.abs(out["rsrp_gap_db"][1]) <= slope_db_m * (step + 2.0))

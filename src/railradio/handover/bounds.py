@@ -10,6 +10,11 @@ gap G = P_s − P_t satisfies
 shadowing gives G ~ N(0, σ_G²), σ_G = σ √(2(1 − ρ_st)), so the first attempt there succeeds
 with Φ(hi/σ_G) − Φ(lo/σ_G) (H_b and H_e taken at the same point: v·T0 ≪ d_cor).  For
 η = 0.5, Q_out = −8 dB, Q_in = −6 dB, σ = 6 dB: Φ(9.01/8.49) − Φ(−11.01/8.49) = 0.758.
+That is the earlier ``instant`` rule.  Under the default ``rlm`` rule the serving link fails
+only by radio-link monitoring along the path (no closed form), and the target's access fails
+if its SINR over the execution is below Q_out, i.e. G > −(Q_out + 10 log10 η): access at X_c
+succeeds with Φ(−(Q_out + 10 log10 η)/σ_G) = Φ(11.01/8.49) = 0.903, an upper bound on a
+first attempt there (radio-link failures before the command come on top).
 """
 
 from __future__ import annotations
@@ -41,3 +46,20 @@ def first_attempt_success_at_centre(radio: Radio) -> float:
     if s == 0.0:
         return float(lo <= 0.0 <= hi)
     return float(norm.cdf(hi / s) - norm.cdf(lo / s))
+
+
+def t304_gap_hi_db(radio: Radio) -> float:
+    """−(Q_out + 10 log10 η) [dB]: the highest true gap at which the target's access succeeds
+    under the ``rlm`` rule (its SINR over the execution ≥ Q_out, noise neglected)."""
+    lo, _ = gap_window_db(radio)
+    return -lo
+
+
+def t304_success_at_centre(radio: Radio) -> float:
+    """Φ(−(Q_out + 10 log10 η)/σ_G): access success at X_c under the ``rlm`` rule, an upper
+    bound on a first attempt there (noise neglected; radio-link failure not counted)."""
+    s = gap_sigma_db(radio)
+    hi = t304_gap_hi_db(radio)
+    if s == 0.0:
+        return float(0.0 <= hi)
+    return float(norm.cdf(hi / s))

@@ -5,7 +5,15 @@ J(m, A) = E[C/N] + E[F(A)], C the convergence price (index of the first node who
 gap at its trigger is below the convergence threshold; N + 1 if none), F the fluctuation
 level std(X_1…X_N)/(PR − PL) clipped to 1.  Weights: the one-parameter geometric family
 α_k ∝ α(1 − α)^(k−1) over m ∈ 1…6, α ∈ 0.01…0.99 [ours: the seed's literal per-element
-grid is 99^m points]; as a check a full per-element grid (step 0.05) for m ≤ 3.
+grid is 99^m points]; as a check a full per-element grid (step 0.05) for 2 ≤ m ≤ 3 (for
+m = 1 every weight vector normalises to [1], so the check cannot fail there).
+
+The search is reported with its Monte Carlo error: the argmin, and the set of settings
+within one standard error of the minimum (J ≤ J_min + SE(J_min), the one-standard-error
+rule of Hastie, Tibshirani and Friedman, *The Elements of Statistical Learning* §7.10),
+which says which settings the runs cannot tell apart.  The full grid's minimum is a minimum
+over thousands of noisy estimates, so its gain over the family is biased upward; its paired
+standard error (the same runs) is reported beside it.
 
 The cost runs use their own random stream (``stream="cost"``), never the evaluation runs.
 """
@@ -60,7 +68,7 @@ def cost_grid(scn: Scenario, speed_kmh: float, seed: int, n_blocks: int, runs_pe
     kin = kinematics(scn, speed_kmh)
     n_m = len(m_values)
     per_run = {meth: [[] for _ in m_values] for meth in METHODS}
-    full_m = [m for m in m_values if m <= full_grid_max_m]
+    full_m = [m for m in m_values if 2 <= m <= full_grid_max_m]
     full_runs = {m: [] for m in full_m}
     for blk in range(n_blocks):
         draws = draw_block(seed, speed_kmh, blk, runs_per_block, kin, scn.train.n_nodes, stream="cost")
@@ -79,21 +87,47 @@ def cost_grid(scn: Scenario, speed_kmh: float, seed: int, n_blocks: int, runs_pe
             cost[a, j] = c.mean(axis=1)
             cost_se[a, j] = c.std(axis=1, ddof=1) / np.sqrt(c.shape[1])
     full_min = np.full(n_m, np.nan)
+    full_gain = np.full(n_m, np.nan)
+    full_gain_se = np.full(n_m, np.nan)
+    i_cfg = METHODS.index(scn.joint.wslr)
     for j, m in enumerate(m_values):
         if m in full_runs:
-            full_min[j] = np.concatenate(full_runs[m], axis=1).mean(axis=1).min()
+            cf = np.concatenate(full_runs[m], axis=1)               # [A_full, R]
+            jf = int(cf.mean(axis=1).argmin())
+            full_min[j] = cf[jf].mean()
+            cg = np.concatenate(per_run[METHODS[i_cfg]][j], axis=1)  # [A, R]
+            d = cg[int(cg.mean(axis=1).argmin())] - cf[jf]          # paired, per run
+            full_gain[j] = d.mean()
+            full_gain_se[j] = d.std(ddof=1) / np.sqrt(d.size)
     best = cost.reshape(len(METHODS), -1).argmin(axis=1)
     best_m = np.array([m_values[i // alphas.size] for i in best])
     best_alpha = np.array([alphas[i % alphas.size] for i in best])
+    flat_se = cost_se.reshape(len(METHODS), -1)
+    threshold = cost.reshape(len(METHODS), -1).min(axis=1) + flat_se[np.arange(len(METHODS)), best]
+    within = cost <= threshold[:, None, None]
+    ia = cost.argmin(axis=2)                                         # [wslr, m]
+    cost_min_m = np.take_along_axis(cost, ia[..., None], axis=2)[..., 0]
+    cost_min_m_se = np.take_along_axis(cost_se, ia[..., None], axis=2)[..., 0]
     ds = xr.Dataset(
         {
             "cost": (("wslr", "m", "alpha"), cost,
                      {"units": "1", "long_name": "cost J = E[C/N] + E[F] (geometric weights)"}),
             "cost_se": (("wslr", "m", "alpha"), cost_se,
                         {"units": "1", "long_name": "Monte Carlo standard error of J"}),
+            "cost_min_m": (("wslr", "m"), cost_min_m, {"units": "1", "long_name": "min over alpha of J"}),
+            "cost_min_m_se": (("wslr", "m"), cost_min_m_se,
+                              {"units": "1", "long_name": "Monte Carlo standard error of min over alpha of J"}),
+            "within_1se": (("wslr", "m", "alpha"), within,
+                           {"units": "1", "long_name": "J within one standard error of the minimum "
+                                                       "(J <= J_min + SE(J_min))"}),
             "cost_min_full_grid": (("m",), full_min,
                                    {"units": "1", "long_name": "min J over the full per-element weight grid "
                                                                "(config WSLR method; NaN: not computed)"}),
+            "full_grid_gain": (("m",), full_gain,
+                               {"units": "1", "long_name": "min J of the geometric family minus min J of the "
+                                                           "full grid, same runs (config WSLR; NaN: not computed)"}),
+            "full_grid_gain_se": (("m",), full_gain_se,
+                                  {"units": "1", "long_name": "paired standard error of full_grid_gain"}),
             "best_m": (("wslr",), best_m, {"units": "1", "long_name": "argmin m of J"}),
             "best_alpha": (("wslr",), best_alpha, {"units": "1", "long_name": "argmin alpha of J"}),
         },
@@ -114,3 +148,18 @@ def cost_grid(scn: Scenario, speed_kmh: float, seed: int, n_blocks: int, runs_pe
 def best_weights(ds: xr.Dataset, method: str) -> tuple[int, float]:
     """(m*, α*) of a cost dataset for a WSLR method."""
     return int(ds["best_m"].sel(wslr=method)), float(ds["best_alpha"].sel(wslr=method))
+
+
+def one_se_settings(ds: xr.Dataset, method: str) -> list[tuple[int, float | None]]:
+    """The distinct (m, α) within one standard error of the minimum for a WSLR method; for
+    m = 1 the weights do not depend on α, so it is one setting (α None)."""
+    w = ds["within_1se"].sel(wslr=method)
+    out: list[tuple[int, float | None]] = []
+    for m in ds["m"].values:
+        row = w.sel(m=m).values
+        if int(m) == 1:
+            if row.any():
+                out.append((1, None))
+        else:
+            out += [(int(m), float(a)) for a in ds["alpha"].values[row]]
+    return out

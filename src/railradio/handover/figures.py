@@ -34,6 +34,13 @@ def plot_cost_vs_m(cost: xr.Dataset, pdf_path, png_path=None) -> None:
     if "cost_min_full_grid" in cost and np.any(np.isfinite(cost["cost_min_full_grid"].values)):
         ax.plot(m, cost["cost_min_full_grid"].values, "x", color="black",
                 label=f"full weight grid ({cost.attrs.get('config_wslr', '')})")
+    cfg = cost.attrs.get("config_wslr", "")
+    if "within_1se" in cost and cfg in cost["wslr"].values:
+        c = cost["cost"].sel(wslr=cfg)
+        flat = int(c.values.argmin())
+        se = float(cost["cost_se"].sel(wslr=cfg).values.ravel()[flat])
+        ax.axhline(float(c.min()) + se, color="grey", linestyle=":", linewidth=1,
+                   label=f"minimum + 1 SE ({cfg}): settings below are not separable")
     ax.axvline(SEED_BEST_M, **plotting.BOUND_STYLE, label=f"source: m = {SEED_BEST_M}")
     ax.set_xlabel("number of joint nodes $m$")
     ax.set_ylabel(r"min$_\alpha$ cost $J = E[C/N] + E[F]$")

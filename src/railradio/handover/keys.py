@@ -7,7 +7,14 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from railradio.handover.bounds import first_attempt_success_at_centre, gap_sigma_db, gap_window_db
+from railradio.handover.bounds import (
+    first_attempt_success_at_centre,
+    gap_sigma_db,
+    gap_window_db,
+    t304_gap_hi_db,
+    t304_success_at_centre,
+)
+from railradio.handover.cost import one_se_settings
 from railradio.keynumbers import KeySpec
 
 POLICIES = ("joint", "a3", "distance")
@@ -18,12 +25,25 @@ def _spec(name, unit, desc, src=None, rel=None, digits=3):
 
 
 SPECS = {s.name: s for s in [
-    _spec("handover.best_m", "1", "number of joint nodes m minimizing the cost (config WSLR reading)", 3, "="),
-    _spec("handover.best_alpha", "1", "geometric weight parameter alpha at the cost minimum (no effect when m = 1)"),
+    _spec("handover.best_m", "1", "number of joint nodes m minimizing the cost (config WSLR reading; "
+          "the settings within one standard error are handover.cost.set_1se.*)", 3, "="),
+    _spec("handover.best_alpha", "1", "geometric weight parameter alpha at the cost minimum (reported only "
+          "when m* > 1: for m = 1 the weights do not depend on alpha)"),
+    _spec("handover.cost.set_1se.m_min", "1", "smallest m among the settings within one standard error of "
+          "the minimum cost (config WSLR reading)"),
+    _spec("handover.cost.set_1se.m_max", "1", "largest m among the settings within one standard error of "
+          "the minimum cost"),
+    _spec("handover.cost.set_1se.n_settings", "1", "distinct (m, alpha) settings within one standard error "
+          "of the minimum cost (m = 1 counts once)"),
+    _spec("handover.cost.set_1se.n_grid", "1", "distinct (m, alpha) settings searched (m = 1 counts once)"),
     _spec("handover.cost.min", "1", "minimum cost J = E[C/N] + E[F]", digits=3),
     _spec("handover.cost.m3_minus_best", "1", "cost at m = 3 (best alpha) minus the minimum cost"),
-    _spec("handover.cost.full_grid_gain", "1",
-          "min cost over the geometric family minus over the full per-element grid, m <= 3"),
+    *[_spec(f"handover.cost.full_grid_gain.m{m}", "1",
+            f"m = {m}: min cost over the geometric family minus over the full per-element grid (same runs; "
+            f"the grid's min over thousands of noisy estimates is biased low, so this gain is biased high)")
+      for m in (2, 3, 4)],
+    *[_spec(f"handover.cost.min.m{m}", "1", f"min over alpha of the cost at m = {m} (config WSLR reading)")
+      for m in range(1, 7)],
     _spec("handover.joint.success.v350", "1", "joint decision: handover success rate at 350 km/h",
           0.9975, "≥", digits=4),
     _spec("handover.joint.success.min_v300_380", "1",
@@ -64,12 +84,17 @@ SPECS = {s.name: s for s in [
             f"of its time-to-trigger)") for pol in ("joint", "a3", "distance") for v in (100, 250, 350)],
     _spec("handover.gaph_db", "dB", "handover threshold GapH(sigma0)"),
     _spec("handover.bound.first_attempt_success_xc", "1",
-          "closed form: first-attempt success at the overlap centre, Phi(hi/sigma_G) - Phi(lo/sigma_G), "
-          "interference-limited, from the config's eta, Q_out, Q_in, sigma", digits=4),
+          "closed form, the earlier instant rule: first-attempt success at the overlap centre, "
+          "Phi(hi/sigma_G) - Phi(lo/sigma_G), interference-limited, from the config's eta, Q_out, Q_in, sigma", digits=4),
     _spec("handover.bound.gap_lo_db", "dB", "closed form: lowest true gap at which an attempt succeeds, "
           "Q_out + 10 log10 eta"),
     _spec("handover.bound.gap_hi_db", "dB", "closed form: highest true gap at which an attempt succeeds, "
           "-(Q_in + 10 log10 eta)"),
+    _spec("handover.bound.t304_success_xc", "1",
+          "closed form, rlm rule: target access success at the overlap centre Phi(-(Q_out + 10 log10 eta)"
+          "/sigma_G), an upper bound on a first attempt there (radio-link failure not counted)", digits=4),
+    _spec("handover.bound.t304_gap_hi_db", "dB", "closed form, rlm rule: highest true gap at which the "
+          "target's access succeeds, -(Q_out + 10 log10 eta)"),
     _spec("handover.bound.gap_sigma_db", "dB", "closed form: std of the shadowing gap sigma sqrt(2(1 - rho_st))"),
     _spec("handover.sigma0_db", "dB", "std of the filtered gap-measurement error sigma0"),
     _spec("handover.n_handovers_per_speed", "1", "node handovers simulated per speed point", digits=6),
@@ -147,15 +172,27 @@ def key_numbers(summary: xr.Dataset, cost: xr.Dataset, sens: xr.Dataset, gaph_db
     best_m = int(cost["best_m"].sel(wslr=wslr))
     best_a = float(cost["best_alpha"].sel(wslr=wslr))
     c = cost["cost"].sel(wslr=wslr)
-    put("handover.best_m", best_m, 0.0)
-    put("handover.best_alpha", best_a)
+    put("handover.best_m", best_m)
+    if best_m > 1:
+        put("handover.best_alpha", best_a)
     put("handover.cost.min", float(c.min()), float(cost["cost_se"].sel(wslr=wslr, m=best_m, alpha=best_a)))
     if 3 in cost["m"].values:
         put("handover.cost.m3_minus_best", float(c.sel(m=3).min() - c.min()))
-    full = cost["cost_min_full_grid"].values
-    geo_small = c.sel(m=[m for m in cost["m"].values if not np.isnan(full[list(cost["m"].values).index(m)])])
-    if geo_small.size:
-        put("handover.cost.full_grid_gain", float(geo_small.min() - np.nanmin(full)))
+    settings = one_se_settings(cost, wslr)
+    ms = [m for m, _ in settings]
+    put("handover.cost.set_1se.m_min", min(ms), 0.0)
+    put("handover.cost.set_1se.m_max", max(ms), 0.0)
+    put("handover.cost.set_1se.n_settings", len(settings), 0.0)
+    n_grid = sum(1 if int(m) == 1 else cost["alpha"].size for m in cost["m"].values)
+    put("handover.cost.set_1se.n_grid", n_grid, 0.0)
+    for m in cost["m"].values:
+        name = f"handover.cost.min.m{int(m)}"
+        if name in SPECS:
+            put(name, float(cost["cost_min_m"].sel(wslr=wslr, m=m)),
+                float(cost["cost_min_m_se"].sel(wslr=wslr, m=m)))
+        name = f"handover.cost.full_grid_gain.m{int(m)}"
+        if "full_grid_gain" in cost and name in SPECS and np.isfinite(float(cost["full_grid_gain"].sel(m=m))):
+            put(name, float(cost["full_grid_gain"].sel(m=m)), float(cost["full_grid_gain_se"].sel(m=m)))
     speeds = [float(s) for s in summary["speed_kmh"].values]
     for pol in POLICIES:
         for metric in ("success", "delay_ms", "delay_all_ms", "delay_trigger_ms", "pingpong", "rsrp_gap_db"):
@@ -181,6 +218,8 @@ def key_numbers(summary: xr.Dataset, cost: xr.Dataset, sens: xr.Dataset, gaph_db
         put("handover.bound.gap_lo_db", lo, 0.0)
         put("handover.bound.gap_hi_db", hi, 0.0)
         put("handover.bound.gap_sigma_db", gap_sigma_db(radio), 0.0)
+        put("handover.bound.t304_success_xc", t304_success_at_centre(radio), 0.0)
+        put("handover.bound.t304_gap_hi_db", t304_gap_hi_db(radio), 0.0)
     put("handover.n_handovers_per_speed", float(summary["n_handovers"].min()))
     out.update(sens_values(sens))
     specs = sens_specs(sens)
