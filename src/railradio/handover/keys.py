@@ -42,6 +42,9 @@ SPECS = {s.name: s for s in [
             f"m = {m}: min cost over the geometric family minus over the full per-element grid (same runs; "
             f"the grid's min over thousands of noisy estimates is biased low, so this gain is biased high)")
       for m in (2, 3, 4)],
+    _spec("handover.cost.min_se", "1", "Monte Carlo standard error of the minimum cost (the one-SE threshold)"),
+    *[_spec(f"handover.cost.full_grid_gain_se.m{m}", "1", f"paired standard error of full_grid_gain.m{m}")
+      for m in (2, 3, 4)],
     *[_spec(f"handover.cost.min.m{m}", "1", f"min over alpha of the cost at m = {m} (config WSLR reading)")
       for m in range(1, 7)],
     _spec("handover.joint.success.v350", "1", "joint decision: handover success rate at 350 km/h",
@@ -175,7 +178,9 @@ def key_numbers(summary: xr.Dataset, cost: xr.Dataset, sens: xr.Dataset, gaph_db
     put("handover.best_m", best_m)
     if best_m > 1:
         put("handover.best_alpha", best_a)
-    put("handover.cost.min", float(c.min()), float(cost["cost_se"].sel(wslr=wslr, m=best_m, alpha=best_a)))
+    se_min = float(cost["cost_se"].sel(wslr=wslr, m=best_m, alpha=best_a))
+    put("handover.cost.min", float(c.min()), se_min)
+    put("handover.cost.min_se", se_min, 0.0)
     if 3 in cost["m"].values:
         put("handover.cost.m3_minus_best", float(c.sel(m=3).min() - c.min()))
     settings = one_se_settings(cost, wslr)
@@ -193,6 +198,7 @@ def key_numbers(summary: xr.Dataset, cost: xr.Dataset, sens: xr.Dataset, gaph_db
         name = f"handover.cost.full_grid_gain.m{int(m)}"
         if "full_grid_gain" in cost and name in SPECS and np.isfinite(float(cost["full_grid_gain"].sel(m=m))):
             put(name, float(cost["full_grid_gain"].sel(m=m)), float(cost["full_grid_gain_se"].sel(m=m)))
+            put(f"handover.cost.full_grid_gain_se.m{int(m)}", float(cost["full_grid_gain_se"].sel(m=m)), 0.0)
     speeds = [float(s) for s in summary["speed_kmh"].values]
     for pol in POLICIES:
         for metric in ("success", "delay_ms", "delay_all_ms", "delay_trigger_ms", "pingpong", "rsrp_gap_db"):
