@@ -185,7 +185,7 @@ class Execution:
         declared before its command (the command cannot be received), or if the target's
         SINR, averaged over the execution's indications (the random access while T304
         runs), is below Q_out (TR 36.839's handover-failure rule).
-        ``instant`` (STUDY.md §5's earlier rule, a case): the serving local-mean SINR at
+        ``instant`` (the earlier one-sample rule, a case): the serving local-mean SINR at
         H_b is below Q_out, or the target's at H_e below Q_in.  ``rlf`` (a case): as
         ``instant`` but the serving link fails only after a T310-long run of
         ``rlf_eval_s`` out-of-sync evaluations before the command [ours].
