@@ -268,3 +268,30 @@ def cross_spectra(zf: np.ndarray, bspec: np.ndarray, out: np.ndarray) -> None:
         for b in range(n_b):
             for f in range(n):
                 out[c, b, f] = zf[b, f] * bspec[c, f]
+
+
+@njit(cache=True, nogil=True)
+def mix_taps(z: np.ndarray, delayed: np.ndarray, coarse: np.ndarray, step: int, sym_of: np.ndarray,
+             per_symbol: bool, mult: np.ndarray, los: np.ndarray, los_amp: float) -> None:
+    """z[m] += los_amp · los[m] · delayed[0, m] + mult[m] · Σ_l g_l(m) · delayed[1 + l, m], in
+    place (the exact reference's time-varying channel, :mod:`railradio.nr.reference`).
+
+    g_l(m) is ``coarse[sym_of[m], l]`` when ``per_symbol`` (gains held per symbol), else the
+    linear interpolation of ``coarse`` [C, L], given at samples 0, step, 2·step, …. NumPy
+    form (per sample): ``g = interp(m, step·arange(C), coarse)``;
+    ``z += los_amp·los·delayed[0] + mult·(g·delayed[1:].T).sum(1)``. ``delayed`` [1 + L, T]."""
+    n_t = z.size
+    n_l = coarse.shape[1]
+    for m in range(n_t):
+        acc = 0j
+        if per_symbol:
+            s = sym_of[m]
+            for l in range(n_l):
+                acc += coarse[s, l] * delayed[1 + l, m]
+        else:
+            c = m // step
+            w = (m - c * step) / step
+            for l in range(n_l):
+                g = coarse[c, l] + w * (coarse[c + 1, l] - coarse[c, l])
+                acc += g * delayed[1 + l, m]
+        z[m] += los_amp * los[m] * delayed[0, m] + mult[m] * acc
