@@ -106,6 +106,18 @@ def nr_problems(nr: Mapping[str, Any], root: str = "nr", main: bool = True) -> I
                 yield (f"{root}.{where}[{i}]", [dur, acc],
                        f"phases that keep the speed >= 0 (this one ends at {v:.3g} m/s)")
     yield from _prefixed(root, _ascending(nr, "tracker.w_distance_edges_m"))
+    if main and nr["fidelity"]["realization"] >= nr["realizations"]:
+        yield f"{root}.fidelity.realization", nr["fidelity"]["realization"], f"< {root}.realizations = {nr['realizations']}"
+    if main and nr["fidelity"]["n_epochs"] > n_epochs:
+        yield f"{root}.fidelity.n_epochs", nr["fidelity"]["n_epochs"], f"<= the run's {n_epochs} epochs"
+    if main and nr["fidelity"]["n_shards"] > nr["fidelity"]["n_epochs"]:
+        yield f"{root}.fidelity.n_shards", nr["fidelity"]["n_shards"], f"<= {root}.fidelity.n_epochs"
+    d, d_c = nr["receiver"]["decimation"], nr["receiver"]["search_decimation"]
+    d_s = nr["channel"]["synthesis_decimation"]
+    if d_s > d or d % d_s:
+        yield f"{root}.channel.synthesis_decimation", d_s, f"a divisor of {root}.receiver.decimation = {d}"
+    if d_c > d or d % d_c:
+        yield f"{root}.receiver.search_decimation", d_c, f"a divisor of {root}.receiver.decimation = {d}"
     receivers = {"seed", *nr["receiver_variants"]}
     if "seed" in nr["receiver_variants"]:
         yield f"{root}.receiver_variants.seed", "…", "a name other than 'seed' (the source's receiver, nr.receiver)"

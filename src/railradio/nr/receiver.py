@@ -283,11 +283,15 @@ class Synthesizer:
     def __call__(self, links: Links, rng: np.random.Generator, t0_s: float = 0.0,
                  noise: bool = True, d2d_m: NDArray | None = None,
                  draws: list[dict] | None = None,
-                 serving: NDArray[np.bool_] | None = None) -> tuple[NDArray[np.complex64], int]:
+                 serving: NDArray[np.bool_] | None = None, motion=None) -> tuple[NDArray[np.complex64], int]:
         """The received burst at F_s/D (sum over RRHs in range + AWGN).
 
         ``serving`` [links]: the links of the serving cell (``data_beam="serving"``; none
-        serving when omitted).
+        serving when omitted). ``motion`` (:class:`railradio.nr.motion.BurstMotion`): the
+        links' geometry follows the train through the burst, symbol by symbol — bulk delay
+        (a per-symbol phase ramp), the LOS phase's curvature and the beam gains at each
+        symbol's receive instant — instead of being held at the epoch instant (the
+        production's shortcut, bounded in :mod:`railradio.nr.fidelity`).
 
         Returns ``(z, s_min)``: samples from the CP start of symbol ``s_min`` (negative:
         before the burst's first subframe).
@@ -327,6 +331,19 @@ class Synthesizer:
         data_amp = np.empty(ss_amp.shape)
         for r in range(links.n):  # "none": the data are zero anyway (zero pool)
             data_amp[r] = links.data_amp[r] if at_train[r] else links.beam_amp[r][draws[r]["data_beam"]]
+        geo_h = None
+        if motion is not None:  # per-symbol geometry at each symbol's receive instant
+            t_rx = t_sym[None, :] + links.tau_s[:, None]  # [R, S]
+            ba_t = motion.beam_amp(t_rx)  # [R, S, B]
+            beam = np.empty(ss_amp.shape, dtype=np.int64)
+            for r in range(links.n):
+                b_data = (np.full(symbols.size, int(np.argmin(np.abs(links.beam_amp[r] - links.data_amp[r]))))
+                          if at_train[r] else draws[r]["data_beam"])
+                beam[r] = np.where(is_ss, np.maximum(sp["block_of"], 0), b_data)
+            ss_amp = data_amp = np.take_along_axis(ba_t, beam[:, :, None], axis=2)[:, :, 0]
+            d_tau = motion.delay_s(t_rx) - links.tau_s[:, None]  # [R, S]
+            geo_h = np.exp(1j * (motion.phase_excess_rad(t_rx)[:, :, None]
+                                 - 2 * np.pi * d_tau[:, :, None] * self.f_k[None, None, :])).astype(np.complex64)
         g_syms = (np.where(is_ss[None, :], ss_amp, data_amp)
                   * (links.amp * n)[:, None]).astype(np.float32)  # × n: unnormalized IFFT
         t_firsts = (num.symbol_start(sp["s_min"]) + n_cs) / fs + t0_s  # [R]
@@ -348,7 +365,12 @@ class Synthesizer:
                 taps *= np.exp(-1j * (2 * np.pi * links.f_los_hz[r] * t_sym + links.phase0[r]))[:, None]
                 h = taps.astype(np.complex64) @ self.basis
                 h += np.float32(np.sqrt(prof.los_power))
+                if geo_h is not None:
+                    h *= geo_h[r]
                 kernels.fill_grid(x, self.pool_band, pool_idx, *ov, h if every else h[rows], True,
+                                  ramps[r], g_r, long_of, sp["long_ramp"])
+            elif geo_h is not None:  # far interferer, its geometry symbol by symbol
+                kernels.fill_grid(x, self.pool_band, pool_idx, *ov, geo_h[r] if every else geo_h[r][rows], True,
                                   ramps[r], g_r, long_of, sp["long_ramp"])
             else:  # far interferer: one tap with the profile's total power, LOS Doppler
                 kernels.fill_grid(x, self.pool_band, pool_idx, *ov, no_h, False,
@@ -383,6 +405,18 @@ class BlockCorrelation:
 
 
 DETECTORS = ("seed", "cfar", "cacfar")
+CA_WINDOW_FULL = 512
+"""The CA-CFAR's reference lags on each side [full-rate lags, 2.08 µs]: the two sides span
+4.2 µs, just under one OFDM symbol (4.46 µs), over which the level of the data interference
+stays put (64 lags at F_s/8) [ours]."""
+CA_PRESCREEN = 0.8
+"""The CFAR detectors evaluate a block's peak at full-rate lags when its value on the lag
+grid exceeds this share of the threshold: on the F_s/2 grid a band-limited peak falls at most
+1 - sinc(1/8) = 2.5 % between grid lags (0.8 keeps a margin for the floor's own change) [ours]."""
+CA_GUARD_FULL = 32
+"""Guard lags on each side of the tested lag [full-rate lags, 130 ns]: the correlation's
+main lobe (±1 lag at F_s/8) and TDL-D's taps within 1.8 delay spreads (36 ns), which hold all
+but 0.5 % of its power (4 lags at F_s/8) [ours]."""
 
 
 def cfar_threshold(window_s: float, pfa: float, n_sc: int = 127) -> float:
@@ -414,20 +448,32 @@ class Correlator:
     """
 
     def __init__(self, cfg: ReceiverConfig, detector: str = "seed", pfa: float = 1e-3,
-                 ca_window: int = 64, ca_guard: int = 4):
+                 ca_window: int | None = None, ca_guard: int | None = None,
+                 template_decimation: int | None = None):
+        """``ca_window``, ``ca_guard``: the CA-CFAR's reference lags on each side and guard
+        lags at this correlator's rate (default: :data:`CA_WINDOW_FULL` and
+        :data:`CA_GUARD_FULL` full-rate lags). ``template_decimation``: the rate F_s/D_t of
+        the receiver's front end when the correlation runs faster than it (the reference
+        waveform is built at F_s/D_t and band-limited-interpolated to ``cfg``'s rate: the
+        correlation is then the band-limited interpolation of the front end's own)."""
         if detector not in DETECTORS:
             raise ValueError(f"detector must be one of {DETECTORS}, got {detector!r}")
-        self.ca_window, self.ca_guard = ca_window, ca_guard
+        d = cfg.decimation
+        td = d if template_decimation is None else int(template_decimation)
+        if td < d or td % d:
+            raise ValueError(f"template_decimation must be a multiple of the decimation {d}, got {template_decimation!r}")
+        self.template_decimation = td
+        self.ca_window = CA_WINDOW_FULL // d if ca_window is None else int(ca_window)
+        self.ca_guard = CA_GUARD_FULL // d if ca_guard is None else int(ca_guard)
+        self.ca_prescreen = CA_PRESCREEN
         if not 0 < pfa < 1:
             raise ValueError(f"pfa must be in (0, 1), got {pfa!r}")
         self.cfg, self.detector, self.pfa = cfg, detector, pfa
-        num = cfg.num
-        b0 = reference_waveform(num, 0, 0, int(cfg.ssb_first[0]))
+        b0 = self._template(0, 0, "pss_sss")
         self.ref_len = len(b0)
         self.n_win = sfft.next_fast_len(cfg.lags + self.ref_len - 1)
         self._spectra: dict[tuple[int, int], NDArray[np.complex64]] = {}
         self.freqs = np.fft.fftfreq(self.n_win, 1.0 / self.n_win)
-        d = cfg.decimation
         # e^{j2π f δ/N} for the full-rate offsets δ = -1 ... +1 (decimated units, step 1/D)
         self.offsets_full = np.arange(-d, d + 1)  # full-rate samples
         self.offsets = self.offsets_full / d
@@ -437,11 +483,26 @@ class Correlator:
         self.roots = np.exp(2j * np.pi * np.arange(self.n_win) / self.n_win).astype(np.complex64)
         self.cfar_factor = cfar_threshold(cfg.lags_full / Numerology(1).sample_rate_hz, pfa) / np.sqrt(np.pi / 2)
 
+    def _template(self, n_id1: int, n_id2: int, template: str) -> NDArray[np.complex64]:
+        """The reference waveform b at the correlation rate. Built at the front end's rate
+        F_s/D_t and zero-stuffed to this one: on a burst interpolated from the front end's
+        samples (:func:`railradio.nr.resample.upsample`) the correlation at lag λ is then
+        Σ_n b*[n] z(n + λ) with z band-limited-interpolated, exactly the front end's own
+        correlation at integer lags and its band-limited interpolation between them."""
+        td, d = self.template_decimation, self.cfg.decimation
+        b = reference_waveform(Numerology(td), n_id1, n_id2, int(self.cfg.ssb_first[0]), template)
+        if td == d:
+            return b
+        f = td // d
+        out = np.zeros((b.size - 1) * f + 1, dtype=np.complex64)
+        out[::f] = b
+        return out
+
     def spectrum(self, n_id1: int, n_id2: int) -> NDArray[np.complex64]:
         """conj(B): the conjugate reference spectrum of a cell, n_win bins."""
         key = (int(n_id1), int(n_id2))
         if key not in self._spectra:
-            b = reference_waveform(self.cfg.num, *key, int(self.cfg.ssb_first[0]), self.cfg.template)
+            b = self._template(*key, self.cfg.template)
             self._spectra[key] = np.conj(sfft.fft(b, self.n_win)).astype(np.complex64)
         return self._spectra[key]
 
@@ -491,10 +552,10 @@ class Correlator:
                 r.reshape(n_c * n_b, cfg.lags), self.ca_window, self.ca_guard))
             # both tests: the seed's μ + kσ over the window and the local CFAR test
             threshold = np.maximum(floor_at * self.cfar_factor, mu + cfg.detect_k_sigma * sigma)
-            pre = threshold * 0.8
+            pre = threshold * self.ca_prescreen
         elif self.detector == "cfar":
             threshold = mu * self.cfar_factor
-            pre = threshold * 0.8
+            pre = threshold * self.ca_prescreen
         else:
             threshold = mu + cfg.detect_k_sigma * sigma
             pre = mu + cfg.prescreen_k_sigma * sigma

@@ -10,6 +10,7 @@ truth.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 from functools import cached_property
 
@@ -24,6 +25,7 @@ from railradio.nr.geometry import Deployment, Trajectory
 from railradio.nr.link import RadioParams, ShadowingMap, link_budget
 from railradio.nr.numerology import SAMPLE_RATE_HZ
 from railradio.nr.receiver import Correlator, ReceiverConfig, Synthesizer
+from railradio.nr.resample import project, upsample
 from railradio.nr.ssb import qpsk_pool
 from railradio.nr.traffic import ServingCell, ServingRule
 from railradio.rng import make_rng
@@ -50,7 +52,17 @@ class Scenario:
     """Extra receivers run on the same bursts: ((name, ReceiverConfig, detector), ...);
     they must share the decimation and SS-block pattern of ``receiver``."""
     cell_search: CellSearchConfig = field(default_factory=CellSearchConfig)
-    full_channel_range_m: float = 1500.0
+    full_channel_range_m: float = np.inf
+    """RRHs farther than this (2-D) are synthesized as one non-fading tap (inf: none)."""
+    synthesis_decimation: int | None = None
+    """The bursts are synthesized at F_s/D_s (the central N_FFT/D_s subcarriers) and brought
+    to the receiver's front end F_s/D (``receiver.decimation``) by its ideal anti-aliasing
+    filter (:func:`railradio.nr.resample.project`); ``None``: synthesized at the front end's
+    rate."""
+    search_decimation: int | None = None
+    """The receivers' correlation lag grid F_s/D_c (finer than the front end's F_s/D of
+    ``receiver.decimation``: its samples band-limited-interpolated, the templates
+    zero-stuffed, :class:`railradio.nr.receiver.Correlator`); ``None``: the front end's."""
     n_sinusoids: int = 16
     pool_size: int = 256
     shadowing: bool = True
@@ -68,8 +80,8 @@ class Scenario:
 
 @dataclass
 class Burst:
-    """One epoch's received burst and the truth it was synthesized from (the truth is for
-    scoring: :class:`Estimator` never receives it)."""
+    """One epoch's received burst — the receiver's front-end samples at F_s/D — and the truth
+    it was synthesized from (the truth is for scoring: :class:`Estimator` never receives it)."""
 
     z: np.ndarray
     s_min: int
@@ -88,7 +100,13 @@ class Synthesis:
         self.scn, self.seed, self.key = scn, seed, key
         self.shadow = ShadowingMap(seed, key + (KEY_SHADOWING,), scn.deployment, scn.radio)
         pool = qpsk_pool(make_rng(seed, key + (KEY_POOL,)), scn.pool_size)
-        self.syn = Synthesizer(scn.receiver, scn.profile, pool, scn.n_sinusoids, scn.full_channel_range_m,
+        d_fe = scn.receiver.decimation
+        d_s = d_fe if scn.synthesis_decimation is None else int(scn.synthesis_decimation)
+        if d_s > d_fe or d_fe % d_s:
+            raise ValueError(f"synthesis_decimation must divide the front end's decimation {d_fe}, got {d_s!r}")
+        self.down = d_fe // d_s  # synthesis rate -> the front end's
+        self.syn = Synthesizer(dataclasses.replace(scn.receiver, decimation=d_s), scn.profile, pool, scn.n_sinusoids,
+                               scn.full_channel_range_m,
                                scn.data_beam, scn.load)
         self.network = ServingCell(scn.serving)
         self.next_epoch: int | None = None
@@ -112,6 +130,7 @@ class Synthesis:
         link_rrh = lb.rrh if lb.link_rrh is None else lb.link_rrh
         z, s_min = self.syn(lb.links, make_rng(self.seed, self.key + (KEY_EPOCH, int(epoch))), t0_s=t,
                             d2d_m=lb.link_d2d_m, serving=np.asarray(link_rrh) == serving)
+        z = project(z, self.down)  # the receiver's front end
         return Burst(z, s_min, x, v, a, lb, serving)
 
 
@@ -145,13 +164,22 @@ class Estimator:
         for _, rc, _ in self.receivers:
             if rc.decimation != scn.receiver.decimation or rc.ssb_pattern != scn.receiver.ssb_pattern:
                 raise ValueError("receiver variants must share decimation and ssb_pattern")
-        self.cors = [Correlator(rc, det, scn.pfa) for _, rc, det in self.receivers]
+        d_fe = scn.receiver.decimation
+        d_c = d_fe if scn.search_decimation is None else int(scn.search_decimation)
+        if d_c > d_fe or d_fe % d_c:
+            raise ValueError(f"search_decimation must divide the front end's decimation {d_fe}, got {d_c!r}")
+        self.up = d_fe // d_c  # the front end's samples interpolated to the lag grid
+
+        def cor(rc, det, pfa):
+            return Correlator(dataclasses.replace(rc, decimation=d_c), det, pfa, template_decimation=d_fe)
+
+        self.cors = [cor(rc, det, scn.pfa) for _, rc, det in self.receivers]
         cs = scn.cell_search
         cs_rc = cs.receiver_config(scn.receiver)
         cs_key = correlation_key(cs_rc, cs.detector, cs.pfa)
         self.cs_shared = next((j for j, (_, rc, det) in enumerate(self.receivers)
                                if correlation_key(rc, det, scn.pfa) == cs_key), None)
-        cs_cor = self.cors[self.cs_shared] if self.cs_shared is not None else Correlator(cs_rc, cs.detector, cs.pfa)
+        cs_cor = self.cors[self.cs_shared] if self.cs_shared is not None else cor(cs_rc, cs.detector, cs.pfa)
         self.search = CellSearch(cs, scn.deployment, cs_cor)
         self.n_id1, self.n_id2 = scn.deployment.n_id()
         self.next_epoch: int | None = None
@@ -173,6 +201,7 @@ class Estimator:
         if self.next_epoch is not None and epoch != self.next_epoch:
             self.search.reset()
         self.next_epoch = int(epoch) + 1
+        z = upsample(z, self.up)  # the front end's samples on the receivers' lag grid
         spectra = {}  # window FFTs shared by correlators with the same window length
 
         def zf(cor):
@@ -355,7 +384,10 @@ def scenario_from_config(c: dict) -> Scenario:
                                   subsample=bool(v["subsample"]), template=v["template"],
                                   search_lags=search_lags), v["detector"])
             for name, v in c.get("receiver_variants", {}).items()),
-        full_channel_range_m=float(c["channel"]["full_channel_range_m"]),
+        full_channel_range_m=(np.inf if c["channel"]["full_channel_range_m"] is None
+                              else float(c["channel"]["full_channel_range_m"])),
+        synthesis_decimation=int(c["channel"].get("synthesis_decimation", rx["decimation"])),
+        search_decimation=int(rx.get("search_decimation", rx["decimation"])),
         n_sinusoids=int(c["channel"]["n_sinusoids"]),
         data_beam=c["traffic"]["data_beam"], load=float(c["traffic"]["load"]),
         serving=ServingRule(float(c["traffic"]["serving_hysteresis_db"]), int(c["traffic"]["serving_reset_every"])),

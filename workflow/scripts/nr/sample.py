@@ -29,7 +29,7 @@ z, s_min = burst.z, burst.s_min
 fs = scn.receiver.num.sample_rate_hz
 start = scn.receiver.num.symbol_start(s_min) / fs
 ds["iq"] = (("sample",), z.astype(np.complex64),
-            {"units": "W0.5", "long_name": f"received baseband samples of epoch {e} at F_s/{scn.receiver.decimation}"})
+            {"units": "W0.5", "long_name": f"received baseband samples of epoch {e}: the front end's, at F_s/{scn.receiver.decimation}"})
 ds = ds.assign_coords(sample=("sample", start + np.arange(z.size) / fs,
                               {"units": "s", "long_name": "time from the burst's first subframe start"}))
 write_dataset(ds, smk.output[0], dict(smk.params.sim), key, title="nr sample epochs: raw IQ and per-block correlations")
