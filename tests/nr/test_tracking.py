@@ -134,15 +134,45 @@ def test_toa_crb_and_peb_against_hand_values():
     assert peb == pytest.approx(np.hypot(0.3, 100 * 0.01), rel=1e-9)
 
 
-def test_pcrb_settles_below_the_snapshot_bound():
-    from railradio.nr.bounds import pcrb_m
+def test_pcrb_settles_below_the_snapshot_peb():
+    """With the same geometry and error levels, the recursion integrates the epochs: it
+    starts at the one-epoch information and settles below the snapshot PEB of every epoch."""
+    from railradio.constants import SPEED_OF_LIGHT_M_S
+    from railradio.nr.bounds import pcrb_m, peb_m
 
     n = 200
     xy = [RRH] * n
     x = 50.0 + 0.1 * np.arange(n)
-    out = pcrb_m(xy, x, DH, [np.full(3, 1e-9)] * n, 0.01, 0.1, 0.1, np.eye(6) * 100)
+    s_toa = 1e-9
+    out = pcrb_m(xy, x, DH, [np.full(3, s_toa)] * n, 0.01, 0.1, 0.1, np.eye(6) * 100)
+    peb = np.array([peb_m(RRH, float(xk), DH, np.full(3, SPEED_OF_LIGHT_M_S * s_toa), 0.01) for xk in x])
     assert out[0] < 10 and np.all(np.diff(out[5:]) < 1e-3)  # non-increasing once informed
-    assert out[-1] < out[0]
+    assert out[0] == pytest.approx(peb[0], rel=0.05)  # one epoch: the snapshot information (and a weak prior)
+    assert np.all(out[20:] < 0.7 * peb[20:])  # ten epochs a second (q = 0.1): 40-55 % below the snapshot PEB
+
+
+def test_toa_crb_counts_the_detected_blocks_against_the_other_ss_blocks():
+    """The bound's E/N0 is the sum over the blocks above the detection level of E_b over
+    noise plus the other links' SS blocks of the same index; a block below that level adds
+    nothing; another link's data beam does not enter (it fills other symbols)."""
+    from railradio.nr.bounds import DETECT_E_OVER_N0, PSS_SSS_SUBCARRIERS, block_e_over_n0, burst_e_over_n0
+    from railradio.nr.numerology import SUBCARRIER_SPACING_HZ
+    from railradio.nr.receiver import Links
+
+    assert 10 * np.log10(DETECT_E_OVER_N0) == pytest.approx(8.75, abs=0.01)
+    n0 = 1e-20
+    beams = np.array([[1.0, 0.1, 1e-3], [0.5, 1.0, 1e-3]])
+    links = Links(n_id1=np.zeros(2, int), n_id2=np.array([0, 1]), tau_s=np.zeros(2), amp=np.array([1e-6, 1e-6]),
+                  beam_amp=beams, data_amp=np.array([1e3, 1e3]), f_los_hz=np.zeros(2), phase0=np.zeros(2),
+                  doppler_hz=0.0, noise_psd_w_hz=n0, n_chains=2)
+    e = block_e_over_n0(links)
+    t_u = 1 / SUBCARRIER_SPACING_HZ
+    p = (1e-6 * beams) ** 2
+    want = 2 * PSS_SSS_SUBCARRIERS * p * t_u / (2 * n0 + p[::-1] * t_u)
+    np.testing.assert_allclose(e, want, rtol=1e-12)
+    assert e[0, 2] < DETECT_E_OVER_N0 < e[0, 0]
+    total = burst_e_over_n0(links)
+    np.testing.assert_allclose(total, np.where(want >= DETECT_E_OVER_N0, want, 0).sum(axis=1), rtol=1e-12)
 
 
 def test_pcrb_true_motion_bound_orders_and_resets():

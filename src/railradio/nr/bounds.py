@@ -1,17 +1,25 @@
-"""Physical limits of the nr study (STUDY.md §2.7).
+"""Physical limits of the nr study, and the predictions built on measured errors.
 
-* TOA Cramér–Rao bound with interference: σ_τ ≥ 1 / (2π β_rms sqrt(2E/N0)), β_rms the RMS
-  bandwidth of the 127-subcarrier PSS+SSS about its centroid, Δf sqrt((127² - 1)/12)
-  ≈ 8.8 MHz; E the PSS+SSS energy of all 64 blocks after beam gains; N0 the thermal noise
-  of both chains plus the other RRHs' received power spread over the carrier (Gaussian
-  interference: the bound is then the interference-limited one).
-* The integer-sample floor c/(F_s √12) = 0.35 m of the seed's TOA estimator.
-* The snapshot position error bound (PEB) of an epoch from its three best RRHs:
-  J = Σ_j u_j u_jᵀ/σ_r,j² + u⊥_j u⊥_jᵀ/(ρ_j² σ_θ²).
-* The posterior CRB of the tracker (Tichavský et al. 1998):
-  J_{k+1} = (Q + F J_k⁻¹ Fᵀ)⁻¹ + Hᵀ W⁻¹ H at the true state — for the white-jerk model
-  the tracker assumes (q calibrated), and for the true motion (constant acceleration
-  within phases, an unknown jump at each known change: a genie-aided bound) [ours].
+Bounds (functions of the signal model alone):
+
+* TOA Cramér–Rao bound with interference: σ_τ ≥ 1 / (2π β_rms sqrt(2 Σ_b E_b/N0_b)), β_rms
+  the RMS bandwidth of the 127-subcarrier PSS+SSS about its centroid, Δf sqrt((127² - 1)/12)
+  ≈ 8.8 MHz; the sum runs over the blocks a detector finds (:func:`detected_blocks`): E_b
+  the PSS+SSS energy of block b after its beam gain, N0_b the thermal noise of both chains
+  plus, as Gaussian interference, what the other RRHs send on the PSS+SSS subcarriers
+  during that block's symbols — their own SS block b on their beam b (every RRH sends its
+  burst at the same instants; the data fill other symbols, :class:`railradio.nr.receiver.Synthesizer`).
+* The posterior CRB recursion of Tichavský et al. (1998) as a function of the
+  per-measurement variances it is given (:func:`pcrb_m`).
+
+Predictions (they use measured error levels, so they are not bounds):
+
+* the integer-sample TOA floor c/(F_s √12) = 0.35 m of the source's estimator;
+* the snapshot position error (PEB form) of an epoch's three best RRHs with the calibration
+  run's AOD spread, J = Σ_j u_j u_jᵀ/σ_r,j² + u⊥_j u⊥_jᵀ/(ρ_j² σ_θ²);
+* the PCRB recursion fed with those error levels — for the white-jerk model the tracker
+  assumes (q calibrated), and for the true motion (constant acceleration within phases, an
+  unknown jump at each known change: a genie-aided filter) [ours].
 """
 
 from __future__ import annotations
@@ -29,25 +37,49 @@ INTEGER_SAMPLE_SIGMA_M = SPEED_OF_LIGHT_M_S / SAMPLE_RATE_HZ / np.sqrt(12)
 
 
 def toa_crb_s(e_over_n0: NDArray) -> NDArray[np.float64]:
-    """σ_τ bound [s] for an energy-to-noise-density ratio E/N0 (linear)."""
-    return 1.0 / (2 * np.pi * BETA_RMS_HZ * np.sqrt(2.0 * np.asarray(e_over_n0, dtype=float)))
+    """σ_τ bound [s] for an energy-to-noise-density ratio E/N0 (linear; inf where 0)."""
+    with np.errstate(divide="ignore"):
+        return 1.0 / (2 * np.pi * BETA_RMS_HZ * np.sqrt(2.0 * np.asarray(e_over_n0, dtype=float)))
 
 
-def burst_e_over_n0(links, n_chains: int | None = None) -> NDArray[np.float64]:
-    """E/N0 of every RRH's PSS+SSS over the burst (all blocks) against thermal noise plus
-    the other RRHs' power, treated as white over the carrier. ``links``: a
+DETECT_K_SIGMA = 4.0
+"""The source's detection threshold μ + 4σ (seed eq. 6) on a Rayleigh floor of parameter σ_R:
+μ = σ_R √(π/2), σ = σ_R √(2 - π/2)."""
+DETECT_E_OVER_N0 = (np.sqrt(np.pi / 2) + DETECT_K_SIGMA * np.sqrt(2 - np.pi / 2)) ** 2 / 2
+"""E_b/N0 at which a block's matched-filter peak √(2E_b/N0) σ_R reaches that threshold (7.50,
+8.75 dB): the blocks a detector finds, in expectation."""
+
+
+def block_e_over_n0(links, n_chains: int | None = None) -> NDArray[np.float64]:
+    """[links, blocks] E_b/N0_b of every link's PSS+SSS in every SS block: its energy after
+    the block's beam gain over thermal noise plus the other links' PSS+SSS of the same block
+    (their beam b) as white interference over those subcarriers. ``links``: a
     :class:`railradio.nr.receiver.Links`."""
     t_u = 1.0 / SUBCARRIER_SPACING_HZ
     chains = links.n_chains if n_chains is None else n_chains
-    p_sc = links.amp**2  # received power per unit-EPRE subcarrier [W]
-    energy = 2 * PSS_SSS_SUBCARRIERS * p_sc * (links.beam_amp**2).sum(axis=1) * t_u  # [J]
-    interf_psd = p_sc * links.data_amp**2 * t_u  # each RRH's data PSD [W/Hz]
-    n0 = links.noise_psd_w_hz * chains + (interf_psd.sum() - interf_psd)
+    p_sc = links.amp[:, None] ** 2 * links.beam_amp**2  # [links, blocks] power per subcarrier [W]
+    energy = 2 * PSS_SSS_SUBCARRIERS * p_sc * t_u  # PSS + SSS symbols [J]
+    interf_psd = p_sc * t_u  # [W/Hz] on those subcarriers during block b
+    n0 = links.noise_psd_w_hz * chains + (interf_psd.sum(axis=0)[None, :] - interf_psd)
     return energy / n0
 
 
+def detected_blocks(e_over_n0_b: NDArray) -> NDArray[np.bool_]:
+    """The blocks whose E_b/N0 reaches :data:`DETECT_E_OVER_N0`."""
+    return np.asarray(e_over_n0_b) >= DETECT_E_OVER_N0
+
+
+def burst_e_over_n0(links, n_chains: int | None = None) -> NDArray[np.float64]:
+    """[links] Σ_b E_b/N0_b over each link's detected blocks (0 when none is): the TOA
+    information of the burst, :func:`toa_crb_s` of it the bound."""
+    e = block_e_over_n0(links, n_chains)
+    return np.where(detected_blocks(e), e, 0.0).sum(axis=1)
+
+
 def peb_m(rrh_xy: NDArray, x_m: float, dh_m: float, sigma_r_m: NDArray, sigma_theta_rad: float) -> float:
-    """Snapshot 2-D position error bound [m] from RRHs at ``rrh_xy`` [n, 2]."""
+    """Snapshot 2-D position error [m] of the Fisher information of RRHs at ``rrh_xy`` [n, 2]
+    with range and angle error levels ``sigma_r_m``, ``sigma_theta_rad`` (a bound when those
+    are bounds, a prediction when they are measured)."""
     d = np.array([x_m, 0.0])[None, :] - rrh_xy
     rho = np.hypot(d[:, 0], d[:, 1])
     r3 = np.sqrt(rho**2 + dh_m**2)
@@ -69,7 +101,8 @@ def change_epochs(phases, dt_s: float) -> NDArray[np.int64]:
 def pcrb_m(rrh_xy_seq: list[NDArray], x_true: NDArray, dh_m: float, sigma_toa_s_seq: list[NDArray],
            sigma_theta_rad: float, dt_s: float, q: float, p0: NDArray,
            reset_epochs: NDArray | None = None, reset_acc_sigma: float = 10.0) -> NDArray[np.float64]:
-    """Posterior CRB of the 2-D position [m] along the track (Tichavský et al. 1998).
+    """Posterior CRB recursion of the 2-D position [m] along the track (Tichavský et al.
+    1998) for the given measurement error levels (a prediction when they are measured).
 
     ``q`` [m² s⁻⁵] is the white-jerk intensity of the motion model (0: constant
     acceleration). ``reset_epochs``: epochs at which the acceleration jumps by an unknown

@@ -80,7 +80,7 @@ def plot_position_cdf(tracks: list[xr.Dataset], pdf: str, png: str, skip_s: floa
         _cdf(ax, e, label="snapshot LS", color="C3", linestyle=":")
         if bounds is not None:
             pc = np.concatenate([b["pcrb"].values[b["t"].values >= skip_s] for b in bounds])
-            _cdf(ax, pc, label="PCRB (tracker bound)", **plotting.BOUND_STYLE)
+            _cdf(ax, pc, label="PCRB prediction (measured error levels)", **plotting.BOUND_STYLE)
         ax.axvline(INTEGER_SAMPLE_FLOOR_M, color="grey", linestyle=":", linewidth=1.0, label="integer-sample σ")
         ax.set_xscale("log")
         ax.set_xlim(1e-2, 1e4)  # diverged tracks leave the axis: their CDF stays below 1
@@ -98,11 +98,11 @@ def plot_error_vs_time(track: xr.Dataset, pdf: str, png: str, bounds: xr.Dataset
             ax.plot(track["t"], track["pos_err"].sel(receiver=rx, variant="aod_toa", gate=g), linewidth=0.6,
                     linestyle=style, label=f"EKF AOD+TOA ({rx}{', gated' if g else ''})", color=f"C{2 * i + g}")
     if bounds is not None:
-        ax.plot(bounds["t"], bounds["pcrb"], label="PCRB (white-jerk model)", **plotting.BOUND_STYLE)
+        ax.plot(bounds["t"], bounds["pcrb"], label="PCRB prediction (white-jerk model)", **plotting.BOUND_STYLE)
         if "pcrb_true_motion" in bounds:
             ax.plot(bounds["t"], bounds["pcrb_true_motion"], color="black", linestyle=":", linewidth=1.0,
-                    label="PCRB (true motion, genie)")
-        ax.plot(bounds["t"], bounds["peb"], color="grey", linewidth=0.6, label="snapshot PEB (integer-sample TOA)")
+                    label="PCRB prediction (true motion, genie)")
+        ax.plot(bounds["t"], bounds["peb"], color="grey", linewidth=0.6, label="snapshot PEB prediction (integer-sample TOA)")
     ax.axhline(INTEGER_SAMPLE_FLOOR_M, color="grey", linestyle=":", linewidth=1.0, label="integer-sample σ (0.35 m)")
     ax.set_yscale("log")
     ax.set_ylim(1e-2, 1e8)  # headroom for the legend; diverged tracks leave the axis
@@ -238,3 +238,33 @@ def _square(x: float, y: float, colour: str):
     from matplotlib.patches import Rectangle
 
     return Rectangle((x, y), 1, 1, facecolor=colour, edgecolor="white", linewidth=1.0)
+
+
+def plot_fidelity(summary: dict, pdf: str, png: str) -> None:
+    """Changed-decision shares of every shortcut (railradio.nr.fidelity), per receiver, with
+    their 95 % intervals, the 0.5 % goal and a redraw of the noise as the yardstick."""
+    from railradio.nr.fidelity import DECISIONS, GOAL_CHANGE_FRAC
+
+    comps = [c for c in summary if c != "noise"] + ["noise"]
+    rxs = list(summary[comps[0]])
+    fig, axes = plotting.figure(nrows=len(rxs), figsize=(6.8, 2.4 * len(rxs)), squeeze=False, sharex=True)
+    floor = 1e-4
+    width = 0.8 / len(DECISIONS)
+    for ax, rx in zip(axes[:, 0], rxs, strict=True):
+        for j, k in enumerate(DECISIONS):
+            x = np.arange(len(comps)) + (j - (len(DECISIONS) - 1) / 2) * width
+            m = [summary[c][rx][k] for c in comps]
+            p = np.array([max(v["frac"], floor) for v in m])
+            lo = np.array([max(v["lo"], floor) for v in m])
+            hi = np.array([max(v["hi"], floor) for v in m])
+            ax.bar(x, p, width=width, color=f"C{j}", label=k, bottom=0)
+            ax.errorbar(x, p, yerr=[p - lo, hi - p], fmt="none", ecolor="black", elinewidth=0.6, capsize=1.5)
+        ax.axhline(GOAL_CHANGE_FRAC, color="grey", linestyle="--", linewidth=0.8, label="0.5 % goal")
+        ax.set_yscale("log")
+        ax.set_ylim(floor, 1.0)
+        ax.set_ylabel("changed share")
+        ax.set_title(f"receiver: {rx}", fontsize=8)
+    axes[-1, 0].set_xticks(np.arange(len(comps)))
+    axes[-1, 0].set_xticklabels(comps, rotation=30, fontsize=7)
+    axes[0, 0].legend(fontsize=6, ncol=5, loc="upper left")
+    plotting.save(fig, pdf, png)

@@ -158,11 +158,15 @@ def _metric_fns(rx: str) -> dict:
 
 
 BOUND_SPECS = {
-    "nr.bound.toa_crb_m.median": ("toa_crb", np.median, "median TOA range CRB of the best RRH (interference-limited)"),
-    "nr.bound.peb_m.median": ("peb", np.median, "median snapshot position bound (integer-sample TOA floor included)"),
-    "nr.bound.pcrb_m.mean": ("pcrb", np.mean, "mean posterior CRB of the tracked position (white-jerk model, calibrated q)"),
-    "nr.bound.pcrb_true_motion_m.mean": ("pcrb_true_motion", np.mean,
-                                         "mean posterior CRB for the true piecewise-constant-acceleration motion (genie knows the change instants)"),
+    "nr.bound.toa_crb_m.median": ("toa_crb", np.median, "median TOA range CRB of the best RRH: its detected blocks' "
+                                  "PSS+SSS energy against noise and the other RRHs' SS blocks (interference-limited)"),
+    "nr.predict.peb_m.median": ("peb", np.median, "median snapshot position error predicted from the TOA CRB with the "
+                                "integer-sample floor and the calibration run's AOD spread (a prediction: measured errors)"),
+    "nr.predict.pcrb_m.mean": ("pcrb", np.mean, "mean PCRB recursion of the tracked position with the calibrated q and the "
+                               "measured error levels (white-jerk model; a prediction, not a bound)"),
+    "nr.predict.pcrb_true_motion_m.mean": ("pcrb_true_motion", np.mean,
+                                           "mean PCRB recursion for the true piecewise-constant-acceleration motion (genie knows "
+                                           "the change instants) with the measured error levels (a prediction, not a bound)"),
 }
 
 

@@ -50,14 +50,14 @@ pcrb = pcrb_m(xy_seq, x, dh, s_seq, cal["sigma_aod_rad"], scn.trajectory.dt_s, c
 # the true motion: constant acceleration within phases, unknown jumps at the changes
 pcrb_true = pcrb_m(xy_seq, x, dh, s_seq, cal["sigma_aod_rad"], scn.trajectory.dt_s, 0.0,
                    np.diag([100.0, 100.0, 1.0, 1.0, 1.0, 1.0]), reset_epochs=change_epochs(scn.trajectory.phases, scn.trajectory.dt_s))
-log.info("median TOA CRB %.4f m, median PEB %.3f m, mean PCRB %.3f m (true motion %.3f m)",
+log.info("median TOA CRB %.4f m, median PEB prediction %.3f m, mean PCRB prediction %.3f m (true motion %.3f m)",
          np.median(crb_best), np.median(peb), np.mean(pcrb), np.mean(pcrb_true))
 ds = xr.Dataset(
-    {"toa_crb": (("t",), crb_best, {"units": "m", "long_name": "TOA range CRB of the best RRH (interference-limited)"}),
-     "peb_crb": (("t",), peb_crb, {"units": "m", "long_name": "snapshot position bound, TOA CRB only"}),
-     "peb": (("t",), peb, {"units": "m", "long_name": "snapshot position bound with the integer-sample TOA floor"}),
-     "pcrb": (("t",), pcrb, {"units": "m", "long_name": "posterior CRB of the tracked 2-D position (white-jerk model, calibrated q)"}),
-     "pcrb_true_motion": (("t",), pcrb_true, {"units": "m", "long_name": "posterior CRB for the true motion: constant acceleration, unknown jumps at the known phase changes (genie)"})},
+    {"toa_crb": (("t",), crb_best, {"units": "m", "long_name": "TOA range CRB of the best RRH: its detected blocks against noise and the other RRHs' SS blocks"}),
+     "peb_crb": (("t",), peb_crb, {"units": "m", "long_name": "snapshot position error predicted from the TOA CRB and the calibration run's AOD spread"}),
+     "peb": (("t",), peb, {"units": "m", "long_name": "snapshot position error predicted with the integer-sample TOA floor and the calibration run's AOD spread"}),
+     "pcrb": (("t",), pcrb, {"units": "m", "long_name": "PCRB recursion of the tracked 2-D position with the measured error levels (white-jerk model, calibrated q): a prediction"}),
+     "pcrb_true_motion": (("t",), pcrb_true, {"units": "m", "long_name": "PCRB recursion for the true motion (constant acceleration, unknown jumps at the known phase changes, genie) with the measured error levels: a prediction"})},
     coords={"t": ("t", t, {"units": "s", "long_name": "time"})})
 write_dataset(ds, smk.output[0], {"sim": dict(smk.params.sim), "calibration": cal}, key,
               title=f"nr physical limits, realization {smk.wildcards.real}")
