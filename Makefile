@@ -8,7 +8,7 @@ SNAKE  := $(BIN)/snakemake --workflow-profile workflow/profiles/default
 export HDF5_USE_FILE_LOCKING := FALSE
 export MPLBACKEND := Agg
 
-.PHONY: all figures numbers paper test test-fast bench reproduce report lint expected publish dag gallery clean
+.PHONY: all figures numbers paper test test-fast bench reproduce report lint expected publish fidelity dag gallery clean
 
 all: figures numbers
 
@@ -59,6 +59,11 @@ expected: $(STAMP)  ## regenerate tests/expected/key_numbers_ci.json (CI scale, 
 
 publish: numbers  ## copy the paper-scale key numbers to paper/numbers.json (commit it)
 	cp results/key_numbers.json paper/numbers.json
+
+fidelity: $(STAMP)  ## the nr shortcuts measured at paper scale (outside all) -> paper/fidelity_numbers.json (commit it)
+	$(SNAKE) fidelity -j$(JOBS)
+	$(BIN)/python -m railradio.nr.fidelity_record publish results/nr/fidelity/key_numbers.json paper/
+	cp results/nr/fidelity/nr_fidelity.png docs/gallery/
 
 GALLERY := fusion_rmse_vs_distance nr_position_error_cdf nr_sensitivity tunnel_position_error_cdf \
            tunnel_seed_vs_physical handover_interruption_vs_speed nr_sweeps chain_success_vs_sigma \

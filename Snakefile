@@ -13,6 +13,7 @@ include: "workflow/rules/fusion.smk"
 include: "workflow/rules/nr.smk"
 include: "workflow/rules/nr_imm.smk"
 include: "workflow/rules/nr_map.smk"
+include: "workflow/rules/nr_fidelity.smk"
 include: "workflow/rules/handover.smk"
 include: "workflow/rules/chain.smk"
 include: "workflow/rules/tunnel.smk"
@@ -52,6 +53,11 @@ rule nr:
     input:
         STUDY_FIGURES["nr"],
         "results/nr/key_numbers.json",
+
+
+rule fidelity:
+    input:
+        "results/nr/fidelity/key_numbers.json",
 
 
 rule nr_imm_all:

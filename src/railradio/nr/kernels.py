@@ -295,3 +295,18 @@ def mix_taps(z: np.ndarray, delayed: np.ndarray, coarse: np.ndarray, step: int, 
                 g = coarse[c, l] + w * (coarse[c + 1, l] - coarse[c, l])
                 acc += g * delayed[1 + l, m]
         z[m] += los_amp * los[m] * delayed[0, m] + mult[m] * acc
+
+
+@njit(cache=True, nogil=True)
+def place_symbols(z: np.ndarray, y: np.ndarray, first: np.ndarray) -> None:
+    """z[first[s] + j] = y[s, j mod n] for first[s] <= first[s] + j < first[s + 1] (the last
+    symbol: n + its CP, given as ``first[S]``), samples outside z dropped: rectangular symbol
+    extents read cyclically from each symbol's IFFT output (the exact reference's placement,
+    :mod:`railradio.nr.reference`). NumPy form: for each s, ``z[a:b] = y[s, arange(b - a) % n]``."""
+    n_s, n = y.shape
+    total = z.size
+    for s in range(n_s):
+        a = first[s]
+        b = min(first[s + 1], total)
+        for m in range(max(a, 0), b):
+            z[m] = y[s, (m - a) % n]

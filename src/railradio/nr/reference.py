@@ -3,30 +3,34 @@
 :func:`reference_received` synthesizes what the train receives with none of the fast
 synthesizer's shortcuts (:class:`railradio.nr.receiver.Synthesizer`), each of which it can
 also switch on alone, so that the effect of every shortcut on the receiver's decisions is
-measured (:mod:`railradio.nr.fidelity`):
+measured (:mod:`railradio.nr.fidelity`).
 
-* **band** — at the rate F_s/D of ``cfg.decimation`` every subcarrier of that band: D = 1
-  is the full rate with all 600 active subcarriers (exact); D = 8 keeps the central 128,
-  the production's band;
+The transmitted signal is TS 38.211 §5.3.1's time-continuous OFDM signal: each symbol the
+sum of its subcarriers over its rectangular extent (cyclic prefix included). Every channel
+tap delays it exactly — each symbol's subcarriers take the delay's phase, its extent moves by
+the delay — and the receiver samples the sum at F_s/D:
+
+* **band** — the rate of ``cfg.decimation``: D = 1 is the full rate with all 600 active
+  subcarriers (exact up to the rectangular extents' spectrum beyond ±F_s/2, aliased);
+  D = 8 keeps the central 128;
 * **taps** — each Rayleigh tap's gain at every sample (exact) or held per symbol and
   rotated with the LOS phase inside it (``symbol_taps``, the production's model); the
   sum-of-sinusoids process is evaluated exactly every 16 full-rate samples and linearly
-  interpolated in between (relative error ≤ (2π f_D Δt)²/8 ≤ 4e-6 at 468 km/h);
+  interpolated in between (relative error ≤ (2π f_D Δt)²/8 ≤ 4e-6 at 468 km/h). Unlike the
+  fast path, every tap's symbols keep their own delayed extent (the taps' spill into the
+  next symbol is kept);
 * **far links** — ``flat`` marks links sent as one non-fading tap with the profile's power
-  (the production's interferers beyond ``nr.channel.full_channel_range_m``);
+  (the interferers beyond ``nr.channel.full_channel_range_m``, when that is set);
 * **geometry** — with ``motion`` (:class:`railradio.nr.motion.BurstMotion`) the bulk delay,
   the LOS carrier phase and the beam gains follow the train through the burst; without it
-  they are held at the epoch instant, as in production. The time-varying delay
-  x(t - τ(t)) is applied to every sample by a third-order Taylor expansion around the
-  delay at the burst's middle (|δ| ≤ 0.11 full-rate samples at 468 km/h: the first
-  omitted term is ≤ (2π · 72 MHz · |δ|)⁴/24 ≈ 7e-5 of the amplitude at the band edge); the
-  beam gains are evaluated at each symbol's receive instant.
+  they are held at the epoch instant, as in production. The delay is taken symbol by symbol
+  at each symbol's receive instant (its extent's edges at theirs): within a 4.5 µs symbol it
+  changes by ≤ 2e-12 s at 468 km/h, a phase ≤ 1e-3 rad at the band's edge; the LOS phase
+  follows every sample, the beam gains every symbol.
 
-Every tap is delayed by its exact τ + τ_l with a band-limited (FFT) fractional delay. The
-random draws are those of :meth:`Synthesizer.draws` (pool indices, fading, beams, loads), and
-the Rayleigh taps are evaluated on the fast path's clock (the transmit instant, receive time
-minus the epoch's τ0), so that a shortcut's effect is measured on the same realization.
-
+The random draws are those of :meth:`Synthesizer.draws` (pool indices, fading, beams, loads),
+and the Rayleigh taps are evaluated on the fast path's clock (the transmit instant, receive
+time minus the epoch's τ0), so that a shortcut's effect is measured on the same realization.
 :func:`reference_correlation` is the time-domain correlation at every full-rate lag; the
 receiver's front end between rates is :mod:`railradio.nr.resample`.
 """
@@ -47,17 +51,6 @@ from railradio.nr.ssb import burst_grid, reference_waveform
 
 TAP_STEP_FULL = 16
 """Full-rate samples between exact evaluations of the sum-of-sinusoids taps."""
-
-
-def _transmit(num: Numerology, grid: NDArray, g: NDArray, starts: NDArray, cps: NDArray,
-              total: int) -> NDArray[np.complex64]:
-    """CP-OFDM time signal of one RRH: each symbol's IFFT times its gain, its CP prepended."""
-    n = num.n_fft
-    y = (n * np.fft.ifft(grid, axis=1)) * g[:, None]
-    x = np.zeros(total, dtype=np.complex64)
-    for i in range(grid.shape[0]):
-        x[starts[i]:starts[i] + n + cps[i]] = np.concatenate([y[i, n - cps[i]:], y[i]])
-    return x
 
 
 def _coarse_fading(profile: TdlProfile, doppler_hz: float, alpha: NDArray, phi: NDArray, t_first_s: float,
@@ -101,25 +94,23 @@ def reference_received(cfg: ReceiverConfig, links: Links, profile: TdlProfile, p
     num = Numerology(cfg.decimation)
     fs = num.sample_rate_hz
     n = num.n_fft
+    k = np.fft.fftfreq(n, 1.0 / n)
     starts = num.symbol_start(symbols) - num.symbol_start(symbols[0])
     cps = num.cp_length(symbols)
     total = int(starts[-1] + n + cps[-1])
-    # receive-sample times; the fast path's fading clock is the transmit instant
-    t = (np.arange(total) + num.symbol_start(symbols[0])) / fs + t0_s
+    ends = np.append(starts[1:], total)
+    s_first = float(num.symbol_start(symbols[0]))
+    t = (np.arange(total) + s_first) / fs + t0_s  # receive-sample times
     at_train = np.ones(links.n, dtype=bool) if at_train is None else np.asarray(at_train, dtype=bool)
     flat = np.zeros(links.n, dtype=bool) if flat is None else np.asarray(flat, dtype=bool)
     pool_ext = np.vstack([pool, np.zeros((1, pool.shape[1]), pool.dtype)])  # last row: an idle slot
-    tap_delays = np.concatenate([[profile.los_delay_s], profile.delays_s])
-    max_delay = float(np.max(links.tau_s)) + float(tap_delays.max()) if links.n else 0.0
-    n_pad = sfft.next_fast_len(total + int(np.ceil(max_delay * fs)) + 256)
-    f = sfft.fftfreq(n_pad, 1.0 / fs)
     z = np.zeros(total, dtype=complex)
-    # symbol layout: transmit-time centre of each symbol (the fast path's fading instants)
+    # transmit-time centre of each symbol (the fast path's fading instants)
     t_sym = (num.symbol_start(symbols) + cps + n / 2) / fs + t0_s
     _, block_of = burst_grid(num, symbols, cfg.ssb_first, 0, 0, pool_ext, np.zeros(symbols.size, np.int64))
-    e_taps = np.exp(-2j * np.pi * np.outer(tap_delays, f)).astype(np.complex64)  # [1 + L, n_pad]
+    cp_ramp = np.exp(-2j * np.pi * np.outer(cps, k) / n)  # [S, n]: the symbol's samples start at its CP
     step = max(1, TAP_STEP_FULL // cfg.decimation)
-    n_taps = profile.powers.size
+    buf = np.zeros(total, dtype=np.complex64)
     for r in range(links.n):
         tau0 = float(links.tau_s[r])
         m = None if motion is None else dataclasses.replace(
@@ -131,33 +122,42 @@ def reference_received(cfg: ReceiverConfig, links: Links, profile: TdlProfile, p
             data_beam = draws[r]["data_beam"]
         grid, _ = burst_grid(num, symbols, cfg.ssb_first, int(links.n_id1[r]), int(links.n_id2[r]), pool_ext, idx)
         beam = np.where(block_of >= 0, block_of, data_beam)
-        # beam gains at the epoch instant, or at each symbol's receive instant
-        ba = (links.beam_amp[r][beam] if m is None
-              else m.beam_amp(t_sym + tau0)[0, np.arange(symbols.size), beam])
-        x = _transmit(num, grid, ba * links.amp[r], starts, cps, total)
-        xf = sfft.fft(x, n_pad)
         lin_phase = 2 * np.pi * links.f_los_hz[r] * t + links.phase0[r]  # the production's LOS phase
-        excess = np.zeros(total)
-        tau_c = tau0
-        if m is not None:
-            # x(t - τ(t)) = x̃(t - τ_c): x̃(u) = Σ_n (-δ)^n/n! x^(n)(u), δ = τ(u + τ_c) - τ_c
-            tau_c = float(m.delay_s(np.array([t[total // 2]]))[0, 0])
-            delta = m.delay_s(t + tau_c)[0] - tau_c  # [T] at transmit sample m
-            w = 2j * np.pi * f
-            xt = x.astype(complex)
-            term = xf.astype(complex)
-            for order, fact in ((1, 1.0), (2, 2.0), (3, 6.0)):
-                term = term * w
-                xt += ((-delta) ** order / fact) * sfft.ifft(term)[:total]
-            xf = sfft.fft(xt.astype(np.complex64), n_pad)
+        if m is None:
+            ba = links.beam_amp[r][beam]
+            tau_sym = np.full(symbols.size, tau0)  # the delay of each symbol [s]
+            tau_edge = np.full(symbols.size + 1, tau0)  # at each extent's edge
+            excess = np.zeros(total)
+        else:  # the geometry at each symbol's (and edge's) receive instant
+            ba = m.beam_amp(t_sym + tau0)[0, np.arange(symbols.size), beam]
+            tau_sym = m.delay_s(t_sym + tau0)[0]
+            edges_t = (np.append(num.symbol_start(symbols), num.symbol_start(symbols[-1]) + n + cps[-1]) / fs
+                       + t0_s + tau0)
+            tau_edge = m.delay_s(edges_t)[0]
             excess = m.phase_excess_rad(t)[0]
         los = np.exp(1j * (lin_phase + excess))
-        spec = xf * np.exp(-2j * np.pi * f * tau_c).astype(np.complex64)
-        if flat[r] or n_taps == 0:
-            amp = 1.0 if flat[r] else np.sqrt(profile.los_power)
-            z += amp * los * sfft.ifft(spec)[:total]
+        spec = grid * (ba * links.amp[r] * n)[:, None] * cp_ramp  # [S, n], × n: unnormalized IFFT
+        taps = [(1.0 if flat[r] else np.sqrt(profile.los_power), profile.los_delay_s)] if (
+            flat[r] or profile.los_power > 0) else []
+        if not flat[r]:
+            taps += [(None, d) for d in profile.delays_s]
+        delayed = np.empty((len(taps), total), dtype=np.complex64)
+        for j, (_, tau_l) in enumerate(taps):
+            # sample m belongs to symbol s when (m + s_first)/fs - τ lies in its extent
+            first = np.ceil((tau_edge + tau_l) * fs + np.append(starts, total) - 1e-9).astype(np.int64)
+            first[-1] = max(first[-1], first[-2])
+            shift = first[:-1] - starts - (tau_sym + tau_l) * fs  # the symbol's first sample past its start [samples]
+            if np.ptp(shift) < 1e-9:  # held geometry: one sub-sample shift for every symbol
+                ramp = np.exp(2j * np.pi * shift[0] * k / n)[None, :]
+            else:
+                ramp = np.exp(2j * np.pi * np.outer(shift, k) / n)
+            y = np.fft.ifft(spec * ramp, axis=1).astype(np.complex64)
+            buf[:] = 0
+            kernels.place_symbols(buf, y, first)
+            delayed[j] = buf
+        if flat[r] or not profile.powers.size:
+            z += taps[0][0] * los * delayed[0]
             continue
-        delayed = sfft.ifft(spec[None, :] * e_taps, axis=-1)[:, :total]
         alpha, phi = draws[r]["alpha"], draws[r]["phi"]
         if symbol_taps:
             # production: gains at each symbol's transmit centre, relative to the LOS phase
@@ -174,6 +174,8 @@ def reference_received(cfg: ReceiverConfig, links: Links, profile: TdlProfile, p
             sym_of = np.zeros(1, dtype=np.int64)
             coarse = _coarse_fading(profile, links.doppler_hz, alpha, phi, float(t[0] - tau0), 1.0 / fs, total, step)
             mult = np.exp(1j * (2 * np.pi * links.f_los_hz[r] * tau0 + excess))
+        if profile.los_power <= 0:  # NLOS profile: no LOS row
+            delayed = np.vstack([np.zeros((1, total), np.complex64), delayed])
         kernels.mix_taps(z, delayed, np.ascontiguousarray(coarse), step, sym_of, symbol_taps, mult, los,
                          float(np.sqrt(profile.los_power)))
     return z

@@ -1,0 +1,231 @@
+"""The exact reference and the fidelity measurement (railradio.nr.reference, .resample,
+.motion, .fidelity): each piece against an independent computation."""
+import dataclasses
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+import scipy.fft as sfft
+
+from railradio.nr import kernels
+from railradio.nr.channel import TdlProfile
+from railradio.nr.fidelity import changed, check_production, sample_epochs
+from railradio.nr.numerology import SAMPLE_RATE_HZ
+from railradio.nr.receiver import Correlator, Links, ReceiverConfig, Synthesizer
+from railradio.nr.reference import reference_received
+from railradio.nr.resample import project, upsample
+from railradio.nr.ssb import qpsk_pool
+
+ROOT = Path(__file__).resolve().parents[2]
+LOS_ONLY = TdlProfile("LOS", 1.0, 0.0, np.zeros(0), np.zeros(0))
+
+
+def _crandn(rng, n):
+    return ((rng.standard_normal(n) + 1j * rng.standard_normal(n)) / np.sqrt(2)).astype(np.complex64)
+
+
+def test_project_inverts_upsample_and_keeps_the_noise_density():
+    """project(upsample(z, D), D) = z; white noise at F_s projected by D is white with 1/D of
+    the variance (N0·F_s/D: what the fast path draws at F_s/D)."""
+    rng = np.random.default_rng(1)
+    z = _crandn(rng, 4096)
+    np.testing.assert_allclose(project(upsample(z, 8), 8), z, atol=2e-5)
+    n = _crandn(rng, 8 * 2**16)
+    p = project(n, 8)
+    assert np.mean(np.abs(p) ** 2) == pytest.approx(1 / 8, rel=0.02)  # 2**16 samples: sd 0.4 %
+    lag1 = np.abs(np.mean(p[1:] * np.conj(p[:-1]))) / np.mean(np.abs(p) ** 2)
+    assert lag1 < 0.02
+    with pytest.raises(ValueError, match="multiple of factor"):
+        project(n[:-1], 8)
+    with pytest.raises(ValueError, match="factor"):
+        upsample(z, 0)
+
+
+def test_finer_lag_grid_is_the_front_ends_correlation_interpolated():
+    """A correlator on an F_s/2 lag grid over the F_s/8 front end's samples (interpolated,
+    template zero-stuffed) equals the front end's own correlation at every fourth lag."""
+    rng = np.random.default_rng(2)
+    cfg8 = ReceiverConfig(decimation=8, n_blocks=4)
+    cfg2 = ReceiverConfig(decimation=2, n_blocks=4)
+    z8 = _crandn(rng, 8000)
+    c8 = Correlator(cfg8).correlate(z8, -4, np.array([5]), np.array([1]), keep_corr=True)
+    c2 = Correlator(cfg2, template_decimation=8).correlate(upsample(z8, 4), -4, np.array([5]), np.array([1]),
+                                                           keep_corr=True)
+    k = cfg8.lags
+    np.testing.assert_allclose(c2.corr[0][:, ::4][:, :k], c8.corr[0], rtol=2e-4, atol=2e-4 * c8.corr.max())
+    with pytest.raises(ValueError, match="template_decimation"):
+        Correlator(cfg2, template_decimation=3)
+
+
+def _links(tau_samples, f_los=0.0, doppler=0.0):
+    return Links(n_id1=np.array([5]), n_id2=np.array([1]), tau_s=np.array([tau_samples]) / SAMPLE_RATE_HZ,
+                 amp=np.array([1.0]), beam_amp=np.ones((1, 8)), data_amp=np.ones(1), f_los_hz=np.array([f_los]),
+                 phase0=np.array([0.3]), doppler_hz=doppler, noise_psd_w_hz=0.0)
+
+
+@pytest.mark.parametrize("delay", [1200.0, 1200.37, 3001.81])
+def test_exact_reference_reproduces_the_fast_path_where_both_are_exact(delay):
+    """LOS only, a LOS Doppler, integer and fractional delays: the fast path's per-symbol
+    phase ramp and placement sample TS 38.211's time-continuous signal exactly, and so does
+    the exact synthesis (each symbol's extent and phase moved by the delay, the channel per
+    sample): they agree to float32 rounding."""
+    rng = np.random.default_rng(4)
+    cfg = ReceiverConfig(decimation=1, n_blocks=8)
+    pool = qpsk_pool(rng, 8)
+    syn = Synthesizer(cfg, LOS_ONLY, pool, data_beam="train")
+    links = _links(delay, f_los=9e3, doppler=1e4)
+    draws = syn.draws(links, rng)
+    z, _ = syn(links, None, noise=False, draws=draws)
+    ref = reference_received(cfg, links, LOS_ONLY, pool, draws, syn._span["symbols"])
+    assert np.max(np.abs(ref - z)) < 1e-4 * np.max(np.abs(z))
+
+
+def test_exact_reference_keeps_the_taps_spill_that_the_fast_path_omits():
+    """One Rayleigh tap 40 samples late: the exact synthesis (symbol taps held, as the fast
+    path's) differs from the fast path only in the first 40 samples of each symbol, where
+    the late tap still carries the previous symbol (the fast path wraps the same one)."""
+    rng = np.random.default_rng(8)
+    cfg = ReceiverConfig(decimation=1, n_blocks=8)
+    pool = qpsk_pool(rng, 8)
+    prof = TdlProfile("two", 0.5, 0.0, np.array([0.5]), np.array([40.0 / SAMPLE_RATE_HZ]))
+    syn = Synthesizer(cfg, prof, pool, data_beam="train")
+    links = _links(1000.0)
+    draws = syn.draws(links, rng)
+    z, _ = syn(links, None, noise=False, draws=draws)
+    ref = reference_received(cfg, links, prof, pool, draws, syn._span["symbols"], symbol_taps=True)
+    sp = syn._span
+    first = 1000 + sp["starts"]  # each symbol's extent begins: 40 samples of the previous one's late copy
+    spill = np.zeros(z.size, bool)
+    for f in first:
+        spill[f:f + 40] = True
+    scale = np.max(np.abs(z))
+    assert np.max(np.abs(ref - z)[~spill]) < 1e-4 * scale
+    assert np.max(np.abs(ref - z)[spill]) > 0.05 * scale
+
+
+def test_a_standing_train_moves_nothing():
+    """With speed and acceleration zero the exact geometry equals the held one."""
+    from railradio.nr.antenna import RrhArray
+    from railradio.nr.geometry import Deployment
+    from railradio.nr.motion import BurstMotion
+
+    rng = np.random.default_rng(5)
+    cfg = ReceiverConfig(decimation=8, n_blocks=8)
+    pool = qpsk_pool(rng, 8)
+    dep = Deployment()
+    arr = RrhArray(n_beams=8)
+    x0 = 260.0
+    d = dep.distance_3d_m(np.array([x0]), np.array([1]))
+    g = 10 ** (arr.beam_gains_db(dep.aod_rad(np.array([x0]), np.array([1]))) / 20)
+    links = dataclasses.replace(_links(0.0), tau_s=d / 299_792_458.0, beam_amp=g, data_amp=g.max(axis=1))
+    syn = Synthesizer(cfg, LOS_ONLY, pool, data_beam="train")
+    draws = syn.draws(links, rng)
+    motion = BurstMotion(dep, arr, np.array([1]), np.zeros(1), x0, 0.0, 0.0, 0.0, 0.03)
+    held, _ = syn(links, None, noise=False, draws=draws)
+    moved, _ = syn(links, None, noise=False, draws=draws, motion=motion)
+    np.testing.assert_allclose(moved, held, atol=1e-6 * np.abs(held).max())
+    sym = syn._span["symbols"]
+    a = reference_received(cfg, links, LOS_ONLY, pool, draws, sym)
+    b = reference_received(cfg, links, LOS_ONLY, pool, draws, sym, motion=motion)
+    np.testing.assert_allclose(b, a, atol=1e-5 * np.abs(a).max())
+
+
+def test_mix_taps_matches_numpy_form():
+    rng = np.random.default_rng(6)
+    n_t, n_l, step = 200, 3, 16
+    delayed = (rng.standard_normal((1 + n_l, n_t)) + 1j * rng.standard_normal((1 + n_l, n_t)))
+    coarse = rng.standard_normal((n_t // step + 2, n_l)) + 1j * rng.standard_normal((n_t // step + 2, n_l))
+    mult = np.exp(1j * rng.uniform(0, 6, n_t))
+    los = np.exp(1j * rng.uniform(0, 6, n_t))
+    z = np.zeros(n_t, complex)
+    kernels.mix_taps(z, delayed, coarse, step, np.zeros(1, np.int64), False, mult, los, 0.7)
+    m = np.arange(n_t)
+    g = np.stack([np.interp(m, step * np.arange(coarse.shape[0]), coarse[:, l].real)
+                  + 1j * np.interp(m, step * np.arange(coarse.shape[0]), coarse[:, l].imag) for l in range(n_l)], axis=1)
+    want = 0.7 * los * delayed[0] + mult * (g * delayed[1:].T).sum(axis=1)
+    np.testing.assert_allclose(z, want, rtol=1e-12, atol=1e-12)
+    sym_of = m // 50
+    z2 = np.zeros(n_t, complex)
+    kernels.mix_taps(z2, delayed, coarse, step, sym_of, True, mult, los, 0.0)
+    np.testing.assert_allclose(z2, mult * (coarse[sym_of] * delayed[1:].T).sum(axis=1), rtol=1e-12, atol=1e-12)
+
+
+def test_sample_holds_the_changes_and_the_top_speed():
+    v = np.r_[np.linspace(0, 100, 2000), np.full(275, 100.0), np.linspace(100, 130, 1500), np.linspace(130, 0, 2000)]
+    e = sample_epochs(v.size, 50, np.array([2000, 2275, 3775, 9000]), v)
+    assert e.size == 50 and np.all(np.diff(e) > 0)
+    assert {2000, 2275, 3775, int(np.argmax(v))} <= set(e.tolist())
+    assert e[0] == 0 and e[-1] == v.size - 1
+    with pytest.raises(ValueError, match="n must be"):
+        sample_epochs(10, 11, np.array([]), np.zeros(10))
+
+
+def test_changed_counts_each_decision_kind():
+    a = {"detected": np.array([[[1, 0], [1, 1]]], bool), "selected": np.array([[True, False]]),
+         "toa": np.array([[100.0, np.nan]]), "aod": np.array([[0.5, np.nan]])}
+    b = {"detected": np.array([[[1, 1], [1, 1]]], bool), "selected": np.array([[True, False]]),
+         "toa": np.array([[101.0, np.nan]]), "aod": np.array([[0.5 + np.radians(0.2), np.nan]])}
+    np.testing.assert_array_equal(changed("detection", a, b), [[0, 1, 0, 0]])
+    np.testing.assert_array_equal(changed("selection", a, b), [[0, 0]])
+    np.testing.assert_array_equal(changed("toa", a, b), [[0, np.nan]])  # one sample: the quantization
+    np.testing.assert_array_equal(changed("aod", a, b), [[1, np.nan]])
+    b["toa"] = np.array([[102.5, 7.0]])
+    np.testing.assert_array_equal(changed("toa", a, b), [[1, 1]])  # moved, and present in one only
+
+
+def test_a_production_path_that_is_not_the_main_runs_is_refused():
+    class D:  # one receiver's decisions
+        toa_samples = np.array([10.0])
+        aod_rad = np.array([0.1])
+
+    res = {"epoch": 3, "decisions": {"own_noise": {"seed": D()}}}
+    import xarray as xr
+
+    row = xr.Dataset({"toa_hat": (("receiver", "cand"), [[10.0 / SAMPLE_RATE_HZ]]),
+                      "aod_hat": (("receiver", "cand"), [[0.1]])})
+    check_production(res, row, ["seed"])
+    row["aod_hat"] = (("receiver", "cand"), [[0.2]])
+    with pytest.raises(ValueError, match="differs from the main run"):
+        check_production(res, row, ["seed"])
+
+
+@pytest.mark.skipif(not (ROOT / "paper/fidelity_numbers.json").exists(), reason="fidelity numbers not published")
+def test_published_fidelity_numbers_are_from_this_code_and_config():
+    """paper/fidelity_numbers.json comes from `make fidelity`, outside `all`: its record
+    must name the code and config that are here, or the numbers are stale (re-run it)."""
+    import yaml
+
+    from railradio.config import load_schema, validate_config
+    from railradio.nr.fidelity_record import PROVENANCE, provenance
+
+    config = yaml.safe_load((ROOT / "config/config.yaml").read_text(encoding="utf-8"))
+    validate_config(config, load_schema(ROOT / "workflow/schemas/config.schema.yaml"))
+    recorded = json.loads((ROOT / "paper" / PROVENANCE).read_text(encoding="utf-8"))
+    now = json.loads(json.dumps(provenance(ROOT, config)))
+    assert recorded["config"] == now["config"], "the config changed since `make fidelity`: re-run it"
+    assert recorded["code"] == now["code"], "the code changed since `make fidelity`: re-run it"
+
+
+@pytest.mark.skipif(not (ROOT / "paper/fidelity_numbers.json").exists(), reason="fidelity numbers not published")
+def test_noise_only_false_alarms_agree_with_the_published_rate():
+    """Each receiver's detector as implemented (the source's μ + 4σ; ours: the CA floor over
+    its cells, the max with μ + 4σ, the prescreen, on the F_s/2 lag grid) on fresh noise-only
+    bursts: its false-alarm rate per block agrees with the rate measured on 2 000 bursts and
+    published (nr.detector.<receiver>.pfa_noise) within three binomial standard errors of
+    both samples."""
+    import yaml
+
+    from railradio.config import load_schema, validate_config
+    from railradio.nr.fidelity import noise_false_alarms
+    from railradio.nr.simulate import scenario_from_config
+
+    config = yaml.safe_load((ROOT / "config/config.yaml").read_text(encoding="utf-8"))
+    validate_config(config, load_schema(ROOT / "workflow/schemas/config.schema.yaml"))
+    pub = json.loads((ROOT / "paper/fidelity_numbers.json").read_text(encoding="utf-8"))
+    counts = noise_false_alarms(scenario_from_config(config["nr"]), 40, np.random.default_rng(20261202))
+    for r, (k, n) in counts.items():
+        p = pub[f"nr.detector.{r}.pfa_noise"]["value"]
+        n_pub = pub[f"nr.detector.{r}.pfa_noise_n"]["value"]
+        sd = np.sqrt(n * p * (1 - p) + n * n * p * (1 - p) / n_pub)
+        assert abs(k - n * p) <= 3 * sd + 1, (r, k, n, p)
