@@ -660,6 +660,9 @@ def key_numbers(summary: dict, comps: dict[str, Comparison], n_epochs: int, seco
         put(f"nr.fidelity.{c}.bounded", "1", f"1: {COMPARISON_LABEL[c]} bounded for every receiver, 0: not", float(c_ok))
         all_ok &= c_ok
     put("nr.fidelity.all_bounded", "1", "1: every comparison bounded for every receiver, 0: not", float(all_ok))
+    ks = [m[k] for per in summary.values() for m in per.values() for k in ("toa_ks_p", "aod_ks_p") if np.isfinite(m[k])]
+    put("nr.fidelity.min_ks_p", "1", "smallest two-sample KS p-value of the TOA and AOD errors over every comparison "
+                                     "and receiver", min(ks) if ks else None)
     return out
 
 

@@ -30,8 +30,9 @@ def inputs(config: dict[str, Any]) -> dict[str, Any]:
     """The config the fidelity target reads: the seed, the simulation sections of ``nr``,
     the main run's length and cell search, and ``nr.fidelity``."""
     nr = config["nr"]
+    fidelity = {k: v for k, v in nr["fidelity"].items() if k != "n_shards"}  # how the work is split only
     return {"seed": config["seed"], "sim": sim_config(nr), "max_epochs": nr["max_epochs"],
-            "cell_search": nr["cell_search"], "fidelity": nr["fidelity"]}
+            "cell_search": nr["cell_search"], "fidelity": fidelity}
 
 
 def provenance(root: Path, config: dict[str, Any]) -> dict[str, Any]:

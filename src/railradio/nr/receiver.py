@@ -1,25 +1,29 @@
-"""Received SS bursts and the seed's correlation receiver (seed eq. 3–9), fast and exact.
+"""Received SS bursts and the seed's correlation receiver (seed eq. 3–9).
 
-Synthesis (per epoch): every RRH in range sends its burst grid (PSS, SSS, PBCH, full-buffer
-data; SS-block symbols on that block's beam, other symbols on the beam toward the train)
-through its own channel: bulk 3-D delay τ0 (exact fractional delay of the CP-OFDM
-waveform: per-symbol phase ramp e^{-j2π f_k τ0} and a cyclic read-out placed at ⌈τ0 F_s⌉),
-TDL taps (per-symbol Rayleigh gains, fixed-delay basis e^{-j2π f_k τ_l}) and the LOS tap's
-Doppler as a continuous phase within every symbol (inter-carrier interference); plus AWGN.
-Shortcuts, each bounded by tests against :func:`reference_received` (per-sample
-time-varying channel at the full rate, all 600 subcarriers):
+Synthesis (per epoch, :class:`Synthesizer`): every RRH in range sends its burst grid (PSS,
+SSS, PBCH, full-buffer data; SS-block symbols on that block's beam, other symbols on their
+data beam) through its own channel: bulk 3-D delay τ0 (TS 38.211's time-continuous symbols
+sampled exactly: a per-symbol phase ramp e^{-j2π f_k τ0} and each symbol's extent placed at
+⌈τ0 F_s⌉), TDL taps (per-symbol Rayleigh gains, fixed-delay basis e^{-j2π f_k τ_l}) and the
+LOS tap's Doppler as a continuous phase within every symbol (inter-carrier interference);
+plus AWGN. Its shortcuts, each measured against the exact computation
+(:func:`railradio.nr.reference.reference_received`) on paper-scale epochs by the fidelity
+target (:mod:`railradio.nr.fidelity`):
 
-* decimated band: only the N_FFT/D central subcarriers are synthesized and correlated
-  (the reference occupies 127); data further out reaches the correlator only through the
-  reference's spectral leakage;
+* a band: only the N_FFT/D_s central subcarriers are synthesized (at F_s/D_s), then the
+  receiver's front end filters to its own band;
 * the Rayleigh taps are held per symbol and rotate within a symbol with the LOS Doppler;
-  taps' delay differences are smaller than the CP and their inter-symbol spill is omitted;
-* the bulk delay is held over the 2 ms burst (the train moves ≤ 0.26 m, 0.2 samples).
+  each delayed tap's copy of a symbol is wrapped within the symbol's extent (its spill into
+  the next symbol is omitted);
+* the geometry (bulk delay, LOS Doppler, beam gains) is held over the 2 ms burst (the train
+  moves ≤ 0.26 m, 0.2 full-rate samples); ``motion`` follows it symbol by symbol.
 
-Correlation: one FFT window per SS block (lags 0..K-1 plus the reference length),
-R = IFFT(Z·conj(B)) at the decimated rate for detection statistics (μ_i, σ_i over the
-window), and band-limited evaluation at full-rate integer lags around the peaks for η_i and
-the TOA (seed eq. 9 is an argmax over full-rate samples).
+Correlation (:class:`Correlator`): one FFT window per SS block (lags 0..K-1 plus the
+reference length), R = IFFT(Z·conj(B)) on the receiver's lag grid for the detection
+statistics (μ_i, σ_i over the window), and band-limited evaluation at full-rate integer lags
+around the peaks for η_i and the TOA (seed eq. 9 is an argmax over full-rate samples). The
+lag grid may be finer than the front end's samples (``template_decimation``): the samples
+band-limited-interpolated, the template zero-stuffed.
 """
 
 from __future__ import annotations
@@ -171,7 +175,8 @@ class Synthesizer:
       direction (its own users along the track), and nothing in its other slots;
     - ``"train"``: every RRH toward the train (a worst case);
     - ``"random"``: every RRH as a non-serving one above;
-    - ``"none"``: no data at all (PSS, SSS and PBCH only).
+    - ``"none"``: PSS and SSS only — the data pool is zeroed, and the PBCH, which draws its
+      QPSK symbols from the same pool, goes with it.
 
     The random beams and loads are drawn for every RRH whatever the policy, so changing the
     policy or the serving cell changes no other draw.
