@@ -69,6 +69,7 @@ rule nr_imm_all:
 rule handover:
     input:
         STUDY_FIGURES["handover"],
+        STUDY_FIGURES["handover_correction"],
         "results/handover/key_numbers.json",
 
 

@@ -3,8 +3,11 @@ the naive full-burst correlation at 245.76 MHz, on the same epochs, in one run.
 
 Naive: the received burst synthesized at the full rate (all 600 subcarriers, D = 1) and, per
 candidate cell, one FFT correlation over the whole burst (2^20 points) split into the 64
-SS-block windows. Project: synthesis at F_s/8 and per-block windows (the shipped config).
-Reports ms per epoch for each, their ratio, and the project's time shares.
+SS-block windows. Project: the shipped config's path (synthesis at F_s/D_s, the front end's
+ideal filter to F_s/D, per-block windows on the F_s/D_c lag grid). Reports ms per epoch for
+each, their ratio, and the project's time shares; then what each shortcut's exact
+replacement costs per epoch (railradio.nr.fidelity, the same paths as the fidelity target),
+so that the choice of what to keep is measured.
 
     python benchmarks/bench_nr.py --out results/benchmarks/nr_bench.json
 """
@@ -26,6 +29,7 @@ import yaml
 from railradio.nr.link import ShadowingMap, link_budget
 from railradio.nr.numerology import Numerology
 from railradio.nr.receiver import Correlator, Synthesizer
+from railradio.nr.resample import project, upsample
 from railradio.nr.simulate import scenario_from_config
 from railradio.nr.ssb import qpsk_pool, reference_waveform
 from railradio.workflow import JOB_ENV
@@ -102,6 +106,8 @@ def main() -> None:
     ap.add_argument("--epochs", type=int, default=6)
     ap.add_argument("--shard-epochs", type=int, default=100,
                     help="bursts of the shard-like runs with and without the malloc settings")
+    ap.add_argument("--exact-epochs", type=int, default=3,
+                    help="epochs of the fidelity paths (the exact reference costs ~6 s each)")
     ap.add_argument("--out", default=None)
     args = ap.parse_args()
     with open(args.config, encoding="utf-8") as fh:
@@ -110,8 +116,16 @@ def main() -> None:
     rng = np.random.default_rng(1)
     pool = qpsk_pool(rng, scn.pool_size)
     shadow = ShadowingMap(1, (0, 0, 1), dep, scn.radio)
-    fast_syn = Synthesizer(scn.receiver, scn.profile, pool, scn.n_sinusoids, scn.full_channel_range_m)
-    fast_cor = Correlator(scn.receiver, scn.detector, scn.pfa)
+    d_fe = scn.receiver.decimation
+    d_s = scn.synthesis_decimation or d_fe
+    d_c = scn.search_decimation or d_fe
+    fast_syn = Synthesizer(dataclasses.replace(scn.receiver, decimation=d_s), scn.profile, pool, scn.n_sinusoids,
+                           scn.full_channel_range_m)
+    fast_cor = Correlator(dataclasses.replace(scn.receiver, decimation=d_c), scn.detector, scn.pfa,
+                          template_decimation=d_fe)
+
+    def front(z):  # the front end's samples on the correlator's lag grid
+        return upsample(project(z, d_fe // d_s), d_fe // d_c)
     cfg1 = dataclasses.replace(scn.receiver, decimation=1)
     full_syn = Synthesizer(cfg1, scn.profile, pool, scn.n_sinusoids, scn.full_channel_range_m)
     t_traj = 250.0 + 0.1 * np.arange(args.epochs)  # consecutive epochs at cruise speed
@@ -124,7 +138,7 @@ def main() -> None:
     for syn, cor in ((fast_syn, fast_cor), (full_syn, None)):
         z, s_min = syn(lb.links, rng, t0_s=float(t_traj[0]))
         if cor is not None:
-            cor.correlate(z, s_min, lb.links.n_id1[cand], lb.links.n_id2[cand])
+            cor.correlate(front(z), s_min, lb.links.n_id1[cand], lb.links.n_id2[cand])
     times = {"link": 0.0, "synthesis": 0.0, "correlation": 0.0, "naive_synthesis": 0.0, "naive_correlation": 0.0}
     for xe, ve, te in zip(x, v, t_traj, strict=True):
         t0 = time.perf_counter()
@@ -136,7 +150,7 @@ def main() -> None:
         draws = fast_syn.draws(lb.links, rng)
         z, s_min = fast_syn(lb.links, rng, t0_s=float(te), d2d_m=d2d, draws=draws)
         t2 = time.perf_counter()
-        fast_cor.correlate(z, s_min, lb.links.n_id1[pos], lb.links.n_id2[pos])
+        fast_cor.correlate(front(z), s_min, lb.links.n_id1[pos], lb.links.n_id2[pos])
         t3 = time.perf_counter()
         draws1 = full_syn.draws(lb.links, rng)
         z1, s1 = full_syn(lb.links, rng, t0_s=float(te), d2d_m=d2d, draws=draws1)
@@ -171,7 +185,37 @@ def main() -> None:
         report[f"{name}_sys_share"] = best["sys_s"] / (best["user_s"] + best["sys_s"])
     report["malloc_speedup"] = report["malloc_default_ms_per_burst"] / report["malloc_tuned_ms_per_burst"]
     report.update(fft_backends())
+    report.update(exact_costs(args.config, args.exact_epochs))
     emit(report, args.out)
+
+
+def exact_costs(config: str, n_epochs: int) -> dict:
+    """ms per epoch of every path of the fidelity target (railradio.nr.fidelity) on
+    ``n_epochs`` epochs at cruise speed, and each against the production path's: what
+    replacing a shortcut by its exact computation would cost."""
+    from railradio.nr.fidelity import FidelityRun
+    from railradio.nr.workflow import receiver_selection
+    from railradio.rng import spawn_key
+
+    with open(config, encoding="utf-8") as fh:
+        cfg = yaml.safe_load(fh)
+    from railradio.config import load_schema, validate_config
+
+    validate_config(cfg, load_schema("workflow/schemas/config.schema.yaml"))
+    scn = scenario_from_config(cfg["nr"])
+    run = FidelityRun(scn, cfg["seed"], spawn_key("nr", 0), receiver_selection(cfg["nr"]))
+    secs: dict[str, float] = {}
+    for k, e in enumerate(range(2500, 2501 + n_epochs)):
+        x = float(scn.trajectory.state(np.array([e * scn.trajectory.dt_s]))[0][0])
+        cand = scn.deployment.nearest(x, scn.cell_search.n_neighbours).astype(np.int64)
+        out = run.epoch(e, cand, int(cand[0]))
+        if k == 0:
+            continue  # warm-up: compiled kernels, caches
+        for v, t in out["seconds"].items():
+            secs[v] = secs.get(v, 0.0) + t / n_epochs
+    rep = {f"exact_path_ms.{v}": 1e3 * t for v, t in secs.items()}
+    rep.update({f"exact_path_ratio.{v}": t / secs["production"] for v, t in secs.items()})
+    return rep
 
 
 if __name__ == "__main__":

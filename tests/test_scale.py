@@ -123,7 +123,7 @@ def _dry_run_jobs(out: str) -> list[tuple[str, dict[str, str]]]:
 @pytest.mark.slow
 def test_slurm_dry_run_gives_every_job_its_rule_resources_and_cluster_shards(tmp_path):
     _copy_workflow(tmp_path)
-    run = subprocess.run([SNAKEMAKE, "all", "paper", "nr_imm_all", "-n", "--forceall",
+    run = subprocess.run([SNAKEMAKE, "all", "paper", "nr_imm_all", "fidelity", "-n", "--forceall",
                           "--workflow-profile", "workflow/profiles/slurm"], cwd=tmp_path,
                          env={"PATH": str(Path(sys.executable).parent) + ":/usr/bin:/bin",
                               "PYTHONPATH": str(tmp_path / "src"), "HOME": str(tmp_path)},
@@ -131,7 +131,7 @@ def test_slurm_dry_run_gives_every_job_its_rule_resources_and_cluster_shards(tmp
     out = run.stdout + run.stderr
     assert run.returncode == 0, out[-3000:]
     prof = _yaml(PROFILE / "config.yaml")
-    targets = {"all", "nr_imm_all"}
+    targets = {"all", "nr_imm_all", "fidelity"}
     jobs = [(r, res) for r, res in _dry_run_jobs(out) if r not in targets]
     counts: dict[str, int] = {}
     for rule, res in jobs:
@@ -144,6 +144,7 @@ def test_slurm_dry_run_gives_every_job_its_rule_resources_and_cluster_shards(tmp
     # the profile's configfiles took effect: cluster-sized shards
     shards, base = _yaml(PROFILE / "shards.yaml"), _yaml(ROOT / "config/config.yaml")
     assert counts["nr_shard"] == base["nr"]["realizations"] * shards["nr"]["n_shards"]
+    assert counts["nr_fidelity_shard"] == shards["nr"]["fidelity"]["n_shards"]
     assert counts["handover_shard"] == (len(base["handover"]["sweep"]["speeds_kmh"])
                                         * shards["handover"]["sweep"]["n_batches"])
     for group in prof["group-components"]:

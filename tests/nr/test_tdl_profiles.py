@@ -9,9 +9,29 @@ from railradio.nr.receiver import Correlator, Links, ReceiverConfig, Synthesizer
 from railradio.nr.reference import reference_correlation, reference_received
 from railradio.nr.ssb import qpsk_pool
 
-# Independent transcription of TR 38.901 v17.0.0 Tables 7.7.2-1…5: number of Rayleigh taps,
-# (normalized delay, power dB) of the first and the last row, LOS tap power [dB] (None: NLOS)
-# and the Rice factor K of the first tap [dB] stated in §7.7.2.
+# Independent transcription of TR 38.901 v17.0.0 Tables 7.7.2-1, -2, -3 and -5, every row
+# (normalized delay, power dB), in the tables' order; TDL-E's first row is the specular
+# (LOS) part of tap 1. TDL-D (Table 7.7.2-4) is transcribed in full in test_channel.py.
+FULL = {
+    "TDL-A": [(0.0, -13.4), (0.3819, 0.0), (0.4025, -2.2), (0.5868, -4.0), (0.4610, -6.0), (0.5375, -8.2),
+              (0.6708, -9.9), (0.5750, -10.5), (0.7618, -7.5), (1.5375, -15.9), (1.8978, -6.6), (2.2242, -16.7),
+              (2.1718, -12.4), (2.4942, -15.2), (2.5119, -10.8), (3.0582, -11.3), (4.0810, -12.7), (4.4579, -16.2),
+              (4.5695, -18.3), (4.7966, -18.9), (5.0066, -16.6), (5.3043, -19.9), (9.6586, -29.7)],
+    "TDL-B": [(0.0, 0.0), (0.1072, -2.2), (0.2155, -4.0), (0.2095, -3.2), (0.2870, -9.8), (0.2986, -1.2),
+              (0.3752, -3.4), (0.5055, -5.2), (0.3681, -7.6), (0.3697, -3.0), (0.5700, -8.9), (0.5283, -9.0),
+              (1.1021, -4.8), (1.2756, -5.7), (1.5474, -7.5), (1.7842, -1.9), (2.0169, -7.6), (2.8294, -12.2),
+              (3.0219, -9.8), (3.6187, -11.4), (4.1067, -14.9), (4.2790, -9.2), (4.7834, -11.3)],
+    "TDL-C": [(0.0, -4.4), (0.2099, -1.2), (0.2219, -3.5), (0.2329, -5.2), (0.2176, -2.5), (0.6366, 0.0),
+              (0.6448, -2.2), (0.6560, -3.9), (0.6584, -7.4), (0.7935, -7.1), (0.8213, -10.7), (0.9336, -11.1),
+              (1.2285, -5.1), (1.3083, -6.8), (2.1704, -8.7), (2.7105, -13.2), (4.2589, -13.9), (4.6003, -13.9),
+              (5.4902, -15.8), (5.6077, -17.1), (6.3065, -16.0), (6.6374, -15.7), (7.0427, -21.6), (8.6523, -22.8)],
+    "TDL-E": [(0.0, -0.03), (0.0, -22.03), (0.5133, -15.8), (0.5440, -18.1), (0.5630, -19.8), (0.5440, -22.9),
+              (0.7112, -22.4), (1.9092, -18.6), (1.9293, -20.8), (1.9589, -22.6), (2.6426, -22.3), (3.7136, -25.6),
+              (5.4524, -20.2), (12.0034, -29.8), (20.6519, -29.2)],
+}
+LOS_FIRST = {"TDL-A": False, "TDL-B": False, "TDL-C": False, "TDL-E": True}
+# number of Rayleigh taps, first and last row, LOS power [dB] (None: NLOS) and the Rice
+# factor K of the first tap [dB] stated in §7.7.2 (TDL-D from Table 7.7.2-4)
 TABLES = {
     "TDL-A": dict(n=23, first=(0.0, -13.4), last=(9.6586, -29.7), los_db=None, k_db=None),
     "TDL-B": dict(n=23, first=(0.0, 0.0), last=(4.7834, -11.3), los_db=None, k_db=None),
@@ -21,6 +41,22 @@ TABLES = {
 }
 # the strongest tap of each NLOS table (normalized delay, 0 dB)
 NLOS_STRONGEST = {"TDL-A": 0.3819, "TDL-B": 0.0, "TDL-C": 0.6366}
+
+
+@pytest.mark.parametrize("name", sorted(FULL))
+def test_every_row_matches_the_independent_transcription(name):
+    """Every tap's delay and power of the package table against the transcription above."""
+    rows = FULL[name]
+    raw = np.array([10 ** (db / 10) for _, db in rows])
+    raw /= raw.sum()
+    p = tdl_profile(name, 1.0)
+    if LOS_FIRST[name]:
+        assert p.los_power == pytest.approx(raw[0], rel=1e-12)
+        raw, rows = raw[1:], rows[1:]
+    else:
+        assert p.los_power == 0.0
+    np.testing.assert_allclose(p.powers, raw, rtol=1e-12)
+    np.testing.assert_allclose(p.delays_s, [d for d, _ in rows], rtol=0, atol=1e-15)
 
 
 def _raw_total(name: str, p) -> float:

@@ -25,6 +25,9 @@ HO_FIGURES = {
 
 register_figures("handover", list(HO_FIGURES))
 KEY_NUMBER_FRAGMENTS.append("results/handover/key_numbers.json")
+register_figures("handover_correction", ["handover_correction"])
+KEY_NUMBER_FRAGMENTS.append("results/handover/correction_key_numbers.json")
+HO_CORRECTION_SPEEDS = [v for v in (100, 350) if v in HO_SWEEP["speeds_kmh"]] or HO_SWEEP["speeds_kmh"][:1]
 
 
 wildcard_constraints:
@@ -170,6 +173,33 @@ rule handover_figure:
         "../envs/railradio.yaml"
     script:
         "../scripts/handover/figure.py"
+
+
+rule handover_correction:
+    """The joint decision's power correction per node against the true deviations, at 100
+    and 350 km/h on the sweep's first blocks (where its error comes from)."""
+    input:
+        cost="results/handover/cost.nc",
+    output:
+        nc="results/handover/correction.nc",
+        json="results/handover/correction_key_numbers.json",
+        pdf=report("results/figures/handover_correction.pdf", caption="../report/handover_figures.rst",
+                   category="handover"),
+        png="results/figures/handover_correction.png",
+    params:
+        sim=HO_SIM,
+        seed=config["seed"],
+        speeds_kmh=HO_CORRECTION_SPEEDS,
+        n_blocks=min(4, HO_SWEEP["n_blocks"]),
+        runs_per_block=HO_SWEEP["runs_per_block"],
+    log:
+        "results/logs/handover/correction.log",
+    benchmark:
+        "results/benchmarks/handover/correction.tsv"
+    conda:
+        "../envs/railradio.yaml"
+    script:
+        "../scripts/handover/correction.py"
 
 
 rule handover_key_numbers:

@@ -241,7 +241,8 @@ def joint_nodes(ctx: BlockContext, band: Band, weights: np.ndarray, method: str)
     -------
     dict with ``k`` (command sample), ``x_trig_m`` (corrected trigger X_i), ``dp_db``
     (measured gap at the trigger, ΔP_i), ``dev_db`` (deviation from the fitted model),
-    each [A, B, N]; ``conv_price`` C and ``fluct`` F(A), each [A, B].
+    ``pred_db`` (the deviation ĉ_i predicted for node i from its predecessors', 0 for the
+    head), each [A, B, N]; ``conv_price`` C and ``fluct`` F(A), each [A, B].
 
     Node i (0-based) uses the deviations of its min(m, i) predecessors: ĉ_i by WSLR,
     X_i = Xm + Δx(ĉ_i), and triggers at the first sample with x̂_i ≥ X_i but not before
@@ -262,6 +263,7 @@ def joint_nodes(ctx: BlockContext, band: Band, weights: np.ndarray, method: str)
     x_trig = np.zeros((n_a, b_n, n_n))
     dp = np.zeros((n_a, b_n, n_n))
     dev = np.zeros((n_a, b_n, n_n))
+    pred = np.zeros((n_a, b_n, n_n))
     w = weights[:, None, :]                                          # [A, 1, m]
     for i in range(n_n):
         if i == 0:
@@ -271,6 +273,7 @@ def joint_nodes(ctx: BlockContext, band: Band, weights: np.ndarray, method: str)
             p = min(m, i)
             preds = dev[:, :, i - p:i][:, :, ::-1]                     # nearest first
             c = wslr_predict(preds, w, method)                         # [A, B]
+            pred[:, :, i] = c
             dx = position_correction_m(c, band.xm_m, band.pl_m, pr_retry, band.gaph_db,
                                        band.a_db, band.n_hat, jt.dead_zone_db, rd)
             x_i = band.xm_m + dx
@@ -285,7 +288,7 @@ def joint_nodes(ctx: BlockContext, band: Band, weights: np.ndarray, method: str)
     conv_price = np.where(converged.any(axis=-1), np.argmax(converged, axis=-1) + 1, n_n + 1)
     width = np.maximum(band.pr_m - band.pl_m, 1e-9)
     fluct = np.minimum(1.0, x_trig.std(axis=-1) / width)
-    return {"k": k, "x_trig_m": x_trig, "dp_db": dp, "dev_db": dev,
+    return {"k": k, "x_trig_m": x_trig, "dp_db": dp, "dev_db": dev, "pred_db": pred,
             "conv_price": conv_price, "fluct": fluct}
 
 
