@@ -286,7 +286,9 @@ def _tunnel(cfg: Mapping[str, Any]) -> Iterator[Problem]:
             yield f"tunnel.trains.{name}.length_m", t["length_m"], f"< tunnel.geometry.length_m = {g['length_m']}"
     yield from _at_most(cfg, "tunnel.tracking.calibration_m", "tunnel.geometry.length_m")
     yield from _at_most(cfg, "tunnel.measurement.window_m", "tunnel.rays.max_offset_m")
-    for key in ("convergence_offsets_m", "engine_offsets_m"):
+    if r["far_decay_m"][1] <= r["far_decay_m"][0]:
+        yield "tunnel.rays.far_decay_m[1]", r["far_decay_m"][1], f"> tunnel.rays.far_decay_m[0] = {r['far_decay_m'][0]}"
+    for key in ("engine_offsets_m",):
         for i, off in enumerate(r[key]):
             if off > r["max_offset_m"]:
                 yield f"tunnel.rays.{key}[{i}]", off, f"<= tunnel.rays.max_offset_m = {r['max_offset_m']}"

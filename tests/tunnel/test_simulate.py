@@ -83,7 +83,7 @@ def test_wideband_peak_recovers_a_single_path_delay():
     tun, cab = Tunnel(length_m=2000.0, shape="rect"), Cable()
     step = 0.04
     los = tabulate(image_families(tun, 0), tun, cab, offset_grid_m(step, 20.0, tun.slot_spacing_m),
-                   eps=None, polarization="paraxial", n_delay_bins=4)
+                   eps=None, polarization="paraxial", n_delay_bins=4, local_mean_window_m=13.3)
     mm = MeasurementModel(window_m=9.99, bandwidth_hz=5e6, n_tones=64)
     rng = np.random.default_rng(5)
     slot = 20.0 * rng.integers(5, 95, 400)

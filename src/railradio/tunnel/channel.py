@@ -53,6 +53,46 @@ def offset_grid_m(step_m: float, max_offset_m: float, slot_spacing_m: float) -> 
     return np.arange(n + 1) * step_m
 
 
+def lee_window_m(wavelength_m: float, n_wavelengths: float) -> float:
+    """Length of the local-mean window [m]: ``n_wavelengths`` wavelengths (Lee 1985: 40 λ
+    with ≥ 36 samples removes the multipath fading and keeps the slower variation)."""
+    if not wavelength_m > 0 or not n_wavelengths > 0:
+        raise ValueError("wavelength_m and n_wavelengths must be positive")
+    return wavelength_m * n_wavelengths
+
+
+def moving_mean(a: np.ndarray, n: int, mirror_start: bool = False) -> np.ndarray:
+    """Centred running mean over ``n`` samples (odd) along axis 0.  ``mirror_start``: the
+    samples before the first are its mirror images (a function of |dx| sampled from dx = 0);
+    otherwise, and at the end, the window holds only the samples that exist."""
+    if n < 1 or n % 2 == 0:
+        raise ValueError(f"n must be a positive odd number of samples, got {n!r}")
+    a = np.asarray(a)
+    half = n // 2
+    if a.shape[0] == 0 or half == 0:
+        return a.astype(float if not np.iscomplexobj(a) else complex)
+    if mirror_start:
+        pre = a[1:half + 1][::-1]
+        ext = np.concatenate([pre, a], axis=0)
+        lead = pre.shape[0]
+    else:
+        ext, lead = a, 0
+    cs = np.concatenate([np.zeros((1, *a.shape[1:])), np.cumsum(ext, axis=0)], axis=0)
+    i = np.arange(a.shape[0]) + lead
+    lo = np.maximum(i - half, 0)
+    hi = np.minimum(i + half + 1, ext.shape[0])
+    shape = (-1,) + (1,) * (a.ndim - 1)
+    return (cs[hi] - cs[lo]) / (hi - lo).reshape(shape)
+
+
+def beat_length_m(tunnel: Tunnel, wavelength_m: float) -> float:
+    """Beat length of the two lowest modes EH11 and EH12 of the rectangular guide across
+    its larger side a: 2π / (β11 - β12) with β_mn ≈ k - (π²/2k)(m²/w² + n²/h²)
+    (Emslie, Lagace & Strong 1975), i.e. 8 a² / (3 λ) [m]."""
+    a = max(tunnel.width_m, tunnel.height_m)
+    return 8.0 * a * a / (3.0 * wavelength_m)
+
+
 def _interp_rows(table: np.ndarray, s: np.ndarray) -> np.ndarray:
     """Linear interpolation of table[f, :] (uniform grid on [0, 1]) at s[f, d]."""
     n_s = table.shape[1]
@@ -67,8 +107,16 @@ def tabulate(fam: Families, tunnel: Tunnel, cable: Cable, offsets_m: np.ndarray,
              eps: complex, polarization: str, propagation: str = "physical",
              seed_model: SeedModel | None = None, rng: np.random.Generator | None = None,
              delay_bin_s: float = 10e-9, n_delay_bins: int = 64, n_sin_grid: int = 513,
-             chunk: int = 256) -> xr.Dataset:
+             chunk: int = 256, local_mean_window_m: float | None = None) -> xr.Dataset:
     """Tabulate the slot-to-receiver channel over ``offsets_m`` (see the module docstring).
+
+    The local mean of the physical channel is what a receiver moving along the tunnel
+    measures: the power of the coherent ray sum averaged over ``local_mean_window_m`` of
+    offsets (required for it; :func:`moving_mean`, mirrored at dx = 0), and the delay
+    moments come from the taps' powers averaged over the same window (the local-mean power
+    delay profile: rays in one delay bin add coherently, different bins' cross terms
+    average out).  The incoherent sum over rays is kept as ``power_incoherent`` for
+    comparison; the seed's model keeps it as its local mean (seed 2.4.3).
 
     The reflection product of each family is evaluated on ``n_sin_grid`` elevations
     (uniform in sin b, in which the Fresnel coefficients are smooth) and interpolated;
@@ -125,16 +173,32 @@ def tabulate(fam: Families, tunnel: Tunnel, cable: Cable, offsets_m: np.ndarray,
         re = np.bincount(flat, weights=amp.real.ravel(), minlength=nd * n_delay_bins)
         im = np.bincount(flat, weights=amp.imag.ravel(), minlength=nd * n_delay_bins)
         taps[a:a + chunk] = (re + 1j * im).reshape(nd, n_delay_bins)
+    los = np.sqrt(h * h + offsets**2) / SPEED_OF_LIGHT_M_S
+    p_incoherent = p_mean
+    lm_desc = "local-mean power gain (incoherent sum over rays, the seed's model) "
+    if propagation == "physical":
+        if local_mean_window_m is None or not local_mean_window_m > 0:
+            raise ValueError("local_mean_window_m (> 0) is required for propagation='physical'")
+        step = offsets[1] - offsets[0] if n_d > 1 else 1.0
+        n_win = 2 * int(round(0.5 * local_mean_window_m / step)) + 1
+        p_mean = moving_mean(np.abs(taps.sum(axis=1)) ** 2, n_win, mirror_start=True)
+        pdp = moving_mean(np.abs(taps) ** 2, n_win, mirror_start=True)
+        tau_b = los[:, None] + np.arange(n_delay_bins)[None, :] * delay_bin_s
+        p_pdp = pdp.sum(axis=1)
+        m1 = (pdp * tau_b).sum(axis=1) * (p_mean / p_pdp)
+        m2 = (pdp * tau_b**2).sum(axis=1) * (p_mean / p_pdp)
+        lm_desc = (f"local-mean power gain (coherent ray sum, power averaged over {local_mean_window_m:g} m) ")
     mean_tau = m1 / p_mean
     rms = np.sqrt(np.maximum(m2 / p_mean - mean_tau**2, 0.0))
-    los = np.sqrt(h * h + offsets**2) / SPEED_OF_LIGHT_M_S
     ds = xr.Dataset(
         {
             "taps": (("offset_m", "excess_delay_s"), taps,
                      {"units": "1", "long_name": "slot-to-receiver channel taps (amplitude gain "
                       "relative to the cable power at the slot, binned by excess delay)"}),
-            "power_mean": ("offset_m", p_mean, {"units": "1", "long_name": "local-mean power gain "
-                           "(incoherent sum over rays) relative to the cable power at the slot"}),
+            "power_mean": ("offset_m", p_mean, {"units": "1", "long_name": lm_desc +
+                           "relative to the cable power at the slot"}),
+            "power_incoherent": ("offset_m", p_incoherent, {"units": "1", "long_name": "incoherent sum of the "
+                                 "rays' powers relative to the cable power at the slot"}),
             "delay_mean_s": ("offset_m", mean_tau, {"units": "s", "long_name": "power-weighted mean delay"}),
             "delay_rms_s": ("offset_m", rms, {"units": "s", "long_name": "RMS delay spread of one slot"}),
             "los_delay_s": ("offset_m", los, {"units": "s", "long_name": "line-of-sight delay"}),
@@ -147,31 +211,10 @@ def tabulate(fam: Families, tunnel: Tunnel, cable: Cable, offsets_m: np.ndarray,
         },
         attrs={"engine": fam.engine, "propagation": propagation, "polarization": polarization,
                "n_families": n_f, "max_reflections": int(fam.n_refl.max(initial=0)),
+               "local_mean_window_m": float(local_mean_window_m or 0.0),
                "shape": tunnel.shape},
     )
     return ds
-
-
-def power_by_order(fam: Families, offsets_m, wavelength_m: float, eps: complex,
-                   polarization: str) -> np.ndarray:
-    """Local-mean power (free-space normalized to the source) per reflection order [order, offset]."""
-    from railradio.tunnel.rays import lift
-
-    rays = lift(fam, offsets_m, wavelength_m, eps, polarization)
-    n_max = int(fam.n_refl.max(initial=0))
-    out = np.zeros((n_max + 1, np.size(offsets_m)))
-    np.add.at(out, fam.n_refl, np.abs(rays.amplitude) ** 2)
-    return out
-
-
-def converged_order(p_by_order: np.ndarray, tol_db: float) -> int:
-    """Smallest order N whose omitted tail (orders > N) is below ``tol_db`` at every offset."""
-    total = p_by_order.sum(axis=0)
-    cum = np.cumsum(p_by_order, axis=0)
-    ok = np.all(10.0 * np.log10(total / cum) <= tol_db, axis=1)
-    if not ok.any():
-        return -1
-    return int(np.argmax(ok))
 
 
 # ------------------------------------------------------------------------ assembling

@@ -71,9 +71,17 @@ def _specs() -> dict[str, KeySpec]:
     add("tunnel.fresnel.te_loss_db.graze1deg", "dB", "TE reflection loss at 1 degree grazing", digits=2)
     add("tunnel.fresnel.te_loss_db.graze10deg", "dB", "TE reflection loss at 10 degrees grazing", digits=2)
     add("tunnel.fresnel.tm_loss_db.graze10deg", "dB", "TM reflection loss at 10 degrees grazing", digits=2)
-    add("tunnel.modal_att_db_per_m", "dB/m", "EH11 modal attenuation of the square tunnel (Emslie); the seed "
-        "states 0.05-0.08 dB/m (source value: its lower end), ours is about 20 times smaller", 0.05, "≥", 2)
-    add("tunnel.rays.slope_db_per_m_500_1000", "dB/m", "decay of one slot's local-mean gain from 500 to 1000 m (image)", digits=2)
+    add("tunnel.modal_att_db_per_m", "dB/m", "EH11 modal attenuation of the square tunnel (Emslie, Lagace & "
+        "Strong 1975), a theoretical value with no counterpart in the source", digits=2)
+    add("tunnel.rays.local_mean_slope_db_per_km.1500_5000", "dB/km",
+        "decay of one slot's local mean (coherent power averaged over one EH11-EH12 beat length) fitted over "
+        "rays.far_decay_m, image method at rays.max_order (test: within -0.5/+1.0 dB/km of the EH11 attenuation)",
+        digits=2)
+    add("tunnel.rays.far_converged_order", "1", "lowest order whose far local means lie within 0.1 dB of the "
+        "max_order ones (the slope key's order is converged when this is below rays.max_order)")
+    add("tunnel.rays.beat_length_m", "m", "EH11-EH12 beat length 8a^2/(3 lambda) of the square tunnel", digits=0)
+    add("tunnel.rays.incoherent_excess_db.1000", "dB", "one slot's incoherent ray-power sum above its local mean "
+        "(the coherent power averaged over 40 wavelengths) at 1000 m: the error of the incoherent local mean", digits=1)
     add("tunnel.slot_eirp_db_re_cable", "dB", "slot EIRP relative to the cable power (slot-chain calibration)")
     for case, what in (("single_slot", "the nearest slot's line-of-sight ray alone"),
                        ("los_slots", "every slot's line-of-sight ray in the receiver's window (absorbing walls)"),
@@ -203,11 +211,15 @@ def key_numbers(runs: dict[tuple[str, str], xr.Dataset], maps: dict[str, xr.Data
     put("tunnel.modal_att_db_per_m", eh11_attenuation_db_per_m(wavelength_m, side_m, side_m, eps))
     t = tables["image"]
     off = t["offset_m"].values
-    g = 10 * np.log10(t["power_mean"].values)
+    put("tunnel.rays.local_mean_slope_db_per_km.1500_5000", engines.attrs["far_slope_db_per_km"])
+    put("tunnel.rays.far_converged_order", engines.attrs["far_converged_order"])
+    put("tunnel.rays.beat_length_m", engines.attrs["far_beat_length_m"])
     if off[-1] >= 1000.0:
-        put("tunnel.rays.slope_db_per_m_500_1000", (g[np.searchsorted(off, 500.0)] - g[np.searchsorted(off, 1000.0)]) / 500.0)
+        i = int(np.argmin(np.abs(off - 1000.0)))
+        put("tunnel.rays.incoherent_excess_db.1000",
+            10 * np.log10(t["power_incoherent"].values[i] / t["power_mean"].values[i]))
     else:
-        put("tunnel.rays.slope_db_per_m_500_1000", None)
+        put("tunnel.rays.incoherent_excess_db.1000", None)
     put("tunnel.slot_eirp_db_re_cable", t.attrs["slot_eirp_offset_db"])
     if peak_bias is not None:
         for case, b in zip(peak_bias["case"].values, peak_bias["peak_bias_s"].values, strict=True):

@@ -8,10 +8,10 @@ import numpy as np
 import xarray as xr
 
 from railradio.rng import make_rng, spawn_key
-from railradio.tunnel.channel import (SeedModel, converged_order, offset_grid_m, power_by_order,
+from railradio.tunnel.channel import (SeedModel, beat_length_m, lee_window_m, moving_mean, offset_grid_m,
                                       received, tabulate)
 from railradio.tunnel.geometry import Cable, Tunnel
-from railradio.tunnel.rays import Families, image_families, lift, sbr_families
+from railradio.tunnel.rays import Families, image_coherent_gain, image_families, lift, sbr_families
 from railradio.tunnel.simulate import MeasurementModel, Train
 
 TABLES = {"image": ("rect", "image", "physical"), "sbr": ("circle", "sbr", "physical"),
@@ -149,7 +149,8 @@ def make_peak_bias(cfg: dict[str, Any], table: xr.Dataset, step_m: float = 9.7) 
     mm = measurement_from_config(cfg)
     r = cfg["rays"]
     los = tabulate(image_families(tun, 0), tun, cab, table["offset_m"].values, eps=None,
-                   polarization="paraxial", delay_bin_s=r["delay_bin_ns"] * 1e-9, n_delay_bins=r["n_delay_bins"])
+                   polarization="paraxial", delay_bin_s=r["delay_bin_ns"] * 1e-9, n_delay_bins=r["n_delay_bins"],
+                   local_mean_window_m=local_mean_window(cfg))
     margin = max(mm.window_m, r["max_offset_m"])
     if tun.length_m <= 2 * margin:
         margin = mm.window_m
@@ -180,26 +181,78 @@ def families(cfg: dict[str, Any], shape: str, engine: str, order: int) -> Famili
     return sbr_families(tun, r["sbr_rays"], order, r["sbr_rx_radius_m"])
 
 
+def local_mean_window(cfg: dict[str, Any]) -> float:
+    """The local-mean window [m] of ``rays.local_mean_wavelengths`` wavelengths."""
+    return lee_window_m(cable_from_config(cfg).wavelength_m, cfg["rays"]["local_mean_wavelengths"])
+
+
 def choose_order(cfg: dict[str, Any]) -> tuple[int, np.ndarray, np.ndarray]:
-    """Reflection order by the convergence criterion (STUDY.md §4): the smallest order whose
-    omitted higher orders carry less than ``convergence_db`` of the local-mean power at every
-    test offset, in the image-method tunnel.  Returns (order, power by order, offsets)."""
+    """Reflection order by convergence of the coherent gain (the narrowband field the
+    positioning measures) in the image-method tunnel: the smallest order N whose omitted
+    orders N+1..``max_order`` carry a field at most ``convergence_field_db`` below the
+    local mean at every offset from 0 to ``max_offset_m`` on a ``convergence_step_m`` grid.
+    Returns (order, the worst omitted field over offsets [dB re local mean] per order, the
+    offsets)."""
     r = cfg["rays"]
     tun = tunnel_from_config(cfg, "rect")
+    lam = cable_from_config(cfg).wavelength_m
     fam = image_families(tun, r["max_order"])
-    offs = np.array(r["convergence_offsets_m"], dtype=float)
-    pbo = power_by_order(fam, offs, cable_from_config(cfg).wavelength_m, eps_from_config(cfg), "paraxial")
-    order = converged_order(pbo, r["convergence_db"])
-    if order < 0:
-        raise ValueError(f"tunnel.rays.max_order={r['max_order']} does not converge to "
-                         f"{r['convergence_db']} dB at offsets {list(offs)}; raise it")
-    return order, pbo, offs
+    step = r["convergence_step_m"]
+    offs = np.arange(int(np.floor(r["max_offset_m"] / step)) + 1) * step
+    by_order = image_coherent_gain(fam, offs, lam, eps_from_config(cfg), by_order=True)
+    cum = np.cumsum(by_order, axis=0)
+    full = cum[-1]
+    n_win = 2 * int(round(0.5 * local_mean_window(cfg) / step)) + 1
+    lm = moving_mean(np.abs(full) ** 2, n_win, mirror_start=True)
+    worst_db = 10.0 * np.log10(np.max(np.abs(cum - full[None, :]) ** 2 / lm[None, :], axis=1) + 1e-300)
+    ok = worst_db <= r["convergence_field_db"]
+    ok[-1] = True
+    order = int(np.argmax(ok))
+    if order == r["max_order"]:
+        raise ValueError(f"tunnel.rays.max_order={r['max_order']}: the coherent gain does not converge to "
+                         f"{r['convergence_field_db']} dB below the local mean; raise it")
+    return order, worst_db, offs
+
+
+def far_decay(cfg: dict[str, Any]) -> xr.Dataset:
+    """One slot's local mean far from it, in the image-method tunnel, for every reflection
+    order up to ``max_order``: the coherent power averaged over windows of one EH11-EH12
+    beat length (:func:`railradio.tunnel.channel.beat_length_m`, which removes the beating
+    of the two lowest modes) centred every quarter beat length over ``rays.far_decay_m``,
+    and its least-squares slope, against the EH11 attenuation of the same square (Emslie,
+    Lagace & Strong 1975).  The slope key takes the highest order; the order at which the
+    window means are within 0.1 dB of it tells whether it converged."""
+    from railradio.tunnel.materials import eh11_attenuation_db_per_m
+
+    r = cfg["rays"]
+    tun = tunnel_from_config(cfg, "rect")
+    lam = cable_from_config(cfg).wavelength_m
+    eps = eps_from_config(cfg)
+    lb = beat_length_m(tun, lam)
+    lo, hi = (float(v) for v in r["far_decay_m"])
+    centres = np.arange(lo, hi + 1e-9, lb / 4.0)
+    # samples 0.293 m apart (not commensurate with lambda/2) over every window
+    x = np.arange(lo - lb / 2.0, hi + lb / 2.0, 0.293)
+    cum = np.cumsum(image_coherent_gain(image_families(tun, r["max_order"]), x, lam, eps, by_order=True), axis=0)
+    p = np.abs(cum) ** 2
+    lm_db = np.stack([10.0 * np.log10(p[:, np.abs(x - c) <= lb / 2.0].mean(axis=1)) for c in centres], axis=1)
+    slope = -np.polyfit(centres / 1e3, lm_db.T, 1)[0]  # [order] dB/km
+    conv = np.all(np.abs(lm_db - lm_db[-1]) <= 0.1, axis=1)
+    conv_order = int(np.argmax(conv))
+    eh11 = eh11_attenuation_db_per_m(lam, tun.width_m, tun.height_m, eps) * 1e3
+    return xr.Dataset(
+        {"local_mean_db": (("order", "centre_m"), lm_db, {"units": "dB", "long_name": "one slot's coherent power averaged over one beat length (unit EIRP), truncated at each reflection order"}),
+         "slope_db_per_km": ("order", slope, {"units": "dB/km", "long_name": "least-squares decay of local_mean_db over the centres"})},
+        coords={"order": ("order", np.arange(lm_db.shape[0]), {"units": "1", "long_name": "highest reflection order summed"}),
+                "centre_m": ("centre_m", centres, {"units": "m", "long_name": "window centre (offset from the slot)"})},
+        attrs={"beat_length_m": lb, "eh11_db_per_km": eh11, "converged_order": conv_order,
+               "slope_db_per_km": float(slope[-1])})
 
 
 def make_table(cfg: dict[str, Any], name: str, seed: int) -> xr.Dataset:
     """The tabulated slot-to-receiver channel ``name`` (see :data:`TABLES`)."""
     shape, engine, prop = TABLES[name]
-    order, pbo, offs = choose_order(cfg)
+    order, worst_db, offs = choose_order(cfg)
     fam = families(cfg, shape, engine, order)
     tun = tunnel_from_config(cfg, shape)
     cab = cable_from_config(cfg)
@@ -211,12 +264,11 @@ def make_table(cfg: dict[str, Any], name: str, seed: int) -> xr.Dataset:
     ds = tabulate(fam, tun, cab, grid, eps=eps_from_config(cfg), polarization=pol, propagation=prop,
                   seed_model=SeedModel(sm["reflection_loss_db"], sm["tunnel_att_db_per_m"],
                                        sm["multipath_max_db"]),
-                  rng=rng, delay_bin_s=r["delay_bin_ns"] * 1e-9, n_delay_bins=r["n_delay_bins"])
-    ds = ds.assign_coords(order=("order", np.arange(pbo.shape[0]), {"units": "1", "long_name": "reflection order"}),
-                          convergence_offset_m=("convergence_offset_m", offs,
-                                                {"units": "m", "long_name": "offsets of the order-convergence test"}))
-    ds["power_by_order"] = (("order", "convergence_offset_m"), pbo,
-                            {"units": "1", "long_name": "image-method local-mean power gain per reflection order (unit EIRP)"})
+                  rng=rng, delay_bin_s=r["delay_bin_ns"] * 1e-9, n_delay_bins=r["n_delay_bins"],
+                  local_mean_window_m=local_mean_window(cfg) if prop == "physical" else None)
+    ds = ds.assign_coords(order=("order", np.arange(worst_db.size), {"units": "1", "long_name": "reflection order"}))
+    ds["omitted_field_db"] = ("order", worst_db, {"units": "dB", "long_name": "image method: worst field of the "
+                              "omitted higher orders over offsets 0..max_offset_m, relative to the local mean"})
     ds.attrs.update({"reflection_order": order, "slot_eirp_offset_db": cab.slot_eirp_offset_db(tun.slot_spacing_m),
                      **{f"sbr_{k}": v for k, v in fam.stats.items()}})
     return ds
@@ -230,11 +282,17 @@ def make_map(cfg: dict[str, Any], table: xr.Dataset, name: str) -> xr.Dataset:
     step = cfg["coverage"]["map_step_m"]
     x = np.arange(int(round(tun.length_m / step)) + 1) * step
     rec = received(table, tun, cab, x, strong_dbm=cfg["coverage"]["blind_spot_dbm"])
+    lm_name = "RSSI, local mean (power sum over rays, seed 2.4.3)"
+    if table.attrs["propagation"] == "physical":  # what a receiver measures: the coherent field's power averaged
+        w = table.attrs["local_mean_window_m"]
+        rec.rssi_mean_dbm = 10.0 * np.log10(moving_mean(10.0 ** (rec.rssi_coherent_dbm / 10.0),
+                                                        2 * int(round(0.5 * w / step)) + 1))
+        lm_name = f"RSSI, local mean (power of the coherent sum of all slots averaged over {w:.3g} m)"
     dims = ("x_m",)
     return xr.Dataset(
         {"rssi_coherent_dbm": (dims, rec.rssi_coherent_dbm, {"units": "dBm", "long_name": "RSSI, coherent sum of all rays of all slots"}),
-         "rssi_mean_dbm": (dims, rec.rssi_mean_dbm, {"units": "dBm", "long_name": "RSSI, local mean (power sum over rays, seed 2.4.3)"}),
-         "delay_rms_s": (dims, rec.delay_rms_s, {"units": "s", "long_name": "RMS delay spread over all slots' rays (seed 2.5.2)"}),
+         "rssi_mean_dbm": (dims, rec.rssi_mean_dbm, {"units": "dBm", "long_name": lm_name}),
+         "delay_rms_s": (dims, rec.delay_rms_s, {"units": "s", "long_name": "RMS delay spread of the local-mean power delay profile of all slots (seed 2.5.2)"}),
          "n_strong_rays": (dims, rec.n_strong_rays, {"units": "1", "long_name": "rays above the blind-spot level"})},
         coords={"x_m": (dims, x, {"units": "m", "long_name": "receiver position along the tunnel"})},
         attrs={"table": name, "shape": shape, "cross_distance_m": tun.cross_distance_m})
@@ -256,7 +314,8 @@ def make_engines(cfg: dict[str, Any]) -> xr.Dataset:
         out[label] = (10 * np.log10(np.sum(np.abs(rays.amplitude) ** 2, axis=0)),
                       20 * np.log10(np.abs(rays.amplitude.sum(axis=0))), rays.amplitude.shape[0])
     labels = list(out)
-    return xr.Dataset(
+    far = far_decay(cfg)
+    ds = xr.Dataset(
         {"power_mean_db": (("model", "offset_m"), np.array([out[k][0] for k in labels]),
                            {"units": "dB", "long_name": "local-mean path gain of one slot (unit EIRP)"}),
          "power_coherent_db": (("model", "offset_m"), np.array([out[k][1] for k in labels]),
@@ -265,3 +324,7 @@ def make_engines(cfg: dict[str, Any]) -> xr.Dataset:
         coords={"model": ("model", labels, {"units": "1", "long_name": "engine, cross-section, polarization rule"}),
                 "offset_m": ("offset_m", offs, {"units": "m", "long_name": "along-axis offset"})},
         attrs={"reflection_order": order})
+    ds = ds.merge(far.rename({"order": "far_order"}).rename_vars({"local_mean_db": "far_local_mean_db",
+                                                                  "slope_db_per_km": "far_slope_db_per_km"}))
+    ds.attrs.update({"reflection_order": order, **{f"far_{k}": v for k, v in far.attrs.items()}})
+    return ds
