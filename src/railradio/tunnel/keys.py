@@ -79,6 +79,10 @@ def _specs() -> dict[str, KeySpec]:
         digits=2)
     add("tunnel.rays.far_converged_order", "1", "lowest order whose far local means lie within 0.1 dB of the "
         "max_order ones (the slope key's order is converged when this is below rays.max_order)")
+    add("tunnel.rays.power_beyond_cutoff_frac.p95", "1", "95th pct along the tunnel of the local-mean power share "
+        "from slots beyond rays.max_offset_m (the criterion: at most rays.cutoff_power_frac)", digits=2)
+    add("tunnel.delay_spread_ns.cutoff_sensitivity", "1", "relative change of the median RMS delay spread when "
+        "rays.max_offset_m doubles (image method, receivers every metre)", digits=2)
     add("tunnel.rays.beat_length_m", "m", "EH11-EH12 beat length 8a^2/(3 lambda) of the square tunnel", digits=0)
     add("tunnel.rays.incoherent_excess_db.1000", "dB", "one slot's incoherent ray-power sum above its local mean "
         "(the coherent power averaged over 40 wavelengths) at 1000 m: the error of the incoherent local mean", digits=1)
@@ -214,6 +218,9 @@ def key_numbers(runs: dict[tuple[str, str], xr.Dataset], maps: dict[str, xr.Data
     put("tunnel.rays.local_mean_slope_db_per_km.1500_5000", engines.attrs["far_slope_db_per_km"])
     put("tunnel.rays.far_converged_order", engines.attrs["far_converged_order"])
     put("tunnel.rays.beat_length_m", engines.attrs["far_beat_length_m"])
+    put("tunnel.rays.power_beyond_cutoff_frac.p95", np.percentile(engines["power_beyond_cutoff_frac"].values, 95))
+    put("tunnel.delay_spread_ns.cutoff_sensitivity", float(np.median(engines["delay_rms_doubled_s"].values)
+                                                           / np.median(engines["delay_rms_cutoff_s"].values) - 1.0))
     if off[-1] >= 1000.0:
         i = int(np.argmin(np.abs(off - 1000.0)))
         put("tunnel.rays.incoherent_excess_db.1000",

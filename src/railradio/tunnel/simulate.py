@@ -14,7 +14,7 @@ Measurement models (STUDY.md §4, both reported):
   changes with position) or ``slot_bias`` (per slot one constant bias: a calibration error
   of the slot's delay); same sigma in all three.
 * ``wideband`` - what a receiver of bandwidth B actually sees: the sum of all slots'
-  rays with their cable delays (velocity factor v), sampled on ``n_tones`` tones across
+  rays (every slot of the table, :func:`wideband_view`) with their cable delays (velocity factor v), sampled on ``n_tones`` tones across
   B with thermal noise, transformed to a channel impulse response; its strongest peak
   gives a delay that maps to the cable distance from the feed, x = x_feed +- v c (tau - h/c).
   The +- is resolved from the measurements (:func:`resolve_ambiguity`: the K receivers sit
@@ -227,6 +227,16 @@ def wideband_delays(table: xr.Dataset, tunnel: Tunnel, cable: Cable, x_rx_m: np.
     return out
 
 
+def wideband_view(table: xr.Dataset, mm: MeasurementModel) -> MeasurementModel:
+    """The wideband receiver sees the whole received signal: every slot of the table, whose
+    cut-off leaves out less than ``rays.cutoff_power_frac`` of the power (checked in
+    :func:`railradio.tunnel.study.cutoff_check`), not only those within ``window_m``
+    (which chooses the separable receiver's slots)."""
+    import dataclasses
+
+    return dataclasses.replace(mm, window_m=max(mm.window_m, float(table["offset_m"].values[-1])))
+
+
 def peak_interp_bound_s(bandwidth_hz: float, oversample: int) -> float:
     """Largest error of the three-point parabolic peak estimate on a single band-limited
     path [s].  Near its peak the pulse |sinc(B t)|^2 = 1 - a t^2 + b t^4 with
@@ -351,7 +361,7 @@ def snapshot_fixes(table, tunnel, cable, train, x_head, mm, propagation, measure
             res["gdop_seed"][:, j], res["gdop_tdoa"][:, j] = gs, gt
             res["scale"][:, j] = gt
         elif measurement == "wideband":
-            tau = wideband_delays(table, tunnel, cable, x_rx[:, j], rngs[j], mm, tones=tones)
+            tau = wideband_delays(table, tunnel, cable, x_rx[:, j], rngs[j], wideband_view(table, mm), tones=tones)
             c = wideband_candidates(tau, tunnel, cable, bias_s)
             cands.append(c)
             res["tau"][:, j] = tau

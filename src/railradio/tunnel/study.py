@@ -249,6 +249,35 @@ def far_decay(cfg: dict[str, Any]) -> xr.Dataset:
                "slope_db_per_km": float(slope[-1])})
 
 
+def cutoff_check(cfg: dict[str, Any], step_m: float = 0.2, x_step_m: float = 1.0) -> xr.Dataset:
+    """Is the table long enough?  The image-method channel (the positioning engine's order)
+    tabulated on a ``step_m`` grid to twice ``rays.max_offset_m``; at receivers every
+    ``x_step_m`` along the tunnel: the share of the local-mean power (summed over slots)
+    from the slots beyond the cut-off, and the RMS delay spread with the cut-off and with it
+    doubled.  ``step_m`` may exceed the table's (the local mean and the power delay profile
+    are averages over 40 wavelengths, which a 0.2 m grid samples 66 times)."""
+    r = cfg["rays"]
+    order, _, _ = choose_order(cfg)
+    tun = tunnel_from_config(cfg, "rect")
+    cab = cable_from_config(cfg)
+    cut = float(r["max_offset_m"])
+    long = tabulate(image_families(tun, order), tun, cab, offset_grid_m(step_m, 2.0 * cut, tun.slot_spacing_m),
+                    eps=eps_from_config(cfg), polarization="paraxial", delay_bin_s=r["delay_bin_ns"] * 1e-9,
+                    n_delay_bins=r["n_delay_bins"], local_mean_window_m=local_mean_window(cfg))
+    short = long.sel(offset_m=long["offset_m"].values[long["offset_m"].values <= cut + 1e-9])
+    x = np.arange(0.0, tun.length_m + 1e-9, x_step_m)
+    a, b = received(short, tun, cab, x), received(long, tun, cab, x)
+    share = 1.0 - 10.0 ** ((a.rssi_mean_dbm - b.rssi_mean_dbm) / 10.0)
+    dims = ("x_m",)
+    ds = xr.Dataset(
+        {"power_beyond_cutoff_frac": (dims, share, {"units": "1", "long_name": "share of the local-mean power (sum over slots) from slots beyond rays.max_offset_m"}),
+         "delay_rms_cutoff_s": (dims, a.delay_rms_s, {"units": "s", "long_name": "RMS delay spread, slots to rays.max_offset_m"}),
+         "delay_rms_doubled_s": (dims, b.delay_rms_s, {"units": "s", "long_name": "RMS delay spread, slots to twice rays.max_offset_m"})},
+        coords={"x_m": (dims, x, {"units": "m", "long_name": "receiver position along the tunnel"})},
+        attrs={"cutoff_m": cut, "cutoff_power_frac": float(r["cutoff_power_frac"]), "order": order})
+    return ds
+
+
 def make_table(cfg: dict[str, Any], name: str, seed: int) -> xr.Dataset:
     """The tabulated slot-to-receiver channel ``name`` (see :data:`TABLES`)."""
     shape, engine, prop = TABLES[name]
@@ -315,6 +344,7 @@ def make_engines(cfg: dict[str, Any]) -> xr.Dataset:
                       20 * np.log10(np.abs(rays.amplitude.sum(axis=0))), rays.amplitude.shape[0])
     labels = list(out)
     far = far_decay(cfg)
+    cut = cutoff_check(cfg)
     ds = xr.Dataset(
         {"power_mean_db": (("model", "offset_m"), np.array([out[k][0] for k in labels]),
                            {"units": "dB", "long_name": "local-mean path gain of one slot (unit EIRP)"}),
@@ -326,5 +356,7 @@ def make_engines(cfg: dict[str, Any]) -> xr.Dataset:
         attrs={"reflection_order": order})
     ds = ds.merge(far.rename({"order": "far_order"}).rename_vars({"local_mean_db": "far_local_mean_db",
                                                                   "slope_db_per_km": "far_slope_db_per_km"}))
-    ds.attrs.update({"reflection_order": order, **{f"far_{k}": v for k, v in far.attrs.items()}})
+    ds = ds.merge(cut)
+    ds.attrs.update({"reflection_order": order, **{f"far_{k}": v for k, v in far.attrs.items()},
+                     "cutoff_m": cut.attrs["cutoff_m"], "cutoff_power_frac": cut.attrs["cutoff_power_frac"]})
     return ds
