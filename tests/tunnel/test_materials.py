@@ -51,3 +51,22 @@ def test_passive_walls_never_amplify():
 def test_bad_input_raises(cos_i, eps):
     with pytest.raises(ValueError):
         fresnel_te(cos_i, eps)
+
+
+def test_circular_guide_attenuation_marcatili_schmeltzer():
+    # 8.5 m concrete circle at 900 MHz: EH11 about 2.8 dB/km, below the equal-area square's
+    # EH11; TE01 lower still (its nu = 1/sqrt(eps - 1) is the smallest); TM01 far higher;
+    # the attenuation scales as lambda^2 / a^3
+    from railradio.tunnel.materials import circular_attenuation_db_per_m, eh11_attenuation_db_per_m
+
+    lam = 299_792_458.0 / 9e8
+    eh11 = circular_attenuation_db_per_m(lam, 4.25, "EH11") * 1e3
+    te01 = circular_attenuation_db_per_m(lam, 4.25, "TE01") * 1e3
+    tm01 = circular_attenuation_db_per_m(lam, 4.25, "TM01") * 1e3
+    side = 8.5 * np.sqrt(np.pi) / 2
+    assert 2.7 < eh11 < 2.9
+    assert te01 < eh11 < eh11_attenuation_db_per_m(lam, side, side) * 1e3 < tm01
+    assert circular_attenuation_db_per_m(2 * lam, 8.5, "EH11") == pytest.approx(
+        circular_attenuation_db_per_m(lam, 4.25, "EH11") * 4 / 8)
+    with pytest.raises(ValueError, match="mode"):
+        circular_attenuation_db_per_m(lam, 4.25, "HE99")

@@ -75,13 +75,17 @@ def position_error_cdf(runs: dict[tuple[str, str], xr.Dataset], pdf, png) -> Non
     fig, axes = figure(ncols=3, figsize=(9.0, 3.3), sharey=True)
     for ax, tr in zip(axes, TRAINS, strict=True):
         ds = runs[(tr, "physical_separable")]
-        _cdf(ax, ds["kf_err_head"], label="head, KF")
-        _cdf(ax, ds["kf_err_tail"], label="tail, KF")
+        _cdf(ax, ds["kf_err_head"], label="head, KF (white delay errors [ours])")
+        _cdf(ax, ds["kf_err_tail"], label="tail, KF (white)")
+        for v, lab, st in (("physical_separable_ar1", "train, KF, AR(1) delay errors", (0, (5, 1))),
+                           ("physical_separable_slot_bias", "train, KF, per-slot delay bias", (0, (3, 1, 1, 1)))):
+            if (tr, v) in runs:
+                _cdf(ax, runs[(tr, v)]["kf_err"], label=lab, ls=st, lw=1.4)
         _cdf(ax, ds["rigid_err"], label="rigid train, KF")
         _cdf(ax, ds["pf_err"], label="train, PF", ls=":")
         _cdf(ax, ds["snapshot_err"].values[:, 0], label="head, snapshot", ls="--")
         if (tr, "physical_wideband") in runs:
-            _cdf(ax, runs[(tr, "physical_wideband")]["kf_err"], label="train, KF, wideband", ls="-.")
+            _cdf(ax, runs[(tr, "physical_wideband")]["kf_err"], label="train, KF, wideband (errors from the channel)", ls="-.")
         if (tr, "seed_separable") in runs:
             _cdf(ax, runs[(tr, "seed_separable")]["kf_err"], label="train, KF, seed's channel", ls=(0, (1, 3)))
         ax.set_xscale("log")

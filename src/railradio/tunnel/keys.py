@@ -25,7 +25,12 @@ def _specs() -> dict[str, KeySpec]:
 
     for tr in TRAINS:
         tot, head, tail = SOURCE_P95[tr]
-        add(f"tunnel.{tr}.err_m.p95", "m", f"{tr}: 95th pct of the train error sqrt((e_h^2+e_t^2)/2), KF", tot, "=")
+        add(f"tunnel.{tr}.err_m.p95", "m", f"{tr}: 95th pct of the train error sqrt((e_h^2+e_t^2)/2), KF, "
+            "separable receiver, delay errors white in time [ours: the source gives no time structure]", tot, "=")
+        add(f"tunnel.{tr}.ar1.err_m.p95", "m", f"{tr}: the same with an AR(1) delay error along the track "
+            "(measurement.delay_corr_m), same sigma")
+        add(f"tunnel.{tr}.slot_bias.err_m.p95", "m", f"{tr}: the same with one constant delay bias per slot "
+            "(the source's systematic per-slot errors), same sigma")
         add(f"tunnel.{tr}.head_err_m.p95", "m", f"{tr}: 95th pct of the head error, KF", head, "=")
         add(f"tunnel.{tr}.tail_err_m.p95", "m", f"{tr}: 95th pct of the tail error, KF", tail, "=")
         add(f"tunnel.{tr}.rigid.err_m.p95", "m", f"{tr}: 95th pct, rigid-train KF on all receivers")
@@ -82,7 +87,19 @@ def _specs() -> dict[str, KeySpec]:
     add("tunnel.rays.power_beyond_cutoff_frac.p95", "1", "95th pct along the tunnel of the local-mean power share "
         "from slots beyond rays.max_offset_m (the criterion: at most rays.cutoff_power_frac)", digits=2)
     add("tunnel.delay_spread_ns.cutoff_sensitivity", "1", "relative change of the median RMS delay spread when "
-        "rays.max_offset_m doubles (image method, receivers every metre)", digits=2)
+        "rays.max_offset_m doubles (image method, receivers every 2 m)", digits=2)
+    add("tunnel.wideband.delay_error_ns.robust_sigma", "ns", "the wideband receiver's own delay error (peak "
+        "delay minus the calibrated model at the true position): 1.4826 x median absolute deviation, all trains "
+        "and receivers", digits=1)
+    add("tunnel.wideband.delay_error_ns.p99", "ns", "99th pct of the absolute wideband delay error (its heavy tail)", digits=0)
+    add("tunnel.wideband.delay_error.lag1_autocorr", "1", "correlation of the wideband delay error between "
+        "consecutive epochs of one receiver (rank correlation, all trains): its time structure", digits=2)
+    add("tunnel.rays.sbr_circle.local_mean_slope_db_per_km", "dB/km", "the circular engine (SBR): one slot's far "
+        "local-mean decay over rays.far_decay_m at rays.max_order, as for the square", digits=2)
+    add("tunnel.rays.circle_eh11_db_per_km", "dB/km", "EH11 attenuation of a lossy circular guide of the tunnel's "
+        "diameter (Marcatili & Schmeltzer 1964)", digits=2)
+    add("tunnel.rays.circle_te01_db_per_km", "dB/km", "TE01 attenuation of the same guide, the lowest of any mode "
+        "(Marcatili & Schmeltzer 1964)", digits=2)
     add("tunnel.rays.beat_length_m", "m", "EH11-EH12 beat length 8a^2/(3 lambda) of the square tunnel", digits=0)
     add("tunnel.rays.incoherent_excess_db.1000", "dB", "one slot's incoherent ray-power sum above its local mean "
         "(the coherent power averaged over 40 wavelengths) at 1000 m: the error of the incoherent local mean", digits=1)
@@ -167,6 +184,9 @@ def key_numbers(runs: dict[tuple[str, str], xr.Dataset], maps: dict[str, xr.Data
         put(f"tunnel.{tr}.snapshot.err_m.p95", p95(ds["snapshot_err"].values[:, 0]))
         put(f"tunnel.{tr}.rssi.err_m.p95", p95(ds["snapshot_rssi_err"].values[:, 0]))
         pooled.append(ds["rep_err"].values)
+        for v, k in (("physical_separable_ar1", "ar1"), ("physical_separable_slot_bias", "slot_bias")):
+            r = runs.get((tr, v))
+            put(f"tunnel.{tr}.{k}.err_m.p95", *((None, None) if r is None else pooled_p95(r["rep_err"].values)))
         wb = runs.get((tr, "physical_wideband"))
         put(f"tunnel.{tr}.wideband.err_m.p95", None if wb is None else p95(wb["kf_err"]))
         if wb is not None:
@@ -175,6 +195,20 @@ def key_numbers(runs: dict[tuple[str, str], xr.Dataset], maps: dict[str, xr.Data
         put(f"tunnel.{tr}.seed_channel.err_m.p95", *((None, None) if sd is None else pooled_p95(sd["rep_err"].values)))
     put("tunnel.availability.err_lt_5m", *pooled_share(pooled, 5.0))
     put("tunnel.availability.err_lt_2m", *pooled_share(pooled, 2.0))
+    if pooled_wb:
+        from scipy.stats import spearmanr
+
+        err = np.concatenate([w["wideband_delay_error"].values.ravel() for w in pooled_wb]) * 1e9
+        err = err[np.isfinite(err)]
+        put("tunnel.wideband.delay_error_ns.robust_sigma", 1.4826 * np.median(np.abs(err - np.median(err))))
+        put("tunnel.wideband.delay_error_ns.p99", np.percentile(np.abs(err), 99))
+        a = np.concatenate([w["wideband_delay_error"].values[:-1].ravel() for w in pooled_wb])
+        b = np.concatenate([w["wideband_delay_error"].values[1:].ravel() for w in pooled_wb])
+        ok = np.isfinite(a) & np.isfinite(b)
+        put("tunnel.wideband.delay_error.lag1_autocorr", spearmanr(a[ok], b[ok])[0])
+    else:
+        for k in ("delay_error_ns.robust_sigma", "delay_error_ns.p99", "delay_error.lag1_autocorr"):
+            put(f"tunnel.wideband.{k}", None)
     cat = (lambda v: np.concatenate([w[v].values.ravel() for w in pooled_wb])) if pooled_wb else None
     put("tunnel.availability.wideband.err_lt_5m", np.mean(cat("kf_err") < 5.0) if cat else None)
     put("tunnel.wideband.ambiguity_wrong_frac", np.mean(cat("ambiguity_wrong")) if cat else None)
@@ -218,6 +252,9 @@ def key_numbers(runs: dict[tuple[str, str], xr.Dataset], maps: dict[str, xr.Data
     put("tunnel.rays.local_mean_slope_db_per_km.1500_5000", engines.attrs["far_slope_db_per_km"])
     put("tunnel.rays.far_converged_order", engines.attrs["far_converged_order"])
     put("tunnel.rays.beat_length_m", engines.attrs["far_beat_length_m"])
+    put("tunnel.rays.sbr_circle.local_mean_slope_db_per_km", engines.attrs["far_circle_slope_db_per_km"])
+    put("tunnel.rays.circle_eh11_db_per_km", engines.attrs["far_circle_eh11_db_per_km"])
+    put("tunnel.rays.circle_te01_db_per_km", engines.attrs["far_circle_te01_db_per_km"])
     put("tunnel.rays.power_beyond_cutoff_frac.p95", np.percentile(engines["power_beyond_cutoff_frac"].values, 95))
     put("tunnel.delay_spread_ns.cutoff_sensitivity", float(np.median(engines["delay_rms_doubled_s"].values)
                                                            / np.median(engines["delay_rms_cutoff_s"].values) - 1.0))

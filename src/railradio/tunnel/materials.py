@@ -80,3 +80,25 @@ def eh11_attenuation_db_per_m(wavelength_m: float, width_m: float, height_m: flo
         raise ValueError("wavelength_m, width_m and height_m must be positive")
     root = np.sqrt(complex(eps) - 1.0)
     return float(4.343 * wavelength_m**2 * np.real(1.0 / (width_m**3 * root) + eps / (height_m**3 * root)))
+
+
+CIRCULAR_MODES = {"EH11": (2.404825557695773, "hybrid"), "TE01": (3.831705970207512, "te"),
+                  "TM01": (3.831705970207512, "tm")}
+"""u_nm (the m-th zero of J_{n-1}) and the mode family of the lowest circular-guide modes."""
+
+
+def circular_attenuation_db_per_m(wavelength_m: float, radius_m: float, mode: str = "EH11",
+                                  eps: complex = CONCRETE_900MHZ) -> float:
+    """Attenuation of a mode of a hollow circular guide in a lossy dielectric (Marcatili &
+    Schmeltzer 1964, eq. 35): alpha = (u_nm / 2 pi)^2 lambda^2 / a^3 Re(nu_n) [Np/m] with
+    nu = 1/sqrt(eps - 1) (TE0m), eps/sqrt(eps - 1) (TM0m), (eps + 1)/(2 sqrt(eps - 1))
+    (hybrid EH_nm) [dB/m]."""
+    if wavelength_m <= 0 or radius_m <= 0:
+        raise ValueError("wavelength_m and radius_m must be positive")
+    if mode not in CIRCULAR_MODES:
+        raise ValueError(f"mode must be one of {tuple(CIRCULAR_MODES)}, got {mode!r}")
+    u, kind = CIRCULAR_MODES[mode]
+    eps = complex(eps)
+    root = np.sqrt(eps - 1.0)
+    nu = {"te": 1.0 / root, "tm": eps / root, "hybrid": (eps + 1.0) / (2.0 * root)}[kind]
+    return float(20.0 * np.log10(np.e) * (u / (2.0 * np.pi)) ** 2 * wavelength_m**2 / radius_m**3 * np.real(nu))

@@ -514,6 +514,9 @@ def run_train(table: xr.Dataset, tunnel: Tunnel, cable: Cable, train: Train, mm:
             "gdop_seed": (tr, res["gdop_seed"], {"units": "1", "long_name": "GDOP, the seed's 2-D formula (seed 4.1.1)"}),
             "gdop_tdoa": (tr, res["gdop_tdoa"], {"units": "1", "long_name": "along-track TDOA dilution (sigma_x / c sigma_tau)"}),
             "wideband_delay": (tr, res["tau"], {"units": "s", "long_name": "CIR peak delay (wideband only)"}),
+            "wideband_delay_error": (tr, res["tau"] - bias_s - cable_model_delay_s(x_rx, tunnel, cable),
+                                     {"units": "s", "long_name": "CIR peak delay minus the calibrated cable-point "
+                                      "model delay at the true position (wideband only): the channel's delay error"}),
             "kf_head": ("time_s", kf[:, 0], {**m, "long_name": "Kalman-filtered head position (head receiver)"}),
             "kf_tail": ("time_s", kf[:, 1], {**m, "long_name": "Kalman-filtered tail position (tail receiver)"}),
             "kf_head_var": ("time_s", kf_var[:, 0], {"units": "m2", "long_name": "KF head position variance"}),

@@ -34,8 +34,13 @@ def side_wall_config(cfg: dict[str, Any]) -> dict[str, Any]:
     z = cfg["sensitivity"]["side_wall_slot_z_m"]
     return cfg | {"geometry": cfg["geometry"] | {"slot_z_m": z}}
 VARIANTS = {"physical_separable": ("physical", "separable"),
+            "physical_separable_ar1": ("physical", "separable"),
+            "physical_separable_slot_bias": ("physical", "separable"),
             "physical_wideband": ("physical", "wideband"),
             "seed_separable": ("seed", "separable")}
+VARIANT_DELAY_ERROR = {"physical_separable_ar1": "ar1", "physical_separable_slot_bias": "slot_bias"}
+"""Runs of the separable receiver with a correlated delay error instead of the configured
+one (white, the source's reading [ours]); the same draws otherwise."""
 TABLE_OF_PROPAGATION = {"physical": None, "seed": "seed"}  # physical: the configured engine
 
 
@@ -187,6 +192,20 @@ def local_mean_window(cfg: dict[str, Any]) -> float:
 
 
 def choose_order(cfg: dict[str, Any]) -> tuple[int, np.ndarray, np.ndarray]:
+    """The reflection order of :func:`_choose_order` (computed once per process and config)."""
+    import json
+
+    key = json.dumps({k: cfg[k] for k in ("rays", "geometry", "cable", "wall")}, sort_keys=True)
+    if key not in _ORDER_CACHE:
+        _ORDER_CACHE[key] = _choose_order(cfg)
+    order, worst, offs = _ORDER_CACHE[key]
+    return order, worst.copy(), offs.copy()
+
+
+_ORDER_CACHE: dict[str, tuple[int, np.ndarray, np.ndarray]] = {}
+
+
+def _choose_order(cfg: dict[str, Any]) -> tuple[int, np.ndarray, np.ndarray]:
     """Reflection order by convergence of the coherent gain (the narrowband field the
     positioning measures) in the image-method tunnel: the smallest order N whose omitted
     orders N+1..``max_order`` carry a field at most ``convergence_field_db`` below the
@@ -249,7 +268,36 @@ def far_decay(cfg: dict[str, Any]) -> xr.Dataset:
                "slope_db_per_km": float(slope[-1])})
 
 
-def cutoff_check(cfg: dict[str, Any], step_m: float = 0.2, x_step_m: float = 1.0) -> xr.Dataset:
+def far_decay_circle(cfg: dict[str, Any], sample_m: float = 1.0) -> dict[str, float]:
+    """The circular engine (SBR, the configured polarization rule) checked far from the slot
+    against an independent reference: one slot's local mean averaged over windows of the
+    square's beat length (as :func:`far_decay`; samples ``sample_m`` apart), its slope over
+    ``rays.far_decay_m`` at ``max_order``, against Marcatili & Schmeltzer's attenuation of
+    EH11 and TE01 in a lossy circular guide of the tunnel's radius (TE01, the least
+    attenuated mode, bounds every mode's decay from below)."""
+    from railradio.tunnel.materials import circular_attenuation_db_per_m
+
+    r = cfg["rays"]
+    tun = tunnel_from_config(cfg, "circle")
+    lam = cable_from_config(cfg).wavelength_m
+    eps = eps_from_config(cfg)
+    lb = beat_length_m(tunnel_from_config(cfg, "rect"), lam)
+    lo, hi = (float(v) for v in r["far_decay_m"])
+    centres = np.arange(lo, hi + 1e-9, lb / 4.0)
+    x = np.arange(lo - lb / 2.0, hi + lb / 2.0, sample_m)
+    fam = families(cfg, "circle", "sbr", r["max_order"])
+    amp = np.concatenate([lift(fam, x[a:a + 1024], lam, eps, r["sbr_polarization"]).amplitude.sum(axis=0)
+                          for a in range(0, x.size, 1024)])
+    p = np.abs(amp) ** 2
+    lm_db = np.array([10.0 * np.log10(p[np.abs(x - c) <= lb / 2.0].mean()) for c in centres])
+    radius = tun.diameter_m / 2.0
+    return {"slope_db_per_km": float(-np.polyfit(centres / 1e3, lm_db, 1)[0]),
+            "eh11_db_per_km": circular_attenuation_db_per_m(lam, radius, "EH11", eps) * 1e3,
+            "te01_db_per_km": circular_attenuation_db_per_m(lam, radius, "TE01", eps) * 1e3,
+            "n_families": len(fam)}
+
+
+def cutoff_check(cfg: dict[str, Any], step_m: float = 0.2, x_step_m: float = 2.0) -> xr.Dataset:
     """Is the table long enough?  The image-method channel (the positioning engine's order)
     tabulated on a ``step_m`` grid to twice ``rays.max_offset_m``; at receivers every
     ``x_step_m`` along the tunnel: the share of the local-mean power (summed over slots)
@@ -357,6 +405,8 @@ def make_engines(cfg: dict[str, Any]) -> xr.Dataset:
     ds = ds.merge(far.rename({"order": "far_order"}).rename_vars({"local_mean_db": "far_local_mean_db",
                                                                   "slope_db_per_km": "far_slope_db_per_km"}))
     ds = ds.merge(cut)
+    circ = far_decay_circle(cfg)
     ds.attrs.update({"reflection_order": order, **{f"far_{k}": v for k, v in far.attrs.items()},
+                     **{f"far_circle_{k}": v for k, v in circ.items()},
                      "cutoff_m": cut.attrs["cutoff_m"], "cutoff_power_frac": cut.attrs["cutoff_power_frac"]})
     return ds
