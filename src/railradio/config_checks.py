@@ -288,10 +288,9 @@ def _tunnel(cfg: Mapping[str, Any]) -> Iterator[Problem]:
     yield from _at_most(cfg, "tunnel.measurement.window_m", "tunnel.rays.max_offset_m")
     if r["far_decay_m"][1] <= r["far_decay_m"][0]:
         yield "tunnel.rays.far_decay_m[1]", r["far_decay_m"][1], f"> tunnel.rays.far_decay_m[0] = {r['far_decay_m'][0]}"
-    for key in ("engine_offsets_m",):
-        for i, off in enumerate(r[key]):
-            if off > r["max_offset_m"]:
-                yield f"tunnel.rays.{key}[{i}]", off, f"<= tunnel.rays.max_offset_m = {r['max_offset_m']}"
+    for i, off in enumerate(r["engine_offsets_m"]):
+        if off > r["max_offset_m"]:
+            yield f"tunnel.rays.engine_offsets_m[{i}]", off, f"<= tunnel.rays.max_offset_m = {r['max_offset_m']}"
     n_window = int(2 * m["window_m"] // g["slot_spacing_m"])
     if m["n_slots"] > n_window:
         yield "tunnel.measurement.n_slots", m["n_slots"], \

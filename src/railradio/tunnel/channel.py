@@ -61,6 +61,11 @@ def lee_window_m(wavelength_m: float, n_wavelengths: float) -> float:
     return wavelength_m * n_wavelengths
 
 
+def window_samples(window_m: float, step_m: float) -> int:
+    """Odd number of samples ``step_m`` apart spanning ``window_m`` (for :func:`moving_mean`)."""
+    return 2 * int(round(0.5 * window_m / step_m)) + 1
+
+
 def moving_mean(a: np.ndarray, n: int, mirror_start: bool = False) -> np.ndarray:
     """Centred running mean over ``n`` samples (odd) along axis 0.  ``mirror_start``: the
     samples before the first are its mirror images (a function of |dx| sampled from dx = 0);
@@ -180,7 +185,7 @@ def tabulate(fam: Families, tunnel: Tunnel, cable: Cable, offsets_m: np.ndarray,
         if local_mean_window_m is None or not local_mean_window_m > 0:
             raise ValueError("local_mean_window_m (> 0) is required for propagation='physical'")
         step = offsets[1] - offsets[0] if n_d > 1 else 1.0
-        n_win = 2 * int(round(0.5 * local_mean_window_m / step)) + 1
+        n_win = window_samples(local_mean_window_m, step)
         p_mean = moving_mean(np.abs(taps.sum(axis=1)) ** 2, n_win, mirror_start=True)
         pdp = moving_mean(np.abs(taps) ** 2, n_win, mirror_start=True)
         tau_b = los[:, None] + np.arange(n_delay_bins)[None, :] * delay_bin_s

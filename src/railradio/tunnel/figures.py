@@ -103,11 +103,11 @@ def ray_engines(eng: xr.Dataset, pdf, png) -> None:
     fig, (ax, ad) = figure(nrows=2, figsize=(6.4, 5.0), sharex=True)
     off = eng["offset_m"].values
     for m in eng["model"].values:
-        ax.plot(off, eng["power_mean_db"].sel(model=m), label=f"{m} (local mean)")
+        ax.plot(off, eng["power_mean_db"].sel(model=m), label=f"{m} (sum of ray powers)")
     ax.plot(off, eng["power_coherent_db"].sel(model="image_rect"), lw=0.5, color="grey", label="image_rect (coherent)")
     ref = eng["power_mean_db"].sel(model="image_rect")
     for m in ("sbr_rect", "sbr_rect_vector"):
-        ad.plot(off, eng["power_mean_db"].sel(model=m) - ref, label=f"{m} - image (local mean)")
+        ad.plot(off, eng["power_mean_db"].sel(model=m) - ref, label=f"{m} - image (sum of ray powers)")
     ad.plot(off, eng["power_coherent_db"].sel(model="sbr_rect") - eng["power_coherent_db"].sel(model="image_rect"),
             lw=0.6, label="sbr_rect - image (coherent)")
     ax.set_xscale("log")

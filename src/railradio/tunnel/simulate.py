@@ -32,6 +32,7 @@ inside the tunnel; epochs at ``rate_hz``.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -228,12 +229,9 @@ def wideband_delays(table: xr.Dataset, tunnel: Tunnel, cable: Cable, x_rx_m: np.
 
 
 def wideband_view(table: xr.Dataset, mm: MeasurementModel) -> MeasurementModel:
-    """The wideband receiver sees the whole received signal: every slot of the table, whose
-    cut-off leaves out less than ``rays.cutoff_power_frac`` of the power (checked in
-    :func:`railradio.tunnel.study.cutoff_check`), not only those within ``window_m``
-    (which chooses the separable receiver's slots)."""
-    import dataclasses
-
+    """The wideband receiver sees every slot of the table, not only those within
+    ``window_m`` (which chooses the separable receiver's slots); what the table's cut-off
+    leaves out is measured by :func:`railradio.tunnel.study.cutoff_check`."""
     return dataclasses.replace(mm, window_m=max(mm.window_m, float(table["offset_m"].values[-1])))
 
 

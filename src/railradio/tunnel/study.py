@@ -9,6 +9,7 @@ import xarray as xr
 
 from railradio.rng import make_rng, spawn_key
 from railradio.tunnel.channel import (SeedModel, beat_length_m, lee_window_m, moving_mean, offset_grid_m,
+                                      window_samples,
                                       received, tabulate)
 from railradio.tunnel.geometry import Cable, Tunnel
 from railradio.tunnel.rays import Families, image_coherent_gain, image_families, lift, sbr_families
@@ -192,20 +193,6 @@ def local_mean_window(cfg: dict[str, Any]) -> float:
 
 
 def choose_order(cfg: dict[str, Any]) -> tuple[int, np.ndarray, np.ndarray]:
-    """The reflection order of :func:`_choose_order` (computed once per process and config)."""
-    import json
-
-    key = json.dumps({k: cfg[k] for k in ("rays", "geometry", "cable", "wall")}, sort_keys=True)
-    if key not in _ORDER_CACHE:
-        _ORDER_CACHE[key] = _choose_order(cfg)
-    order, worst, offs = _ORDER_CACHE[key]
-    return order, worst.copy(), offs.copy()
-
-
-_ORDER_CACHE: dict[str, tuple[int, np.ndarray, np.ndarray]] = {}
-
-
-def _choose_order(cfg: dict[str, Any]) -> tuple[int, np.ndarray, np.ndarray]:
     """Reflection order by convergence of the coherent gain (the narrowband field the
     positioning measures) in the image-method tunnel: the smallest order N whose omitted
     orders N+1..``max_order`` carry a field at most ``convergence_field_db`` below the
@@ -221,8 +208,7 @@ def _choose_order(cfg: dict[str, Any]) -> tuple[int, np.ndarray, np.ndarray]:
     by_order = image_coherent_gain(fam, offs, lam, eps_from_config(cfg), by_order=True)
     cum = np.cumsum(by_order, axis=0)
     full = cum[-1]
-    n_win = 2 * int(round(0.5 * local_mean_window(cfg) / step)) + 1
-    lm = moving_mean(np.abs(full) ** 2, n_win, mirror_start=True)
+    lm = moving_mean(np.abs(full) ** 2, window_samples(local_mean_window(cfg), step), mirror_start=True)
     worst_db = 10.0 * np.log10(np.max(np.abs(cum - full[None, :]) ** 2 / lm[None, :], axis=1) + 1e-300)
     ok = worst_db <= r["convergence_field_db"]
     ok[-1] = True
@@ -231,6 +217,12 @@ def _choose_order(cfg: dict[str, Any]) -> tuple[int, np.ndarray, np.ndarray]:
         raise ValueError(f"tunnel.rays.max_order={r['max_order']}: the coherent gain does not converge to "
                          f"{r['convergence_field_db']} dB below the local mean; raise it")
     return order, worst_db, offs
+
+
+def _window_means_db(x_m: np.ndarray, p: np.ndarray, centres_m: np.ndarray, width_m: float) -> np.ndarray:
+    """Mean of p [..., x] over windows of ``width_m`` centred at ``centres_m`` [dB, [..., centre]]."""
+    return np.stack([10.0 * np.log10(p[..., np.abs(x_m - c) <= width_m / 2.0].mean(axis=-1)) for c in centres_m],
+                    axis=-1)
 
 
 def far_decay(cfg: dict[str, Any]) -> xr.Dataset:
@@ -254,7 +246,7 @@ def far_decay(cfg: dict[str, Any]) -> xr.Dataset:
     x = np.arange(lo - lb / 2.0, hi + lb / 2.0, 0.293)
     cum = np.cumsum(image_coherent_gain(image_families(tun, r["max_order"]), x, lam, eps, by_order=True), axis=0)
     p = np.abs(cum) ** 2
-    lm_db = np.stack([10.0 * np.log10(p[:, np.abs(x - c) <= lb / 2.0].mean(axis=1)) for c in centres], axis=1)
+    lm_db = _window_means_db(x, p, centres, lb)
     slope = -np.polyfit(centres / 1e3, lm_db.T, 1)[0]  # [order] dB/km
     conv = np.all(np.abs(lm_db - lm_db[-1]) <= 0.1, axis=1)
     conv_order = int(np.argmax(conv))
@@ -289,7 +281,7 @@ def far_decay_circle(cfg: dict[str, Any], sample_m: float = 1.0) -> dict[str, fl
     amp = np.concatenate([lift(fam, x[a:a + 1024], lam, eps, r["sbr_polarization"]).amplitude.sum(axis=0)
                           for a in range(0, x.size, 1024)])
     p = np.abs(amp) ** 2
-    lm_db = np.array([10.0 * np.log10(p[np.abs(x - c) <= lb / 2.0].mean()) for c in centres])
+    lm_db = _window_means_db(x, p, centres, lb)
     radius = tun.diameter_m / 2.0
     return {"slope_db_per_km": float(-np.polyfit(centres / 1e3, lm_db, 1)[0]),
             "eh11_db_per_km": circular_attenuation_db_per_m(lam, radius, "EH11", eps) * 1e3,
@@ -297,15 +289,14 @@ def far_decay_circle(cfg: dict[str, Any], sample_m: float = 1.0) -> dict[str, fl
             "n_families": len(fam)}
 
 
-def cutoff_check(cfg: dict[str, Any], step_m: float = 0.2, x_step_m: float = 2.0) -> xr.Dataset:
-    """Is the table long enough?  The image-method channel (the positioning engine's order)
+def cutoff_check(cfg: dict[str, Any], order: int, step_m: float = 0.2, x_step_m: float = 2.0) -> xr.Dataset:
+    """Is the table long enough?  The image-method channel (at the tables' ``order``)
     tabulated on a ``step_m`` grid to twice ``rays.max_offset_m``; at receivers every
     ``x_step_m`` along the tunnel: the share of the local-mean power (summed over slots)
     from the slots beyond the cut-off, and the RMS delay spread with the cut-off and with it
     doubled.  ``step_m`` may exceed the table's (the local mean and the power delay profile
     are averages over 40 wavelengths, which a 0.2 m grid samples 66 times)."""
     r = cfg["rays"]
-    order, _, _ = choose_order(cfg)
     tun = tunnel_from_config(cfg, "rect")
     cab = cable_from_config(cfg)
     cut = float(r["max_offset_m"])
@@ -363,7 +354,7 @@ def make_map(cfg: dict[str, Any], table: xr.Dataset, name: str) -> xr.Dataset:
     if table.attrs["propagation"] == "physical":  # what a receiver measures: the coherent field's power averaged
         w = table.attrs["local_mean_window_m"]
         rec.rssi_mean_dbm = 10.0 * np.log10(moving_mean(10.0 ** (rec.rssi_coherent_dbm / 10.0),
-                                                        2 * int(round(0.5 * w / step)) + 1))
+                                                        window_samples(w, step)))
         lm_name = f"RSSI, local mean (power of the coherent sum of all slots averaged over {w:.3g} m)"
     dims = ("x_m",)
     return xr.Dataset(
@@ -392,10 +383,10 @@ def make_engines(cfg: dict[str, Any]) -> xr.Dataset:
                       20 * np.log10(np.abs(rays.amplitude.sum(axis=0))), rays.amplitude.shape[0])
     labels = list(out)
     far = far_decay(cfg)
-    cut = cutoff_check(cfg)
+    cut = cutoff_check(cfg, order)
     ds = xr.Dataset(
         {"power_mean_db": (("model", "offset_m"), np.array([out[k][0] for k in labels]),
-                           {"units": "dB", "long_name": "local-mean path gain of one slot (unit EIRP)"}),
+                           {"units": "dB", "long_name": "incoherent sum of the rays' powers of one slot (unit EIRP)"}),
          "power_coherent_db": (("model", "offset_m"), np.array([out[k][1] for k in labels]),
                                {"units": "dB", "long_name": "coherent path gain of one slot (unit EIRP)"}),
          "n_rays": ("model", np.array([out[k][2] for k in labels]), {"units": "1", "long_name": "rays (families)"})},
