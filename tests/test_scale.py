@@ -273,11 +273,11 @@ def test_tunnel_realizations_identical_whatever_the_subset():
     """Monte Carlo realizations are keyed by their ID: any subset (a would-be shard) gives
     the same errors per realization as the whole set."""
     from railradio.tunnel.simulate import calibrate_separable, kf_realizations
-    from railradio.tunnel.study import (cable_from_config, make_table, measurement_from_config,
+    from railradio.tunnel.study import (cable_from_config, make_order, make_table, measurement_from_config,
                                         train_from_config, tunnel_from_config)
 
     cfg = _ci("tunnel")
-    table = make_table(cfg, "image", 7)
+    table = make_table(cfg, "image", 7, make_order(cfg))
     tun = tunnel_from_config(cfg, table.attrs["shape"])
     cab, mm, tr = cable_from_config(cfg), measurement_from_config(cfg), train_from_config(cfg, "hst")
     r0 = calibrate_separable(table, tun, cab, tr, mm, "physical", cfg["tracking"], 3)

@@ -285,12 +285,14 @@ def _tunnel(cfg: Mapping[str, Any]) -> Iterator[Problem]:
         if t["length_m"] >= g["length_m"]:
             yield f"tunnel.trains.{name}.length_m", t["length_m"], f"< tunnel.geometry.length_m = {g['length_m']}"
     yield from _at_most(cfg, "tunnel.tracking.calibration_m", "tunnel.geometry.length_m")
-    yield from _at_most(cfg, "tunnel.measurement.window_m", "tunnel.rays.max_offset_m")
+    extent = study.table_extent_m(tu)
+    if m["window_m"] > extent:
+        yield "tunnel.measurement.window_m", m["window_m"], f"<= the table's extent (tunnel.rays.max_offset_m) = {extent}"
     if r["far_decay_m"][1] <= r["far_decay_m"][0]:
         yield "tunnel.rays.far_decay_m[1]", r["far_decay_m"][1], f"> tunnel.rays.far_decay_m[0] = {r['far_decay_m'][0]}"
     for i, off in enumerate(r["engine_offsets_m"]):
-        if off > r["max_offset_m"]:
-            yield f"tunnel.rays.engine_offsets_m[{i}]", off, f"<= tunnel.rays.max_offset_m = {r['max_offset_m']}"
+        if off > extent:
+            yield f"tunnel.rays.engine_offsets_m[{i}]", off, f"<= the table's extent (tunnel.rays.max_offset_m) = {extent}"
     n_window = int(2 * m["window_m"] // g["slot_spacing_m"])
     if m["n_slots"] > n_window:
         yield "tunnel.measurement.n_slots", m["n_slots"], \

@@ -6,7 +6,7 @@ import yaml
 from railradio.config import deep_merge
 from railradio.tunnel.simulate import (MeasurementModel, calibrate_separable, delay_error_field,
                                        kf_realizations, run_train)
-from railradio.tunnel.study import (cable_from_config, make_table, measurement_from_config,
+from railradio.tunnel.study import (cable_from_config, make_order, make_table, measurement_from_config,
                                     sensitivity_cases, train_from_config, tunnel_from_config)
 
 
@@ -17,7 +17,7 @@ def ci():
     with open("config/ci.yaml") as f:
         over = yaml.safe_load(f)
     cfg = deep_merge(base, over)["tunnel"]
-    return cfg, make_table(cfg, "image", 7)
+    return cfg, make_table(cfg, "image", 7, make_order(cfg))
 
 
 def test_delay_error_fields():

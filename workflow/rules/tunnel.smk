@@ -25,8 +25,33 @@ register_figures("tunnel", TUNNEL_FIGURE_NAMES + ["tunnel_sensitivity"])
 KEY_NUMBER_FRAGMENTS.append("results/tunnel/key_numbers.json")
 
 
+rule tunnel_order:
+    """Reflection order by convergence of the coherent gain (image method), per cable
+    placement: the centreline and the side wall."""
+    output:
+        "results/tunnel/order_{placement}.nc",
+    params:
+        cfg=lambda w: channel_config(TUNNEL, "image" + (SIDE_WALL if w.placement == "side_wall" else ""),
+                                     TUNNEL_CHANNEL_KEYS),
+    wildcard_constraints:
+        placement="centreline|side_wall",
+    log:
+        "results/logs/tunnel/order_{placement}.log",
+    benchmark:
+        "results/benchmarks/tunnel/order_{placement}.tsv"
+    resources:
+        mem_mb=3000,
+        runtime=10,
+    conda:
+        "../envs/railradio.yaml"
+    script:
+        "../scripts/tunnel/order.py"
+
+
 rule tunnel_table:
-    """Ray families of one engine, tabulated by slot-receiver offset (order by convergence)."""
+    """Ray families of one engine, tabulated by slot-receiver offset at the placement's order."""
+    input:
+        lambda w: "results/tunnel/order_{}.nc".format("side_wall" if SIDE_WALL in w.name else "centreline"),
     output:
         "results/tunnel/table_{name}.nc",
     params:
@@ -71,7 +96,10 @@ rule tunnel_map:
 
 
 rule tunnel_engines:
-    """Image method vs SBR in the square tunnel (and SBR in the circle) at fixed offsets."""
+    """Image method vs SBR in the square tunnel (and SBR in the circle) at fixed offsets; the
+    far-decay checks and the image-method table's cut-off check."""
+    input:
+        "results/tunnel/table_image.nc",
     output:
         "results/tunnel/engines.nc",
     params:

@@ -20,11 +20,13 @@ spread [seed 2.5.2], per-slot powers and delays.
 
 from __future__ import annotations
 
+import cmath
 import math
 from dataclasses import dataclass
 
 import numpy as np
 import xarray as xr
+from numba import njit
 
 from railradio.constants import SPEED_OF_LIGHT_M_S
 from railradio.tunnel.geometry import Cable, Tunnel
@@ -98,14 +100,67 @@ def beat_length_m(tunnel: Tunnel, wavelength_m: float) -> float:
     return 8.0 * a * a / (3.0 * wavelength_m)
 
 
-def _interp_rows(table: np.ndarray, s: np.ndarray) -> np.ndarray:
-    """Linear interpolation of table[f, :] (uniform grid on [0, 1]) at s[f, d]."""
-    n_s = table.shape[1]
-    pos = np.clip(s, 0.0, 1.0) * (n_s - 1)
-    i0 = np.minimum(pos.astype(np.int64), n_s - 2)
-    frac = pos - i0
-    rows = np.arange(table.shape[0])[:, None]
-    return table[rows, i0] * (1.0 - frac) + table[rows, i0 + 1] * frac
+@njit(cache=True, nogil=True)
+def _ray(g_grid, f, e, dx, k):
+    """Family f's ray (2-D length e) at offset dx: (amplitude, 3-D length).  The reflection
+    product is linear in sin b between the rows of ``g_grid`` [f, s] (uniform on [0, 1]),
+    which already hold the spreading, caustic phase and scale."""
+    n_s = g_grid.shape[1]
+    d = math.sqrt(e * e + dx * dx)
+    inv = 1.0 / d
+    pos = e * inv * (n_s - 1.0)
+    i0 = min(int(pos), n_s - 2)
+    g = g_grid[f, i0] + (g_grid[f, i0 + 1] - g_grid[f, i0]) * (pos - i0)
+    ph = k * d
+    return g * inv * complex(math.cos(ph), -math.sin(ph)), d
+
+
+@njit(cache=True, nogil=True)
+def _physical_taps(ell, g_grid, offsets, k, h, c, delay_bin_s, taps, p_inc, block=512):
+    """taps[j, b] += every family's ray at offset offsets[j] in its excess-delay bin b (over
+    the line of sight); p_inc[j] += the rays' powers.  Blocks of offsets, one family at a
+    time (its row of ``g_grid`` stays in cache); every sum runs in family order."""
+    n_b = taps.shape[1]
+    for j0 in range(0, offsets.size, block):
+        j1 = min(j0 + block, offsets.size)
+        for f in range(ell.size):
+            for j in range(j0, j1):
+                dx = offsets[j]
+                a, d = _ray(g_grid, f, ell[f], dx, k)
+                b = min(np.rint((d - math.sqrt(h * h + dx * dx)) / (c * delay_bin_s)), n_b - 1.0)
+                taps[j, int(b)] += a
+                p_inc[j] += a.real * a.real + a.imag * a.imag
+
+
+@njit(cache=True, nogil=True)
+def _gain_by_order(ell, n_refl, g_grid, offsets, k, out, block=512):
+    """out[n, j] += every family's ray of reflection order n at offset offsets[j] (the
+    narrowband field, as :func:`_physical_taps` sums it)."""
+    for j0 in range(0, offsets.size, block):
+        j1 = min(j0 + block, offsets.size)
+        for f in range(ell.size):
+            for j in range(j0, j1):
+                out[n_refl[f], j] += _ray(g_grid, f, ell[f], offsets[j], k)[0]
+
+
+def _scaled_product_grid(fam: Families, eps: complex, polarization: str, n_sin_grid: int) -> np.ndarray:
+    """The reflection product on ``n_sin_grid`` elevations uniform in sin b, times each
+    family's spreading and caustic phase and λ/(4π) (unit EIRP) [f, s]."""
+    g = reflection_product(fam, np.linspace(0.0, 1.0, n_sin_grid), eps, polarization)
+    return np.ascontiguousarray(g * (fam.spread * np.exp(1j * fam.caustic_phase_rad))[:, None])
+
+
+def coherent_gain_by_order(fam: Families, offsets_m: np.ndarray, wavelength_m: float, eps: complex,
+                           polarization: str, n_sin_grid: int = 513) -> np.ndarray:
+    """Narrowband gain of one slot (unit EIRP) at ``offsets_m``, the sum of each reflection
+    order apart [order 0..max, offset] (its cumulative sum over orders: the gain truncated
+    at each order), with the reflection product interpolated as :func:`tabulate` does."""
+    g = _scaled_product_grid(fam, eps, polarization, n_sin_grid) * (wavelength_m / (4.0 * math.pi))
+    dx = np.ascontiguousarray(np.abs(np.asarray(offsets_m, dtype=float)).ravel())
+    out = np.zeros((int(fam.n_refl.max(initial=0)) + 1, dx.size), dtype=complex)
+    _gain_by_order(np.ascontiguousarray(fam.ell_m, dtype=float), np.ascontiguousarray(fam.n_refl, dtype=np.int64),
+                   g, dx, 2.0 * math.pi / wavelength_m, out)
+    return out
 
 
 def tabulate(fam: Families, tunnel: Tunnel, cable: Cable, offsets_m: np.ndarray, *,
@@ -138,10 +193,8 @@ def tabulate(fam: Families, tunnel: Tunnel, cable: Cable, offsets_m: np.ndarray,
     n_d, n_f = offsets.size, len(fam)
     h = tunnel.cross_distance_m
     if propagation == "physical":
-        sgrid = np.linspace(0.0, 1.0, n_sin_grid)
-        g_grid = reflection_product(fam, sgrid, eps, polarization)
-        g_grid = g_grid * (fam.spread * np.exp(1j * fam.caustic_phase_rad))[:, None]
         eirp = 10.0 ** (cable.slot_eirp_offset_db(tunnel.slot_spacing_m) / 20.0)
+        g_grid = _scaled_product_grid(fam, eps, polarization, n_sin_grid) * (eirp * lam / (4.0 * math.pi))
     else:
         sm = seed_model or SeedModel()
         if rng is None:
@@ -151,33 +204,32 @@ def tabulate(fam: Families, tunnel: Tunnel, cable: Cable, offsets_m: np.ndarray,
     p_mean = np.zeros(n_d)
     m1 = np.zeros(n_d)
     m2 = np.zeros(n_d)
-    ell = fam.ell_m[:, None]
-    for a in range(0, n_d, chunk):
-        dx = offsets[a:a + chunk][None, :]
-        d = np.sqrt(ell**2 + dx**2)
-        if propagation == "physical":
-            amp = _interp_rows(g_grid, ell / d) * (eirp * lam / (4.0 * math.pi)) / d
-        else:
+    if propagation == "physical":  # compiled; its moments come from the local mean below
+        _physical_taps(np.ascontiguousarray(fam.ell_m, dtype=float), g_grid, np.ascontiguousarray(offsets),
+                       k, h, SPEED_OF_LIGHT_M_S, delay_bin_s, taps, p_mean)
+    else:
+        ell = fam.ell_m[:, None]
+        for a in range(0, n_d, chunk):
+            dx = offsets[a:a + chunk][None, :]
+            d = np.sqrt(ell**2 + dx**2)
             d_direct = np.sqrt(h * h + dx**2)
             # the seed's random 0-10 dB multipath loss, drawn per reflected ray and per offset,
             # i.e. independently for every slot-receiver pair (seed 2.4.2)
             mp_db = np.where(fam.n_refl[:, None] > 0, rng.uniform(0.0, sm.multipath_max_db, d.shape), 0.0)
             loss_db = (cable.coupling_loss_at_db(d_direct) + 20.0 * np.log10(4.0 * math.pi * d / lam)
                        + sm.tunnel_att_db_per_m * d) - fixed_db[:, None] + mp_db
-            amp = 10.0 ** (-loss_db / 20.0)
-        amp = amp * np.exp(-1j * k * d)
-        tau = d / SPEED_OF_LIGHT_M_S
-        tau_los = np.sqrt(h * h + dx**2) / SPEED_OF_LIGHT_M_S
-        pw = np.abs(amp) ** 2
-        p_mean[a:a + chunk] = pw.sum(axis=0)
-        m1[a:a + chunk] = (pw * tau).sum(axis=0)
-        m2[a:a + chunk] = (pw * tau**2).sum(axis=0)
-        b = np.clip(np.rint((tau - tau_los) / delay_bin_s), 0, n_delay_bins - 1).astype(np.int64)
-        nd = dx.shape[1]
-        flat = (np.arange(nd)[None, :] * n_delay_bins + b).ravel()
-        re = np.bincount(flat, weights=amp.real.ravel(), minlength=nd * n_delay_bins)
-        im = np.bincount(flat, weights=amp.imag.ravel(), minlength=nd * n_delay_bins)
-        taps[a:a + chunk] = (re + 1j * im).reshape(nd, n_delay_bins)
+            amp = 10.0 ** (-loss_db / 20.0) * np.exp(-1j * k * d)
+            tau = d / SPEED_OF_LIGHT_M_S
+            pw = np.abs(amp) ** 2
+            p_mean[a:a + chunk] = pw.sum(axis=0)
+            m1[a:a + chunk] = (pw * tau).sum(axis=0)
+            m2[a:a + chunk] = (pw * tau**2).sum(axis=0)
+            b = np.clip(np.rint((tau - d_direct / SPEED_OF_LIGHT_M_S) / delay_bin_s), 0, n_delay_bins - 1)
+            nd = dx.shape[1]
+            flat = (np.arange(nd)[None, :] * n_delay_bins + b.astype(np.int64)).ravel()
+            re = np.bincount(flat, weights=amp.real.ravel(), minlength=nd * n_delay_bins)
+            im = np.bincount(flat, weights=amp.imag.ravel(), minlength=nd * n_delay_bins)
+            taps[a:a + chunk] = (re + 1j * im).reshape(nd, n_delay_bins)
     los = np.sqrt(h * h + offsets**2) / SPEED_OF_LIGHT_M_S
     p_incoherent = p_mean
     lm_desc = "local-mean power gain (incoherent sum over rays, the seed's model) "
@@ -270,6 +322,8 @@ def received(table: xr.Dataset, tunnel: Tunnel, cable: Cable, x_rx_m: np.ndarray
     amp_c = 10.0 ** ((pc_dbm - 30.0) / 20.0) * np.exp(-2j * math.pi * cable.frequency_hz * tc)  # sqrt(W)
     taps = table["taps"].values
     h_nb = taps.sum(axis=1)
+    tap_w = np.abs(taps) ** 2  # [offset, tap]
+    tap_w_max = tap_w.max(axis=1)
     pm = table["power_mean"].values
     mu = table["delay_mean_s"].values
     rms = table["delay_rms_s"].values
@@ -289,9 +343,12 @@ def received(table: xr.Dataset, tunnel: Tunnel, cable: Cable, x_rx_m: np.ndarray
         tau = tc[sl] + mu[idx]
         m1 = (pw * tau).sum(axis=1)
         m2 = (pw * (rms[idx] ** 2 + tau**2)).sum(axis=1)
-        strong = (np.abs(ac[..., None] * taps[idx]) ** 2 > thr_w) & (w[..., None] > 0)
+        # strong taps: |a_c|^2 |tap|^2 > thr, looked up only for slots whose strongest tap can pass
+        pc = np.abs(ac) ** 2
+        r, c = np.nonzero((pc * tap_w_max[idx] > thr_w) & (w > 0))
+        n_strong = (tap_w[idx[r, c]] * pc[r, c][:, None] > thr_w).sum(axis=1)
         out[0][a:a + chunk] = 10.0 * np.log10(np.abs(field) ** 2) + 30.0
         out[1][a:a + chunk] = 10.0 * np.log10(ptot) + 30.0
         out[2][a:a + chunk] = np.sqrt(np.maximum(m2 / ptot - (m1 / ptot) ** 2, 0.0))
-        out[3][a:a + chunk] = strong.sum(axis=(1, 2))
+        out[3][a:a + chunk] = np.bincount(r, weights=n_strong, minlength=x.size)
     return Received(*out)

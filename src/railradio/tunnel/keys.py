@@ -84,10 +84,14 @@ def _specs() -> dict[str, KeySpec]:
         digits=2)
     add("tunnel.rays.far_converged_order", "1", "lowest order whose far local means lie within 0.1 dB of the "
         "max_order ones (the slope key's order is converged when this is below rays.max_order)")
+    add("tunnel.rays.table_extent_m", "m", "largest slot-receiver offset of the image-method table (rays.max_offset_m; "
+        "null: the whole tunnel)", digits=0)
     add("tunnel.rays.power_beyond_cutoff_frac.p95", "1", "95th pct along the tunnel of the local-mean power share "
-        "from slots beyond rays.max_offset_m (the criterion: at most rays.cutoff_power_frac)", digits=2)
+        "from slots beyond the table's extent (the criterion: at most rays.cutoff_power_frac)", digits=2)
     add("tunnel.delay_spread_ns.cutoff_sensitivity", "1", "relative change of the median RMS delay spread when "
-        "rays.max_offset_m doubles (image method, receivers every 2 m)", digits=2)
+        "the table's extent doubles (image method, receivers every 2 m; test: at most 0.05)", digits=2)
+    add("tunnel.delay_spread_ns.half_extent_change", "1", "relative change of the median RMS delay spread when "
+        "the table's extent halves (how much the far slots count)", digits=2)
     add("tunnel.wideband.delay_error_ns.robust_sigma", "ns", "the wideband receiver's own delay error (peak "
         "delay minus the calibrated model at the true position): 1.4826 x median absolute deviation, all trains "
         "and receivers", digits=1)
@@ -256,8 +260,10 @@ def key_numbers(runs: dict[tuple[str, str], xr.Dataset], maps: dict[str, xr.Data
     put("tunnel.rays.circle_eh11_db_per_km", engines.attrs["far_circle_eh11_db_per_km"])
     put("tunnel.rays.circle_te01_db_per_km", engines.attrs["far_circle_te01_db_per_km"])
     put("tunnel.rays.power_beyond_cutoff_frac.p95", np.percentile(engines["power_beyond_cutoff_frac"].values, 95))
-    put("tunnel.delay_spread_ns.cutoff_sensitivity", float(np.median(engines["delay_rms_doubled_s"].values)
-                                                           / np.median(engines["delay_rms_cutoff_s"].values) - 1.0))
+    ds_med = {k: float(np.median(engines[f"delay_rms_{k}_s"].values)) for k in ("halved", "cutoff", "doubled")}
+    put("tunnel.rays.table_extent_m", engines.attrs["cutoff_m"])
+    put("tunnel.delay_spread_ns.cutoff_sensitivity", ds_med["doubled"] / ds_med["cutoff"] - 1.0)
+    put("tunnel.delay_spread_ns.half_extent_change", ds_med["halved"] / ds_med["cutoff"] - 1.0)
     if off[-1] >= 1000.0:
         i = int(np.argmin(np.abs(off - 1000.0)))
         put("tunnel.rays.incoherent_excess_db.1000",

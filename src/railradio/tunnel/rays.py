@@ -377,6 +377,12 @@ def reflection_product(fam: Families, sin_b: np.ndarray, eps: complex | None, po
     if s.ndim != 1 and s2.shape[0] != n_f:
         raise ValueError(f"sin_b must be [s] or [{n_f}, s], got shape {s.shape}")
     n_s = s2.shape[1]
+    if polarization == "paraxial" and fam.engine == "image":
+        # in the rectangle all floor/ceiling (TM) reflections of a family share one incidence
+        # cosine, and all side-wall (TE) ones another: the product is two powers
+        n_tm, c_tm, n_te, c_te = image_power_form(fam)
+        return (fresnel_tm(np.clip(s2 * c_tm[:, None], 0.0, 1.0), eps) ** n_tm[:, None]
+                * fresnel_te(np.clip(s2 * c_te[:, None], 0.0, 1.0), eps) ** n_te[:, None])
     if polarization == "paraxial":
         g = np.ones((n_f, n_s), dtype=complex)
         for k in range(r_max):
@@ -491,6 +497,18 @@ def _image_sum(ell, n_tm, c_tm, n_te, c_te, dx, k, eps, out):
             out[n_tm[f] + n_te[f], j] += g * cmath.exp(-1j * k * d) / d
 
 
+def image_power_form(fam: Families) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """An image family's reflections in the rectangle, counted by wall pair: (number of
+    floor/ceiling reflections, their 2-D incidence cosine |u_y|, number of side-wall
+    reflections, |u_z|) per family (the 2-D direction only changes sign at a reflection)."""
+    valid = np.arange(fam.normal.shape[1])[None, :] < fam.n_refl[:, None]
+    on_floor = valid & (np.abs(fam.normal[..., 0]) >= np.abs(fam.normal[..., 1]))
+    n_tm = on_floor.sum(axis=1).astype(np.int64)
+    n_te = (fam.n_refl - n_tm).astype(np.int64)
+    return (n_tm, np.abs(fam.final_direction[:, 0]).astype(float), n_te,
+            np.abs(fam.final_direction[:, 1]).astype(float))
+
+
 def image_coherent_gain(fam: Families, dx_m, wavelength_m: float, eps: complex,
                         by_order: bool = False) -> np.ndarray:
     """Coherent (narrowband) gain of one slot in the rectangular tunnel, the sum of every
@@ -505,12 +523,7 @@ def image_coherent_gain(fam: Families, dx_m, wavelength_m: float, eps: complex,
     if eps is None:
         raise ValueError("eps is required")
     dx = np.ascontiguousarray(np.abs(np.asarray(dx_m, dtype=float)).ravel())
-    valid = np.arange(fam.normal.shape[1])[None, :] < fam.n_refl[:, None]
-    on_floor = valid & (np.abs(fam.normal[..., 0]) >= np.abs(fam.normal[..., 1]))
-    n_tm = on_floor.sum(axis=1).astype(np.int64)
-    n_te = (fam.n_refl - n_tm).astype(np.int64)
-    c_tm = np.abs(fam.final_direction[:, 0]).astype(float)
-    c_te = np.abs(fam.final_direction[:, 1]).astype(float)
+    n_tm, c_tm, n_te, c_te = image_power_form(fam)
     out = np.zeros((int(fam.n_refl.max(initial=0)) + 1, dx.size), dtype=complex)
     _image_sum(np.ascontiguousarray(fam.ell_m, dtype=float), n_tm, c_tm, n_te, c_te, dx,
                2.0 * math.pi / wavelength_m, complex(eps), out)

@@ -181,16 +181,13 @@ def separable_fix(meas: dict, table: xr.Dataset, tunnel: Tunnel, mm: Measurement
 
 def tone_response(table: xr.Dataset, mm: MeasurementModel) -> tuple[np.ndarray, np.ndarray]:
     """Baseband tone frequencies [tone] and every offset's frequency response [offset, tone]
-    (taps at line-of-sight + excess delay), computed once per table."""
+    (taps at line-of-sight + excess delay: the line-of-sight phase times the taps' transform
+    over the excess-delay grid), computed once per table."""
     n_t = mm.n_tones
     f = (np.arange(n_t) - n_t // 2) * (mm.bandwidth_hz / n_t)
-    tau = table["los_delay_s"].values[:, None] + table["excess_delay_s"].values[None, :]
-    taps = table["taps"].values
-    out = np.empty((tau.shape[0], n_t), dtype=complex)
-    for a in range(0, tau.shape[0], 2048):
-        out[a:a + 2048] = np.einsum("ob,obf->of", taps[a:a + 2048],
-                                    np.exp(-2j * math.pi * tau[a:a + 2048, :, None] * f[None, None, :]))
-    return f, out
+    excess = np.exp(-2j * math.pi * table["excess_delay_s"].values[:, None] * f[None, :])  # [bin, tone]
+    los = np.exp(-2j * math.pi * table["los_delay_s"].values[:, None] * f[None, :])  # [offset, tone]
+    return f, los * (table["taps"].values @ excess)
 
 
 def wideband_delays(table: xr.Dataset, tunnel: Tunnel, cable: Cable, x_rx_m: np.ndarray,
@@ -204,17 +201,20 @@ def wideband_delays(table: xr.Dataset, tunnel: Tunnel, cable: Cable, x_rx_m: np.
     xs, pc_dbm, tc = slot_powers(tunnel, cable)
     amp_c = 10.0 ** ((pc_dbm - 30.0) / 20.0) * np.exp(-2j * math.pi * cable.frequency_hz * tc)
     f, resp = tones if tones is not None else tone_response(table, mm)
+    cab_tones = amp_c[:, None] * np.exp(-2j * math.pi * tc[:, None] * f[None, :])  # [slot, tone]
     df = f[1] - f[0]
     noise_w = 10.0 ** ((BOLTZMANN_DBM_HZ + mm.noise_figure_db - 30.0) / 10.0) * mm.bandwidth_hz
     n_fft = f.size * oversample
     x_all = np.asarray(x_rx_m, dtype=float)
     out = np.empty(x_all.size)
+    # receivers per pass: the [receiver, slot, tone] arrays stay near chunk x 20 x 64 elements
+    chunk = max(16, chunk * 1280 // (f.size * (2 * int(mm.window_m // tunnel.slot_spacing_m) + 2)))
     for a in range(0, x_all.size, chunk):
         x = x_all[a:a + chunk]
         sl, ok = window_slots(tunnel, x, mm.window_m)
         idx, inside = offset_index(table, x[:, None] - xs[sl])
         w = (ok & inside)[..., None]
-        cab = amp_c[sl][..., None] * np.exp(-2j * math.pi * tc[sl][..., None] * f[None, None, :])
+        cab = cab_tones[sl]
         hf = np.sum(cab * resp[idx] * w, axis=1)
         if thermal_noise:
             hf += math.sqrt(noise_w / 2.0) * (rng.standard_normal(hf.shape) + 1j * rng.standard_normal(hf.shape))
@@ -229,9 +229,9 @@ def wideband_delays(table: xr.Dataset, tunnel: Tunnel, cable: Cable, x_rx_m: np.
 
 
 def wideband_view(table: xr.Dataset, mm: MeasurementModel) -> MeasurementModel:
-    """The wideband receiver sees every slot of the table, not only those within
-    ``window_m`` (which chooses the separable receiver's slots); what the table's cut-off
-    leaves out is measured by :func:`railradio.tunnel.study.cutoff_check`."""
+    """The wideband receiver sees every slot of the table (by default the whole tunnel), not
+    only those within ``window_m`` (which chooses the separable receiver's slots); a shorter
+    table's cut-off is measured by :func:`railradio.tunnel.study.cutoff_check`."""
     return dataclasses.replace(mm, window_m=max(mm.window_m, float(table["offset_m"].values[-1])))
 
 

@@ -8,11 +8,10 @@ import numpy as np
 import xarray as xr
 
 from railradio.rng import make_rng, spawn_key
-from railradio.tunnel.channel import (SeedModel, beat_length_m, lee_window_m, moving_mean, offset_grid_m,
-                                      window_samples,
-                                      received, tabulate)
+from railradio.tunnel.channel import (SeedModel, beat_length_m, coherent_gain_by_order, lee_window_m, moving_mean,
+                                      offset_grid_m, received, tabulate, window_samples)
 from railradio.tunnel.geometry import Cable, Tunnel
-from railradio.tunnel.rays import Families, image_coherent_gain, image_families, lift, sbr_families
+from railradio.tunnel.rays import Families, image_families, lift, sbr_families
 from railradio.tunnel.simulate import MeasurementModel, Train
 
 TABLES = {"image": ("rect", "image", "physical"), "sbr": ("circle", "sbr", "physical"),
@@ -157,12 +156,13 @@ def make_peak_bias(cfg: dict[str, Any], table: xr.Dataset, step_m: float = 9.7) 
     los = tabulate(image_families(tun, 0), tun, cab, table["offset_m"].values, eps=None,
                    polarization="paraxial", delay_bin_s=r["delay_bin_ns"] * 1e-9, n_delay_bins=r["n_delay_bins"],
                    local_mean_window_m=local_mean_window(cfg))
-    margin = max(mm.window_m, r["max_offset_m"])
+    extent = float(table["offset_m"].values[-1])
+    margin = max(mm.window_m, extent)
     if tun.length_m <= 2 * margin:
         margin = mm.window_m
     x = np.arange(margin, tun.length_m - margin + 1e-9, step_m)
     cases = {"single_slot": (los, 0.5 * tun.slot_spacing_m - 1e-6), "los_slots": (los, mm.window_m),
-             "full": (table, mm.window_m), "full_all_slots": (table, r["max_offset_m"])}
+             "full": (table, mm.window_m), "full_all_slots": (table, extent)}
     model = cable_model_delay_s(x, tun, cab)
     tones = {id(t): tone_response(t, mm) for t in (los, table)}
     bias = np.stack([wideband_delays(t, tun, cab, x, None, dataclasses.replace(mm, window_m=w), tones=tones[id(t)],
@@ -192,20 +192,29 @@ def local_mean_window(cfg: dict[str, Any]) -> float:
     return lee_window_m(cable_from_config(cfg).wavelength_m, cfg["rays"]["local_mean_wavelengths"])
 
 
+def table_extent_m(cfg: dict[str, Any], propagation: str = "physical") -> float:
+    """The largest slot-receiver offset the table holds [m]: ``rays.max_offset_m``, or with
+    it null the whole tunnel (every slot a receiver in the tunnel can see); the seed's model
+    ``seed_model.max_offset_m`` (its own attenuation leaves nothing beyond it)."""
+    length = float(cfg["geometry"]["length_m"])
+    m = cfg["seed_model"]["max_offset_m"] if propagation == "seed" else cfg["rays"]["max_offset_m"]
+    return length if m is None else min(float(m), length)
+
+
 def choose_order(cfg: dict[str, Any]) -> tuple[int, np.ndarray, np.ndarray]:
     """Reflection order by convergence of the coherent gain (the narrowband field the
     positioning measures) in the image-method tunnel: the smallest order N whose omitted
     orders N+1..``max_order`` carry a field at most ``convergence_field_db`` below the
-    local mean at every offset from 0 to ``max_offset_m`` on a ``convergence_step_m`` grid.
-    Returns (order, the worst omitted field over offsets [dB re local mean] per order, the
-    offsets)."""
+    local mean at every offset from 0 to the table's extent (:func:`table_extent_m`) on a
+    ``convergence_step_m`` grid.  Returns (order, the worst omitted field over offsets
+    [dB re local mean] per order, the offsets)."""
     r = cfg["rays"]
     tun = tunnel_from_config(cfg, "rect")
     lam = cable_from_config(cfg).wavelength_m
     fam = image_families(tun, r["max_order"])
     step = r["convergence_step_m"]
-    offs = np.arange(int(np.floor(r["max_offset_m"] / step)) + 1) * step
-    by_order = image_coherent_gain(fam, offs, lam, eps_from_config(cfg), by_order=True)
+    offs = np.arange(int(np.floor(table_extent_m(cfg) / step + 1e-9)) + 1) * step
+    by_order = coherent_gain_by_order(fam, offs, lam, eps_from_config(cfg), "paraxial")
     cum = np.cumsum(by_order, axis=0)
     full = cum[-1]
     lm = moving_mean(np.abs(full) ** 2, window_samples(local_mean_window(cfg), step), mirror_start=True)
@@ -244,7 +253,7 @@ def far_decay(cfg: dict[str, Any]) -> xr.Dataset:
     centres = np.arange(lo, hi + 1e-9, lb / 4.0)
     # samples 0.293 m apart (not commensurate with lambda/2) over every window
     x = np.arange(lo - lb / 2.0, hi + lb / 2.0, 0.293)
-    cum = np.cumsum(image_coherent_gain(image_families(tun, r["max_order"]), x, lam, eps, by_order=True), axis=0)
+    cum = np.cumsum(coherent_gain_by_order(image_families(tun, r["max_order"]), x, lam, eps, "paraxial"), axis=0)
     p = np.abs(cum) ** 2
     lm_db = _window_means_db(x, p, centres, lb)
     slope = -np.polyfit(centres / 1e3, lm_db.T, 1)[0]  # [order] dB/km
@@ -264,7 +273,8 @@ def far_decay_circle(cfg: dict[str, Any], sample_m: float = 1.0) -> dict[str, fl
     """The circular engine (SBR, the configured polarization rule) checked far from the slot
     against an independent reference: one slot's local mean averaged over windows of the
     square's beat length (as :func:`far_decay`; samples ``sample_m`` apart), its slope over
-    ``rays.far_decay_m`` at ``max_order``, against Marcatili & Schmeltzer's attenuation of
+    ``rays.far_decay_m`` at ``max_order`` (the reflection product interpolated in sin b as
+    in the tables), against Marcatili & Schmeltzer's attenuation of
     EH11 and TE01 in a lossy circular guide of the tunnel's radius (TE01, the least
     attenuated mode, bounds every mode's decay from below)."""
     from railradio.tunnel.materials import circular_attenuation_db_per_m
@@ -278,9 +288,7 @@ def far_decay_circle(cfg: dict[str, Any], sample_m: float = 1.0) -> dict[str, fl
     centres = np.arange(lo, hi + 1e-9, lb / 4.0)
     x = np.arange(lo - lb / 2.0, hi + lb / 2.0, sample_m)
     fam = families(cfg, "circle", "sbr", r["max_order"])
-    amp = np.concatenate([lift(fam, x[a:a + 1024], lam, eps, r["sbr_polarization"]).amplitude.sum(axis=0)
-                          for a in range(0, x.size, 1024)])
-    p = np.abs(amp) ** 2
+    p = np.abs(coherent_gain_by_order(fam, x, lam, eps, r["sbr_polarization"]).sum(axis=0)) ** 2
     lm_db = _window_means_db(x, p, centres, lb)
     radius = tun.diameter_m / 2.0
     return {"slope_db_per_km": float(-np.polyfit(centres / 1e3, lm_db, 1)[0]),
@@ -289,44 +297,64 @@ def far_decay_circle(cfg: dict[str, Any], sample_m: float = 1.0) -> dict[str, fl
             "n_families": len(fam)}
 
 
-def cutoff_check(cfg: dict[str, Any], order: int, step_m: float = 0.2, x_step_m: float = 2.0) -> xr.Dataset:
-    """Is the table long enough?  The image-method channel (at the tables' ``order``)
-    tabulated on a ``step_m`` grid to twice ``rays.max_offset_m``; at receivers every
-    ``x_step_m`` along the tunnel: the share of the local-mean power (summed over slots)
-    from the slots beyond the cut-off, and the RMS delay spread with the cut-off and with it
-    doubled.  ``step_m`` may exceed the table's (the local mean and the power delay profile
-    are averages over 40 wavelengths, which a 0.2 m grid samples 66 times)."""
+def cutoff_check(cfg: dict[str, Any], table: xr.Dataset, x_step_m: float = 2.0, step_m: float = 0.2) -> xr.Dataset:
+    """Is the table long enough?  At receivers every ``x_step_m`` along the tunnel: the
+    share of the local-mean power (summed over slots) from the slots beyond the table's
+    extent c, and the RMS delay spread of the slots within c, within 2c and within c/2.
+    A table covering the whole tunnel leaves no slot beyond it (share 0, the doubled
+    cut-off adds nothing); a shorter one is compared with the channel tabulated to 2c (at
+    the table's order, on a ``step_m`` grid: the local mean and the power delay profile are
+    averages over 40 wavelengths, which a 0.2 m grid samples 66 times)."""
     r = cfg["rays"]
-    tun = tunnel_from_config(cfg, "rect")
+    tun = tunnel_from_config(cfg, table.attrs["shape"])
     cab = cable_from_config(cfg)
-    cut = float(r["max_offset_m"])
-    long = tabulate(image_families(tun, order), tun, cab, offset_grid_m(step_m, 2.0 * cut, tun.slot_spacing_m),
-                    eps=eps_from_config(cfg), polarization="paraxial", delay_bin_s=r["delay_bin_ns"] * 1e-9,
-                    n_delay_bins=r["n_delay_bins"], local_mean_window_m=local_mean_window(cfg))
-    short = long.sel(offset_m=long["offset_m"].values[long["offset_m"].values <= cut + 1e-9])
+    off = table["offset_m"].values
+    cut = float(off[-1])
+    if cut >= tun.length_m - 1e-9:
+        long = table
+    else:
+        long = tabulate(image_families(tun, table.attrs["reflection_order"]), tun, cab,
+                        offset_grid_m(step_m, min(2.0 * cut, tun.length_m), tun.slot_spacing_m),
+                        eps=eps_from_config(cfg), polarization="paraxial", delay_bin_s=r["delay_bin_ns"] * 1e-9,
+                        n_delay_bins=r["n_delay_bins"], local_mean_window_m=local_mean_window(cfg))
+    half = table.isel(offset_m=slice(0, int(np.searchsorted(off, cut / 2.0 + 1e-9))))
     x = np.arange(0.0, tun.length_m + 1e-9, x_step_m)
-    a, b = received(short, tun, cab, x), received(long, tun, cab, x)
+    a, b, c = received(table, tun, cab, x), received(long, tun, cab, x), received(half, tun, cab, x)
     share = 1.0 - 10.0 ** ((a.rssi_mean_dbm - b.rssi_mean_dbm) / 10.0)
     dims = ("x_m",)
-    ds = xr.Dataset(
-        {"power_beyond_cutoff_frac": (dims, share, {"units": "1", "long_name": "share of the local-mean power (sum over slots) from slots beyond rays.max_offset_m"}),
-         "delay_rms_cutoff_s": (dims, a.delay_rms_s, {"units": "s", "long_name": "RMS delay spread, slots to rays.max_offset_m"}),
-         "delay_rms_doubled_s": (dims, b.delay_rms_s, {"units": "s", "long_name": "RMS delay spread, slots to twice rays.max_offset_m"})},
+    return xr.Dataset(
+        {"power_beyond_cutoff_frac": (dims, share, {"units": "1", "long_name": "share of the local-mean power (sum over slots) from slots beyond the table's extent"}),
+         "delay_rms_cutoff_s": (dims, a.delay_rms_s, {"units": "s", "long_name": "RMS delay spread, slots within the table's extent"}),
+         "delay_rms_doubled_s": (dims, b.delay_rms_s, {"units": "s", "long_name": "RMS delay spread, slots within twice the table's extent"}),
+         "delay_rms_halved_s": (dims, c.delay_rms_s, {"units": "s", "long_name": "RMS delay spread, slots within half the table's extent"})},
         coords={"x_m": (dims, x, {"units": "m", "long_name": "receiver position along the tunnel"})},
-        attrs={"cutoff_m": cut, "cutoff_power_frac": float(r["cutoff_power_frac"]), "order": order})
-    return ds
+        attrs={"cutoff_m": cut, "cutoff_power_frac": float(r["cutoff_power_frac"])})
 
 
-def make_table(cfg: dict[str, Any], name: str, seed: int) -> xr.Dataset:
-    """The tabulated slot-to-receiver channel ``name`` (see :data:`TABLES`)."""
-    shape, engine, prop = TABLES[name]
+def make_order(cfg: dict[str, Any]) -> xr.Dataset:
+    """The reflection order of :func:`choose_order` with the worst omitted field per order
+    (one file per cable placement, read by every table of that placement)."""
     order, worst_db, offs = choose_order(cfg)
+    return xr.Dataset(
+        {"omitted_field_db": ("order", worst_db, {"units": "dB", "long_name": "image method: worst field of the "
+                              "omitted higher orders over the table's offsets, relative to the local mean"})},
+        coords={"order": ("order", np.arange(worst_db.size), {"units": "1", "long_name": "highest reflection order summed"})},
+        attrs={"reflection_order": order, "max_offset_m": float(offs[-1]),
+               "convergence_field_db": float(cfg["rays"]["convergence_field_db"])})
+
+
+def make_table(cfg: dict[str, Any], name: str, seed: int, order: xr.Dataset) -> xr.Dataset:
+    """The tabulated slot-to-receiver channel ``name`` (see :data:`TABLES`) at the
+    reflection order of ``order`` (:func:`make_order` for the table's cable placement)."""
+    shape, engine, prop = TABLES[name]
+    worst_db = order["omitted_field_db"].values
+    order = int(order.attrs["reflection_order"])
     fam = families(cfg, shape, engine, order)
     tun = tunnel_from_config(cfg, shape)
     cab = cable_from_config(cfg)
     r = cfg["rays"]
     sm = cfg["seed_model"]
-    grid = offset_grid_m(r["offset_step_m"], r["max_offset_m"], tun.slot_spacing_m)
+    grid = offset_grid_m(r["offset_step_m"], table_extent_m(cfg, prop), tun.slot_spacing_m)
     pol = "paraxial" if engine == "image" else cfg["rays"]["sbr_polarization"]
     rng = make_rng(seed, spawn_key("tunnel", 10)) if prop == "seed" else None
     ds = tabulate(fam, tun, cab, grid, eps=eps_from_config(cfg), polarization=pol, propagation=prop,
@@ -336,7 +364,7 @@ def make_table(cfg: dict[str, Any], name: str, seed: int) -> xr.Dataset:
                   local_mean_window_m=local_mean_window(cfg) if prop == "physical" else None)
     ds = ds.assign_coords(order=("order", np.arange(worst_db.size), {"units": "1", "long_name": "reflection order"}))
     ds["omitted_field_db"] = ("order", worst_db, {"units": "dB", "long_name": "image method: worst field of the "
-                              "omitted higher orders over offsets 0..max_offset_m, relative to the local mean"})
+                              "omitted higher orders over the table's offsets, relative to the local mean"})
     ds.attrs.update({"reflection_order": order, "slot_eirp_offset_db": cab.slot_eirp_offset_db(tun.slot_spacing_m),
                      **{f"sbr_{k}": v for k, v in fam.stats.items()}})
     return ds
@@ -366,10 +394,12 @@ def make_map(cfg: dict[str, Any], table: xr.Dataset, name: str) -> xr.Dataset:
         attrs={"table": name, "shape": shape, "cross_distance_m": tun.cross_distance_m})
 
 
-def make_engines(cfg: dict[str, Any]) -> xr.Dataset:
+def make_engines(cfg: dict[str, Any], table: xr.Dataset) -> xr.Dataset:
     """Image method vs SBR in the rectangular tunnel (and SBR in the circle): per-slot
-    local-mean and coherent gain at a set of offsets, same order, same Fresnel rule."""
-    order, _, _ = choose_order(cfg)
+    local-mean and coherent gain at a set of offsets, same order, same Fresnel rule; the
+    far decay checks (:func:`far_decay`, :func:`far_decay_circle`) and the cut-off check
+    of the image-method ``table`` (:func:`cutoff_check`)."""
+    order = int(table.attrs["reflection_order"])
     cab = cable_from_config(cfg)
     eps = eps_from_config(cfg)
     offs = np.array(cfg["rays"]["engine_offsets_m"], dtype=float)
@@ -383,7 +413,7 @@ def make_engines(cfg: dict[str, Any]) -> xr.Dataset:
                       20 * np.log10(np.abs(rays.amplitude.sum(axis=0))), rays.amplitude.shape[0])
     labels = list(out)
     far = far_decay(cfg)
-    cut = cutoff_check(cfg, order)
+    cut = cutoff_check(cfg, table)
     ds = xr.Dataset(
         {"power_mean_db": (("model", "offset_m"), np.array([out[k][0] for k in labels]),
                            {"units": "dB", "long_name": "incoherent sum of the rays' powers of one slot (unit EIRP)"}),
