@@ -1,4 +1,4 @@
-"""Fusion sensitivity (issue 7): the arc geometry and its estimators against independent
+"""Fusion sensitivity (docs/model/fusion.md §5): the arc geometry and its estimators against independent
 geometry and root finding, the correlated-noise generator, the CRLBs against numerical
 Fisher information, whitening at ρ = 0, Monte Carlo against the bounds, bad input."""
 import math

@@ -7,7 +7,7 @@ from railradio.tunnel.materials import CONCRETE_900MHZ, fresnel_te, fresnel_tm, 
 
 def test_normal_incidence_8db_for_concrete():
     # hand value: sqrt(5.31 - 0.60j) = 2.3057 - 0.1301j; |(1 - n)/(1 + n)|^2 = 1.7218/10.9446
-    # = 0.15732 -> 8.03 dB (STUDY.md §4: "8 dB only at normal incidence")
+    # = 0.15732 -> 8.03 dB (the source's 8 dB holds only at normal incidence)
     assert CONCRETE_900MHZ == complex(5.31, -0.60)
     for fn in (fresnel_te, fresnel_tm):
         loss = float(reflection_loss_db(fn(1.0)))

@@ -1,4 +1,4 @@
-# Study `fusion`: TDOA/AOA fusion with the track constraint (seed 002, STUDY.md §3).
+# Study `fusion`: TDOA/AOA fusion with the track constraint (seed 002; docs/model/fusion.md).
 # Chain: one Monte Carlo job per sweep point -> one dataset per sweep -> figures;
 # reference point + sweeps -> key numbers.
 
@@ -11,7 +11,7 @@ FUSION_FIGURE_SWEEP = {
 }
 from railradio.fusion.montecarlo import sweep_points
 
-# the sensitivity modules (issue 7) are left out: they do not change the main sweeps
+# the sensitivity modules are left out: they do not change the main sweeps
 FUSION_SENS_MODULES = ("arc.py", "correlated.py", "sensitivity.py", "sensitivity_keys.py",
                        "sensitivity_figures.py")
 
@@ -106,7 +106,7 @@ rule fusion_key_numbers:
         "../scripts/fusion/key_numbers.py"
 
 
-# --- Sensitivity beyond the source (issue 7): curved track, correlated TDOA errors --------
+# --- Sensitivity beyond the source: curved track, correlated TDOA errors --------
 from railradio.fusion.sensitivity import sens_points
 
 FUSION_SENS_POINTS = {kind: sens_points(FUSION, kind) for kind in ("curve", "rho")}  # validates radii

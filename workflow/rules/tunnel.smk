@@ -1,4 +1,4 @@
-# Study `tunnel`: long-train positioning with a leaky cable in a tunnel (seed 003, STUDY.md §4).
+# Study `tunnel`: long-train positioning with a leaky cable in a tunnel (seed 003; docs/model/tunnel.md).
 # Chain: ray families -> tabulated slot-to-receiver channel per engine (NetCDF) ->
 # RSSI map, delay spread, coverage (NetCDF) -> one run per train type and channel /
 # measurement variant (snapshot fixes, KF, PF; NetCDF) -> figures + key numbers.

@@ -1,4 +1,4 @@
-"""A curved track: the fusion study's cell layout on a circular arc (issue 7, sensitivity).
+"""A curved track: the fusion study's cell layout on a circular arc (sensitivity, docs/model/fusion.md §5).
 
 The source (seed 002) uses the straight line y = 0 as the constraint.  Here the track is a
 circular arc of radius R, tangent to y = 0 at the foot of the serving base station and

@@ -1,4 +1,4 @@
-"""Correlated TDOA errors: two range differences that share the serving BS (issue 7).
+"""Correlated TDOA errors: two range differences that share the serving BS (docs/model/fusion.md §5).
 
 The source (seed 002) has one TDOA, t_{2,1}, and one AOA, with independent errors.  A
 receiver usually has more than one neighbour: here BS0 at (-D, d) joins BS1 (0, d) and

@@ -1,4 +1,4 @@
-"""Key numbers of the fusion study (STUDY.md §3; the seed states none numerically)."""
+"""Key numbers of the fusion study (docs/model/fusion.md; the seed states none numerically)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Monte Carlo of the fusion sensitivity sweeps the source did not run (issue 7).
+"""Monte Carlo of the fusion sensitivity sweeps the source did not run (docs/model/fusion.md §5).
 
 Two sweeps, each at the study's reference point (d, σ_TDOA, σ_AOA of ``fusion.reference``)
 and with the main study's Monte Carlo engine (:mod:`railradio.fusion.montecarlo`): the

@@ -1,4 +1,4 @@
-"""Key numbers ``sens.fusion.*`` of the fusion sensitivity sweeps (issue 7; the source has none).
+"""Key numbers ``sens.fusion.*`` of the fusion sensitivity sweeps (docs/model/fusion.md §5; the source has none).
 
 Names (R in metres as an integer, ``inf`` for the straight base; ρ as written by ``{:g}``):
 

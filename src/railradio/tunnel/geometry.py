@@ -1,4 +1,4 @@
-"""Tunnel and leaky-cable geometry (seed 003 §1, §2.1-2.2; STUDY.md §4).
+"""Tunnel and leaky-cable geometry (seed 003 §1, §2.1-2.2; docs/model/tunnel.md §1).
 
 Coordinates [seed 2.1]: x along the tunnel from the portal, y vertical from the tunnel
 floor (the lowest point of the lining), z transverse from the centreline.  The circular
@@ -6,7 +6,7 @@ cross-section of diameter D has its centre at (y, z) = (D/2, 0); the rectangle o
 area (the image method's tunnel) is a square of side D sqrt(pi)/2 with its floor at y = 0.
 
 The leaky coaxial cable (LCX) radiates through slots every ``slot_spacing_m`` at
-(x_i, 0.1 H, z_slot) [seed 2.2.1].  Slot-chain model (STUDY.md §4): every slot is an
+(x_i, 0.1 H, z_slot) [seed 2.2.1].  Slot-chain model (docs/model/tunnel.md §1): every slot is an
 isotropic radiator whose EIRP is set so that the along-cable mean of the incoherent
 free-space sum of all slots, at distance d_ref from the cable, equals the cable's
 specified coupling loss L_c(d_ref) = 85 + 10 log10(d_ref / 1 m) dB [seed 2.2.2]:

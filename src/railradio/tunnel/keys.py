@@ -1,4 +1,4 @@
-"""Key numbers of the tunnel study (STUDY.md §4; source values from seed 003 §8)."""
+"""Key numbers of the tunnel study (docs/model/tunnel.md; source values from seed 003 §8)."""
 
 from __future__ import annotations
 

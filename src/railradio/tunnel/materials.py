@@ -2,7 +2,7 @@
 
 Concrete at 900 MHz: ITU-R P.2040-1 Table 3 gives eta' = 5.31 and
 sigma = 0.0326 f^0.8095 S/m (f in GHz), i.e. epsilon = eta' - j 17.98 sigma / f
-= 5.31 - j0.60 at 0.9 GHz (eq. 9b), the value of STUDY.md §4; the tests pin its
+= 5.31 - j0.60 at 0.9 GHz (eq. 9b), the project's value (docs/model/tunnel.md §2.1); the tests pin its
 8.0 dB loss at normal incidence.
 
 Conventions (time factor exp(+j omega t), so a lossy medium has Im(epsilon) < 0):
@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 CONCRETE_900MHZ = complex(5.31, -0.60)
-"""Relative permittivity of the concrete lining at 900 MHz [STUDY.md §4, ITU-R P.2040-1]."""
+"""Relative permittivity of the concrete lining at 900 MHz [ITU-R P.2040-1]."""
 
 
 def _check_eps(eps: complex) -> complex:

@@ -30,7 +30,7 @@ Engines:
   its parity (the orientation of the tube).
 
 Polarization: vertical (E along y) at both ends.  ``paraxial``: TM on walls whose normal
-is closer to vertical, TE otherwise (STUDY.md §4, the rule for a rectangle).  ``vector``:
+is closer to vertical, TE otherwise (the rule for a rectangle, docs/model/tunnel.md §2.1).  ``vector``:
 the field vector is tracked and split into its s and p parts at every reflection; the
 received amplitude is its projection on the vertical direction made transverse to the
 arriving ray.

@@ -1,6 +1,6 @@
 """A train crossing the tunnel: measurements, snapshot fixes, tracks (seed 003 §3.3, §7.2).
 
-Measurement models (STUDY.md §4, both reported):
+Measurement models (docs/model/tunnel.md §3, both reported):
 
 * ``separable`` - the seed's assumption that every slot's RSSI and delay are measured on
   their own [seed 4.2, 6.2]: per slot the coherent one-slot power of the channel table

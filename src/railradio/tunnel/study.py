@@ -74,7 +74,7 @@ def _label(v: float) -> str:
 
 
 def sensitivity_cases(cfg: dict[str, Any]) -> dict[str, dict[str, Any]]:
-    """Sensitivity cases (STUDY.md §4: shadowing and delay-error sigma swept over the seed's
+    """Sensitivity cases (shadowing and delay-error sigma swept over the seed's
     ranges; the delay-error model): label -> overrides of the measurement section, each
     case changing one thing from the defaults, and the delay-sigma sweep repeated with each
     correlated delay-error model (``delay_sigma_ns_<v>_<model>``)."""
