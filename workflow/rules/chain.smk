@@ -1,4 +1,4 @@
-# Study `chain`: one railway, one chain (STUDY.md §6 item 1, issue 7). The nr study's tracked
+# Study `chain`: one railway, one chain (docs/model/chain.md). The nr study's tracked
 # along-track position error (results/nr/imm/{real}.nc, the seed's EKF on the robust
 # receiver's gated AOD+TOA) replaces the handover study's assumed GNSS/INS error, beside a
 # Gauss-Markov sweep of the error sigma. Reads the nr IMM/track files and the handover cost

@@ -1,4 +1,4 @@
-"""Study ``chain``: one railway, one chain (STUDY.md §6 item 1).
+"""Study ``chain``: one railway, one chain (docs/model/chain.md).
 
 The ``nr`` study's tracked position error replaces the assumed GNSS/INS error of the
 ``handover`` study's position input; a Gauss–Markov sweep of the position error σ tells how
