@@ -20,7 +20,6 @@ spread [seed 2.5.2], per-slot powers and delays.
 
 from __future__ import annotations
 
-import cmath
 import math
 from dataclasses import dataclass
 
@@ -121,13 +120,13 @@ def _physical_taps(ell, g_grid, offsets, k, h, c, delay_bin_s, taps, p_inc, bloc
     the line of sight); p_inc[j] += the rays' powers.  Blocks of offsets, one family at a
     time (its row of ``g_grid`` stays in cache); every sum runs in family order."""
     n_b = taps.shape[1]
+    d_los = np.sqrt(h * h + offsets * offsets)
     for j0 in range(0, offsets.size, block):
         j1 = min(j0 + block, offsets.size)
         for f in range(ell.size):
             for j in range(j0, j1):
-                dx = offsets[j]
-                a, d = _ray(g_grid, f, ell[f], dx, k)
-                b = min(np.rint((d - math.sqrt(h * h + dx * dx)) / (c * delay_bin_s)), n_b - 1.0)
+                a, d = _ray(g_grid, f, ell[f], offsets[j], k)
+                b = min(np.rint((d - d_los[j]) / (c * delay_bin_s)), n_b - 1.0)
                 taps[j, int(b)] += a
                 p_inc[j] += a.real * a.real + a.imag * a.imag
 

@@ -319,7 +319,8 @@ def cutoff_check(cfg: dict[str, Any], table: xr.Dataset, x_step_m: float = 2.0, 
                         n_delay_bins=r["n_delay_bins"], local_mean_window_m=local_mean_window(cfg))
     half = table.isel(offset_m=slice(0, int(np.searchsorted(off, cut / 2.0 + 1e-9))))
     x = np.arange(0.0, tun.length_m + 1e-9, x_step_m)
-    a, b, c = received(table, tun, cab, x), received(long, tun, cab, x), received(half, tun, cab, x)
+    a, c = received(table, tun, cab, x), received(half, tun, cab, x)
+    b = a if long is table else received(long, tun, cab, x)
     share = 1.0 - 10.0 ** ((a.rssi_mean_dbm - b.rssi_mean_dbm) / 10.0)
     dims = ("x_m",)
     return xr.Dataset(
@@ -347,7 +348,7 @@ def make_table(cfg: dict[str, Any], name: str, seed: int, order: xr.Dataset) -> 
     """The tabulated slot-to-receiver channel ``name`` (see :data:`TABLES`) at the
     reflection order of ``order`` (:func:`make_order` for the table's cable placement)."""
     shape, engine, prop = TABLES[name]
-    worst_db = order["omitted_field_db"].values
+    omitted = order["omitted_field_db"]
     order = int(order.attrs["reflection_order"])
     fam = families(cfg, shape, engine, order)
     tun = tunnel_from_config(cfg, shape)
@@ -362,9 +363,7 @@ def make_table(cfg: dict[str, Any], name: str, seed: int, order: xr.Dataset) -> 
                                        sm["multipath_max_db"]),
                   rng=rng, delay_bin_s=r["delay_bin_ns"] * 1e-9, n_delay_bins=r["n_delay_bins"],
                   local_mean_window_m=local_mean_window(cfg) if prop == "physical" else None)
-    ds = ds.assign_coords(order=("order", np.arange(worst_db.size), {"units": "1", "long_name": "reflection order"}))
-    ds["omitted_field_db"] = ("order", worst_db, {"units": "dB", "long_name": "image method: worst field of the "
-                              "omitted higher orders over the table's offsets, relative to the local mean"})
+    ds["omitted_field_db"] = omitted
     ds.attrs.update({"reflection_order": order, "slot_eirp_offset_db": cab.slot_eirp_offset_db(tun.slot_spacing_m),
                      **{f"sbr_{k}": v for k, v in fam.stats.items()}})
     return ds
