@@ -43,7 +43,7 @@ def main() -> None:
     point = PointParams(1500.0, 1e-7, 0.01, n_positions=200, n_trials=10_000)
     t_mc = best_of(lambda: simulate_point(point, 1, (2, 0)), 2)
 
-    # sensitivity (issue 7): TDOA on a 4 km arc, vectorized safeguarded Newton vs per-trial
+    # sensitivity: TDOA on a 4 km arc, vectorized safeguarded Newton vs per-trial
     # Brent root finding on the same branch and the same range differences
     arc = ArcGeometry(1500.0, 4000.0)
     s_true = rng.uniform(*arc.train_interval_m, size=args.n_vector // 4)

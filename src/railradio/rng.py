@@ -5,7 +5,7 @@ A job derives its generator from the config seed and *stable integer IDs* (study
 sweep, sweep point, shard, ...) through :class:`numpy.random.SeedSequence`, never from
 job order, so the same config gives identical results whatever ``snakemake -j``.
 
-Study IDs are the seed papers' numbers (``shared/seeds/NNN_*``).  IDs of things that
+Study IDs are the seed papers' numbers (000 nr, 002 fusion, 003 tunnel, 004 handover).  IDs of things that
 are described by parameter values (a sweep point) come from :func:`stable_id`, a hash of
 their canonical JSON: the same physical point gets the same random numbers wherever it
 appears (common random numbers across a sweep and the reference point).

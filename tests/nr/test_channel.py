@@ -12,7 +12,7 @@ from railradio.nr.channel import (
     tdl_profile,
 )
 
-# TR 38.901 v17 Table 7.7.2-4, TDL-D, transcribed independently from STUDY.md §2.3:
+# TR 38.901 v17 Table 7.7.2-4, TDL-D, transcribed independently of the code:
 # (normalized delay, power dB); the first row is the LOS (specular) part of tap 1.
 TDL_D_INDEPENDENT = [
     (0.0, -0.2), (0.0, -13.5), (0.035, -18.8), (0.612, -21.0), (1.363, -22.8), (1.405, -17.9),

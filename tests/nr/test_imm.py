@@ -1,4 +1,4 @@
-"""IMM filter, RTS smoother and the lag key numbers (STUDY.md §6 item 3, issue 7)."""
+"""IMM filter, RTS smoother and the lag key numbers (docs/model/nr.md §6)."""
 
 import json
 

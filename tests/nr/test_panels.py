@@ -1,4 +1,4 @@
-"""Separate head/tail train panels (STUDY.md §2.1 option): per-panel paths in the link
+"""Separate head/tail train panels (docs/model/nr.md §1): per-panel paths in the link
 budget and the synthesized bursts, and the lever arm in the tracker's measurement model."""
 
 import numpy as np

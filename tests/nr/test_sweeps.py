@@ -1,4 +1,4 @@
-"""The nr sensitivity sweeps (issue 7): clock-synchronization errors on the measured TOAs,
+"""The nr sensitivity sweeps (docs/model/nr.md §9): clock-synchronization errors on the measured TOAs,
 their TOA floor, per-case epochs in the sensitivity key numbers, sparse RRHs at the track's
 start, fewer SS beams."""
 import json

@@ -124,7 +124,7 @@ def test_trajectory_seed_profile():
 def test_toa_crb_and_peb_against_hand_values():
     from railradio.nr.bounds import BETA_RMS_HZ, INTEGER_SAMPLE_SIGMA_M, peb_m, toa_crb_s
 
-    assert BETA_RMS_HZ == pytest.approx(8.8e6, rel=0.01)  # STUDY.md §2.7
+    assert BETA_RMS_HZ == pytest.approx(8.8e6, rel=0.01)  # docs/model/nr.md §7
     assert INTEGER_SAMPLE_SIGMA_M == pytest.approx(0.352, abs=1e-3)
     # E/N0 = 1e4 (40 dB): σ_τ = 1/(2π · 8.8 MHz · sqrt(2e4)) = 0.128 ns
     assert float(toa_crb_s(1e4)) == pytest.approx(1 / (2 * np.pi * BETA_RMS_HZ * np.sqrt(2e4)))

@@ -1,5 +1,5 @@
 # Study `handover`: position-power joint handover decision vs A3 and distance triggers
-# (seed 004, STUDY.md §5; our reconstruction of the lost equations).
+# (seed 004; docs/model/handover.md, our reconstruction of the lost equations).
 # Chain: cost grid of (m, alpha) on its own runs -> shards of crossings per (speed, batch)
 # with the selected weights -> summary per policy and speed -> figures + key numbers;
 # one-at-a-time sensitivity variants on the reference speed's runs -> their summary.

@@ -1,4 +1,4 @@
-# Study `nr`: 5G NR SS-burst positioning of a high-speed train (seed 000, STUDY.md §2).
+# Study `nr`: 5G NR SS-burst positioning of a high-speed train (seed 000, docs/model/nr.md).
 # Chain: trajectory -> per-shard channel + burst + per-cell estimates (NetCDF) ->
 # calibration run (noise levels, q) -> EKF tracking per realization -> figures + numbers.
 from railradio.nr.workflow import receiver_selection as nr_selection
@@ -166,7 +166,7 @@ rule nr_track:
 
 
 rule nr_bounds:
-    """Physical limits along the track: TOA CRB, snapshot PEB, tracker PCRB (STUDY.md §2.7)."""
+    """Physical limits along the track: TOA CRB, snapshot PEB, tracker PCRB (docs/model/nr.md §7)."""
     input:
         calibration="results/nr/calibration.json",
     output:
@@ -237,7 +237,7 @@ rule nr_key_numbers:
         "../scripts/nr/key_numbers.py"
 
 
-# ---- sensitivity cases (STUDY.md §2; paired with realization r0 on the first epochs) ----
+# ---- sensitivity cases (docs/model/nr.md §9; paired with realization r0 on the first epochs) ----
 
 
 rule nr_case_shard:

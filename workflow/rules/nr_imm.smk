@@ -1,4 +1,4 @@
-# Tracking that does not lag (STUDY.md §6 item 3, issue 7): the nr study's EKF beside an
+# Tracking that does not lag (docs/model/nr.md §6): the nr study's EKF beside an
 # IMM (quiet + manoeuvre white-jerk models) and an RTS smoother, around the trajectory's
 # acceleration changes. Reads the nr shards and calibration; simulates nothing.
 NR_IMM = NR["imm"]

@@ -1,6 +1,6 @@
 """Study `handover`: position-power joint handover decision against A3 and distance
-triggers (seed 004, STUDY.md §5).  The model is OUR reconstruction of the seed's lost
-equations (``handover_reconstruction.md``); every uncertain choice is a config switch."""
+triggers (seed 004).  The model is OUR reconstruction of the seed's lost equations,
+stated in docs/model/handover.md; every uncertain choice is a config switch."""
 
 from railradio.handover.params import A3, Execution, Joint, Radio, Scenario, Train, scenario_from_config
 from railradio.handover.policies import POLICIES, Policy, make_policy, register, run_policy

@@ -1,4 +1,4 @@
-"""Key numbers of the handover study (STUDY.md §5, §7), ours beside the seed's claims."""
+"""Key numbers of the handover study (docs/model/handover.md §7), ours beside the seed's claims."""
 
 from __future__ import annotations
 
@@ -111,7 +111,7 @@ def _pick(summary: xr.Dataset, policy: str, name: str, speed: float):
 
 def pingpong_strictly_lowest(summary: xr.Dataset) -> np.ndarray:
     """bool per speed: the joint ping-pong rate is strictly below A3's and distance's — its
-    upper 95% bound below both lower 95% bounds (STUDY.md §7 'proposed < A3, distance'; a
+    upper 95% bound below both lower 95% bounds (docs/model/handover.md §7, 'proposed < A3, distance'; a
     policy with zero ping-pong ties with joint's zero and does not count)."""
     hi = summary["pingpong_hi"].sel(policy=list(POLICIES)).values
     lo = summary["pingpong_lo"].sel(policy=list(POLICIES)).values

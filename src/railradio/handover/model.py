@@ -198,7 +198,7 @@ def rlm_failure_x_m(ctx: BlockContext) -> np.ndarray:
 def serving_ok(ctx: BlockContext, run: np.ndarray, hb_m: np.ndarray) -> np.ndarray:
     """bool: the serving link has not failed at a command at true position ``hb_m``.
 
-    ``instant`` (STUDY.md §5): SINR_serving(H_b) ≥ Q_out.  ``rlf``: radio-link failure only
+    ``instant`` (docs/model/handover.md §5): SINR_serving(H_b) ≥ Q_out.  ``rlf``: radio-link failure only
     after a T310-long run of out-of-sync evaluations — the link has failed iff every
     n_eval-sample mean (dB) of the serving SINR at the positions H_b − j·v·T_m, whose windows
     end at j = 0…n_t310, is below Q_out.  ``rlm``: radio-link monitoring (TS 36.133 §7.6,

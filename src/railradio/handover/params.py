@@ -1,4 +1,4 @@
-"""Parameters of the handover study (STUDY.md §5, ``handover_reconstruction.md``).
+"""Parameters of the handover study (docs/model/handover.md).
 
 The seed (Zhang, Li, Xie 2022) lost every equation and its Table 1; the model is OUR
 reconstruction.  Every value lives in the ``handover`` section of the config; this module

@@ -186,7 +186,7 @@ def joint_regressors(ctx: BlockContext) -> np.ndarray:
     F_1 = M_1, so filtering r exactly as the measurements are filtered gives
     F(G) = â + 10 n̂ F(r): a fit of filtered gaps against F(r) carries no filter delay.
     Fitting them against the current r instead lags by (1 − a)/a samples (0.27 s at
-    k = 4, 40 ms) and biases â by the gap's slope times that lag (review finding 1).
+    k = 4, 40 ms) and biases â by the gap's slope times that lag.
     """
     key = "joint_regressors"
     if key not in ctx._cache:

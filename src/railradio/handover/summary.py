@@ -1,4 +1,4 @@
-"""Rates and means per policy and speed from the per-handover shards (STUDY.md §5).
+"""Rates and means per policy and speed from the per-handover shards (docs/model/handover.md §7).
 
 Definitions [ours]: success = the handover completed (at any permitted attempt);
 interruption = 1 − success; ping-pong = a successful handover followed by a command back

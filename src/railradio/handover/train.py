@@ -1,4 +1,4 @@
-"""The train's motion, its nodes and its position input (STUDY.md §5).
+"""The train's motion, its nodes and its position input (docs/model/handover.md §1, §6).
 
 The head starts at the serving RRH (x = 0) at t = 0 [seed: "the train starts at the
 serving eNB and moves to the target eNB"] and moves at constant speed v; node i

@@ -52,7 +52,7 @@ def ula_gain(phi_rel_rad: NDArray, steer_rel_rad: NDArray, n_elements: int) -> N
 
 @dataclass(frozen=True)
 class RrhArray:
-    """An RRH's two panels and its SS-burst beams (seed §4; STUDY.md §2.1).
+    """An RRH's two panels and its SS-burst beams (seed §4; docs/model/nr.md §1).
 
     Beam k points at -(k + 0.5)·180/n_beams degrees; beams of the first half on the
     -45° panel, the rest on the -135° panel [ours].
@@ -91,7 +91,7 @@ class TrainArray:
     reference point [m], head >= 0 >= tail (the train runs toward +x). (0, 0), the default,
     co-locates them at the reference point, as the seed's eq. 14 treats the train as a
     point; otherwise every RRH reaches each panel over its own path (:func:`link_budget`)
-    and the tracker's measurement model carries the lever arm [ours, STUDY.md §2.1].
+    and the tracker's measurement model carries the lever arm [ours, docs/model/nr.md §1].
     """
 
     n_elements: int = 8

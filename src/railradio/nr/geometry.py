@@ -1,4 +1,4 @@
-"""Trajectory and deployment of the nr study (seed 000 §4, STUDY.md §2.1).
+"""Trajectory and deployment of the nr study (seed 000 §4, docs/model/nr.md §1).
 
 Straight track on y = 0; RRHs every 500 m at y = +15 m, height 10 m; train antennas at
 2.5 m. Every delay, path loss and the tracker's range model use the same 3-D distance.

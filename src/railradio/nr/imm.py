@@ -1,4 +1,4 @@
-"""Tracking that does not lag (STUDY.md §6 item 3, issue 7): an interacting-multiple-model
+"""Tracking that does not lag (docs/model/nr.md §6): an interacting-multiple-model
 (IMM) filter of white-jerk constant-acceleration EKFs, run with the same measurement
 selection, χ² gate and re-acquisition as :func:`railradio.nr.tracking.track`.
 

@@ -1,5 +1,5 @@
 """Key numbers ``nr.track.{ekf,imm,rts}.*`` and the figure ``nr_imm_lag`` of the
-tracking-that-does-not-lag study (STUDY.md §6 item 3): the seed's EKF, the IMM and the RTS
+tracking-that-does-not-lag study (docs/model/nr.md §6): the seed's EKF, the IMM and the RTS
 smoother around the trajectory's acceleration changes.
 
 The lag is measured two ways over the ``window_s`` after each change (all changes and

@@ -1,4 +1,4 @@
-"""Key numbers of the nr study (STUDY.md §2.6): pooled over realizations, with their spread."""
+"""Key numbers of the nr study (docs/model/nr.md §10): pooled over realizations, with their spread."""
 
 from __future__ import annotations
 
@@ -14,7 +14,7 @@ from railradio.keynumbers import KeySpec
 from railradio.nr import loss
 from railradio.nr.numerology import SAMPLE_RATE_HZ
 
-SKIP_S = 5.0  # errors are counted after the first 5 s (STUDY.md §2.6)
+SKIP_S = 5.0  # errors are counted after the first 5 s (docs/model/nr.md §10)
 
 SPECS = {
     "meas.aod_err_deg.p95": ("deg", "95th percentile of |AOD error| of the measured RRHs", 1.3, "<"),

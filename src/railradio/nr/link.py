@@ -1,4 +1,4 @@
-"""Large-scale link budget of every RRH in range at one epoch (seed eq. 1; STUDY.md §2.1–2.3).
+"""Large-scale link budget of every RRH in range at one epoch (seed eq. 1; docs/model/nr.md §1, §3).
 
 P_R = P_T - PL(d3D) + S + G_T(θ_T) + G_R(θ_R): the transmit power is spread evenly over the
 600 active subcarriers (equal EPRE); beam gains from :mod:`railradio.nr.antenna`.

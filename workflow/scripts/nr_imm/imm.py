@@ -1,5 +1,5 @@
 """Adapter: one realization's shards + calibration -> results/nr/imm/{real}.nc
-(EKF, IMM and RTS-smoothed EKF on the same measurements; STUDY.md §6 item 3)."""
+(EKF, IMM and RTS-smoothed EKF on the same measurements; docs/model/nr.md §6)."""
 import json
 import sys
 from pathlib import Path
