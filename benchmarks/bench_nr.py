@@ -6,8 +6,9 @@ candidate cell, one FFT correlation over the whole burst (2^20 points) split int
 SS-block windows. Project: the shipped config's path (synthesis at F_s/D_s, the front end's
 ideal filter to F_s/D, per-block windows on the F_s/D_c lag grid). Reports ms per epoch for
 each, their ratio, and the project's time shares; then what each shortcut's exact
-replacement costs per epoch (railradio.nr.fidelity, the same paths as the fidelity target),
-so that the choice of what to keep is measured.
+replacement costs per epoch (railradio.nr.fidelity, the same paths as the fidelity target;
+and the fast path's own exact spill, nr.channel.exact_spill, in shard-like runs), so that the
+choice of what to keep is measured.
 
     python benchmarks/bench_nr.py --out results/benchmarks/nr_bench.json
 """
@@ -41,6 +42,7 @@ import json, resource, sys, time, yaml
 from railradio.nr.simulate import scenario_from_config, simulate_epochs
 from railradio.rng import spawn_key
 cfg = yaml.safe_load(open(sys.argv[1]))
+cfg["nr"]["channel"]["exact_spill"] = sys.argv[3] == "exact_spill"
 scn = scenario_from_config(cfg["nr"])
 ep = list(range(2500, 2500 + int(sys.argv[2])))
 simulate_epochs(scn, ep[:3], cfg["seed"], spawn_key("nr", 0))  # warm-up: kernels, caches
@@ -52,13 +54,15 @@ print(json.dumps({"wall_s": t1 - t0, "user_s": r1.ru_utime - r0.ru_utime,
 """
 
 
-def shard_run(config: str, n_epochs: int, tunables: bool) -> dict:
+def shard_run(config: str, n_epochs: int, tunables: bool, exact_spill: bool = False) -> dict:
     """Time ``n_epochs`` bursts in a fresh process with or without the jobs' malloc
-    settings (glibc reads them at process start, hence the subprocess)."""
+    settings (glibc reads them at process start, hence the subprocess), the taps' spill
+    wrapped (as configured) or exact (``nr.channel.exact_spill``)."""
     env = {**os.environ, **JOB_ENV}
     if not tunables:
         del env["GLIBC_TUNABLES"]
-    out = subprocess.run([sys.executable, "-c", _SHARD_RUN, config, str(n_epochs)], env=env,
+    out = subprocess.run([sys.executable, "-c", _SHARD_RUN, config, str(n_epochs),
+                          "exact_spill" if exact_spill else "wrapped"], env=env,
                          check=True, capture_output=True, text=True, timeout=1800).stdout
     return json.loads(out.strip().splitlines()[-1])
 
@@ -175,15 +179,18 @@ def main() -> None:
     }
     # the jobs' heap settings (railradio.workflow.JOB_ENV) against glibc's defaults, same
     # bursts, each in a fresh process, alternated and best of two
-    runs = {False: [], True: []}
+    # and the exact spill of the delayed taps (nr.channel.exact_spill) with the jobs' settings
+    runs = {"malloc_default": [], "malloc_tuned": [], "exact_spill": []}
     for _ in range(2):
-        for tun in (False, True):
-            runs[tun].append(shard_run(args.config, args.shard_epochs, tun))
-    for tun, name in ((False, "malloc_default"), (True, "malloc_tuned")):
-        best = min(runs[tun], key=lambda r: r["wall_s"])
+        for name in runs:
+            runs[name].append(shard_run(args.config, args.shard_epochs, name != "malloc_default",
+                                        exact_spill=name == "exact_spill"))
+    for name in runs:
+        best = min(runs[name], key=lambda r: r["wall_s"])
         report[f"{name}_ms_per_burst"] = 1e3 * best["wall_s"] / best["n"]
         report[f"{name}_sys_share"] = best["sys_s"] / (best["user_s"] + best["sys_s"])
     report["malloc_speedup"] = report["malloc_default_ms_per_burst"] / report["malloc_tuned_ms_per_burst"]
+    report["exact_spill_cost_ratio"] = report["exact_spill_ms_per_burst"] / report["malloc_tuned_ms_per_burst"]
     report.update(fft_backends())
     report.update(exact_costs(args.config, args.exact_epochs))
     emit(report, args.out)

@@ -75,6 +75,33 @@ def test_place_matches_numpy_form():
         np.testing.assert_allclose(z, want, atol=1e-5)
 
 
+def test_add_spill_matches_numpy_form():
+    rng = np.random.default_rng(6)
+    starts = np.array([0, 19, 36, 53], dtype=np.int64)
+    b = np.array([0, 2, 5, 1], dtype=np.int64)
+    col_of = np.zeros((4, 5), dtype=np.int64)
+    q = 0
+    for l in range(4):
+        for j in range(b[l]):
+            col_of[l, j] = q
+            q += 1
+    at = (rng.standard_normal((4, q)) + 1j * rng.standard_normal((4, q))).astype(np.complex64)
+    gains = (rng.standard_normal((4, 4)) + 1j * rng.standard_normal((4, 4))).astype(np.complex64)
+    w, t_first, phase0, dt = 2 * np.pi * 9.7e3, 12.3, 0.4, 1 / 30.72e6
+    for n_c, total in ((0, 80), (7, 80), (7, 62)):
+        want = np.zeros(total, dtype=complex)
+        for s in range(4):
+            for l in range(4):
+                for j in range(b[l]):
+                    m = n_c + starts[s] + j
+                    if m < total:
+                        want[m] += gains[s, l] * at[s, col_of[l, j]] * np.exp(1j * (w * (t_first + (m - n_c) * dt)
+                                                                                   + phase0))
+        z = np.zeros(total, dtype=np.complex64)
+        kernels.add_spill(z, at, col_of, b, gains, starts, n_c, w, t_first, phase0, dt)
+        np.testing.assert_allclose(z, want, atol=1e-5)
+
+
 def test_magnitude_stats_match_numpy():
     rng = np.random.default_rng(5)
     c = (rng.standard_normal((9, 50)) + 1j * rng.standard_normal((9, 50))).astype(np.complex64)

@@ -21,6 +21,9 @@ shortcut       off (the exact computation)
                symbol wrapped cyclically within the symbol's extent: its spill into the next
                symbol omitted) against every tap's own delayed extent, both at the full band
                with the fast path's held geometry and per-symbol taps (exact synthesis)
+``spill``      the same as ``form`` at the production's own rate: the production path with each
+               delayed tap's spill into the next symbol computed exactly
+               (``nr.channel.exact_spill``; only where the production wraps it)
 ``taps``       Rayleigh taps at every sample instead of held per symbol (against ``form``)
 ``geometry``   the bulk delay, LOS phase and beam gains following the train through the
                burst (:mod:`railradio.nr.motion`) instead of held at the epoch instant
@@ -87,19 +90,22 @@ COMPARISONS = {
     "search": Comparison("search", "production"),
     "band": Comparison("band", "production"),
     "form": Comparison("form", "band"),
+    "spill": Comparison("spill", "production"),
     "taps": Comparison("taps", "form"),
     "geometry": Comparison("geometry", "production"),
     "far_taps": Comparison("far_taps", "production", stochastic=True),
     "noise": Comparison("own_noise", "production", stochastic=True),
     "all": Comparison("exact", "production"),
 }
-"""Every comparison; ``far_taps`` only where the production uses that shortcut."""
+"""Every comparison; ``far_taps`` and ``spill`` only where the production uses that shortcut."""
 
 
 def comparisons(scn: Scenario) -> dict[str, Comparison]:
     """The comparisons that apply to the scenario's production path."""
-    far = bool(np.isfinite(scn.full_channel_range_m))
-    return {k: c for k, c in COMPARISONS.items() if far or k != "far_taps"}
+    skip = set() if np.isfinite(scn.full_channel_range_m) else {"far_taps"}
+    if scn.exact_spill:
+        skip.add("spill")
+    return {k: c for k, c in COMPARISONS.items() if k not in skip}
 
 DECISIONS = ("detection", "selection", "toa", "aod")
 TOA_CHANGE_SAMPLES = 1.0
@@ -194,11 +200,15 @@ class FidelityRun:
         self.pool_ref = np.zeros_like(pool) if scn.data_beam == "none" else pool
         self.cfg_full = dataclasses.replace(scn.receiver, decimation=D_FULL)
         self.fast_full = Synthesizer(self.cfg_full, scn.profile, pool, scn.n_sinusoids,
-                                     scn.full_channel_range_m, scn.data_beam, scn.load)
+                                     scn.full_channel_range_m, scn.data_beam, scn.load,
+                                     exact_spill=scn.exact_spill)
         self.far_flat = bool(np.isfinite(scn.full_channel_range_m))
         self.down = self.synthesis.down  # synthesis rate -> the front end's
         self.fast_fading = (Synthesizer(self.fast.cfg, scn.profile, pool, scn.n_sinusoids, np.inf, scn.data_beam,
-                                        scn.load) if self.far_flat else None)
+                                        scn.load, exact_spill=scn.exact_spill) if self.far_flat else None)
+        self.fast_spill = (None if scn.exact_spill else
+                           Synthesizer(self.fast.cfg, scn.profile, pool, scn.n_sinusoids, scn.full_channel_range_m,
+                                       scn.data_beam, scn.load, exact_spill=True))
         d_c = scn.search_decimation or scn.receiver.decimation
         self.rx = Receivers(scn, selection, d_c)
         self.rx_exact = Receivers(scn, selection, D_FULL)
@@ -258,6 +268,8 @@ class FidelityRun:
         z["geometry"] = clock("geometry", lambda: fast(self.fast, motion=motion)) + n8
         if self.far_flat:
             z["far_taps"] = clock("far_taps", lambda: fast(self.fast_fading)) + n8
+        if self.fast_spill is not None:
+            z["spill"] = clock("spill", lambda: fast(self.fast_spill)) + n8
         z["form"] = clock("form", lambda: project(reference_received(
             self.cfg_full, links, scn.profile, self.pool_ref, draws, symbols, t0, symbol_taps=True,
             flat=flat, **ref), d)) + n8
@@ -613,6 +625,7 @@ COMPARISON_LABEL = {
     "search": "the decimated coarse-to-fine search against every full-rate lag",
     "band": "the band-limited synthesis against the full band through the front end",
     "form": "each tap's symbols wrapped within their extent against the taps' spill kept",
+    "spill": "each tap's symbols wrapped within their extent against the taps' spill kept, at the production's rate",
     "taps": "Rayleigh taps held per symbol against per sample",
     "geometry": "the geometry held over the burst against the train's motion",
     "far_taps": "far interferers as one non-fading tap against fully fading",

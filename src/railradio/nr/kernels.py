@@ -298,6 +298,42 @@ def mix_taps(z: np.ndarray, delayed: np.ndarray, coarse: np.ndarray, step: int, 
 
 
 @njit(cache=True, nogil=True)
+def add_spill(z: np.ndarray, at: np.ndarray, col_of: np.ndarray, b: np.ndarray, gains: np.ndarray,
+              starts: np.ndarray, n_c: int, w_rad_s: float, t_first_s: float, phase0_rad: float,
+              dt_s: float) -> None:
+    """z[n_c + starts[s] + j] += LOS(m) · Σ_{l: j < b[l]} gains[s, l] · at[s, col_of[l, j]], in
+    place: the delayed taps' spill across symbol boundaries (:class:`railradio.nr.receiver.
+    Synthesizer`), from ``at`` [S, Q], the boundary difference's waveform at each tap's delayed
+    sample positions, and the receive symbol's held tap gains; LOS(m) is :func:`place`'s
+    phasor (exact at each symbol start times a per-sample factor). Samples past the end of z
+    are dropped. NumPy form: ``for s, l, j: z[n_c + starts[s] + j] += los[m] * gains[s, l] *
+    at[s, col_of[l, j]]`` over j < b[l]."""
+    n_s = at.shape[0]
+    n_l = b.size
+    total = z.size
+    j_max = 0
+    for l in range(n_l):
+        j_max = max(j_max, b[l])
+    fine = np.empty(j_max, dtype=np.complex64)
+    for j in range(j_max):
+        fine[j] = np.exp(1j * w_rad_s * j * dt_s)
+    acc = np.empty(j_max, dtype=np.complex64)
+    for s in range(n_s):
+        base = n_c + starts[s]
+        if base >= total:
+            break
+        for j in range(j_max):
+            acc[j] = 0
+        for l in range(n_l):
+            g = gains[s, l]
+            for j in range(b[l]):
+                acc[j] += g * at[s, col_of[l, j]]
+        coarse = np.complex64(np.exp(1j * (w_rad_s * (t_first_s + starts[s] * dt_s) + phase0_rad)))
+        for j in range(min(j_max, total - base)):
+            z[base + j] += acc[j] * (coarse * fine[j])
+
+
+@njit(cache=True, nogil=True)
 def place_symbols(z: np.ndarray, y: np.ndarray, first: np.ndarray) -> None:
     """z[first[s] + j] = y[s, j mod n] for first[s] <= first[s] + j < first[s + 1] (the last
     symbol: n + its CP, given as ``first[S]``), samples outside z dropped: rectangular symbol

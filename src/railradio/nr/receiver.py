@@ -184,7 +184,7 @@ class Synthesizer:
 
     def __init__(self, cfg: ReceiverConfig, profile: TdlProfile, pool: NDArray[np.complex64],
                  n_sinusoids: int = 16, full_channel_range_m: float = np.inf,
-                 data_beam: str = "serving", load: float = 1.0):
+                 data_beam: str = "serving", load: float = 1.0, exact_spill: bool = False):
         if data_beam not in DATA_BEAMS:
             raise ValueError(f"data_beam must be one of {DATA_BEAMS}, got {data_beam!r}")
         if not 0.0 <= load <= 1.0:
@@ -204,6 +204,20 @@ class Synthesizer:
         self.k = np.fft.fftfreq(n, 1.0 / n)
         self.f_k = self.k * SUBCARRIER_SPACING_HZ
         self.basis = np.exp(-2j * np.pi * np.outer(profile.delays_s, self.f_k)).astype(np.complex64)
+        self.exact_spill = exact_spill
+        # the taps' spill (kernels.add_spill): tap l's copy of a symbol begins at most
+        # ⌈τ_l F⌉ samples into its slot; column col_of[l, j] of ``spill_at`` evaluates a
+        # symbol's waveform at sample j - τ_l F (e^{j2π k (j - τ_l F)/n}/n, as the IFFT)
+        fs = num.sample_rate_hz
+        reach = np.ceil(profile.delays_s * fs - 1e-9).astype(np.int64)
+        self.spill_reach = reach
+        self.spill_col_of = np.zeros((reach.size, int(reach.max(initial=0))), dtype=np.int64)
+        cols = []
+        for l, r in enumerate(reach):
+            for j in range(r):
+                self.spill_col_of[l, j] = len(cols)
+                cols.append(j - profile.delays_s[l] * fs)
+        self.spill_at = (np.exp(2j * np.pi * np.outer(self.k, cols) / n) / n).astype(np.complex64)  # [n, Q]
         self._overlays: dict = {}
         self._span: tuple | None = None
 
@@ -285,6 +299,34 @@ class Synthesizer:
             d["busy"] = (rng.random(n_slots) < self.load)[slot]
         return out
 
+    def _add_spill(self, z, u, rows, every, gains, n_c, tau0_s, sp, w_rad_s, t_first_s, phase0_rad) -> None:
+        """Add the delayed taps' spill across symbol boundaries, which the cyclic read-out of
+        each symbol's IFFT (:func:`kernels.place`) leaves out: the first b_l samples of a
+        symbol's slot carry tap l's copy of the previous symbol, not of its own cyclic
+        extension. With Δ_s = u_{s-1} e^{j2π k cp_{s-1}/n} - u_s (the tap-less spectra; a
+        symbol not synthesized is empty), the correction at sample j of slot s is
+        Σ_{l: j < b_l} g_{s,l} δ_s(j - τ_l F), δ_s the IFFT of Δ_s evaluated off the grid:
+        one matrix product with :attr:`spill_at`. Exact (``tests/nr/test_fidelity.py``: the
+        fast path equals the exact reference's per-symbol taps to float32 rounding). b_l uses
+        the epoch's delay τ0 (under ``motion`` a symbol's edge moves by < 0.05 sample)."""
+        num, n = self.cfg.num, self.cfg.num.n_fft
+        fs = num.sample_rate_hz
+        u_all = u if every else np.zeros((sp["symbols"].size, n), dtype=np.complex64)
+        if not every:
+            u_all[rows] = u
+        if "cp_turn" not in sp:  # e^{j2π k cp_s/n} per symbol, cached with the layout
+            cps, inv = np.unique(sp["cps"][:-1], return_inverse=True)
+            sp["cp_turn"] = np.exp(2j * np.pi * np.outer(cps, self.k) / n).astype(np.complex64)[inv]
+        cp_turn = sp["cp_turn"]
+        delta = np.empty_like(u_all)
+        np.multiply(u_all[:-1], cp_turn, out=delta[1:])
+        delta[0] = 0
+        delta -= u_all
+        b = np.ceil((tau0_s + self.profile.delays_s) * fs - 1e-9).astype(np.int64) - n_c
+        b = np.clip(b, 0, self.spill_reach)
+        kernels.add_spill(z, delta @ self.spill_at, self.spill_col_of, b, gains, sp["starts"], n_c,
+                          w_rad_s, t_first_s, phase0_rad, 1.0 / fs)
+
     def __call__(self, links: Links, rng: np.random.Generator, t0_s: float = 0.0,
                  noise: bool = True, d2d_m: NDArray | None = None,
                  draws: list[dict] | None = None,
@@ -316,6 +358,7 @@ class Synthesizer:
         rows = np.flatnonzero(sp["block_of"] >= 0) if self.data_beam == "none" else np.arange(symbols.size)
         every = rows.size == symbols.size
         x = np.empty((rows.size, n), dtype=np.complex64)
+        u = np.empty_like(x) if self.exact_spill and prof.powers.size else None  # tap-less spectra
         long_of, starts, cps = ((sp["long_of"], sp["starts"], sp["cps"]) if every else
                                 (sp["long_of"][rows], sp["starts"][rows], sp["cps"][rows]))
         no_h = np.ones((1, 1), dtype=np.complex64)
@@ -368,12 +411,19 @@ class Synthesizer:
                 f_lm = links.doppler_hz * np.cos(draws[r]["alpha"])
                 taps = kernels.sos_taps(amp_l, f_lm, draws[r]["phi"], t_sym)
                 taps *= np.exp(-1j * (2 * np.pi * links.f_los_hz[r] * t_sym + links.phase0[r]))[:, None]
-                h = taps.astype(np.complex64) @ self.basis
+                gains = taps.astype(np.complex64)
+                h = gains @ self.basis
                 h += np.float32(np.sqrt(prof.los_power))
-                if geo_h is not None:
-                    h *= geo_h[r]
-                kernels.fill_grid(x, self.pool_band, pool_idx, *ov, h if every else h[rows], True,
-                                  ramps[r], g_r, long_of, sp["long_ramp"])
+                if u is not None:  # the tap-less spectra kept for the spill, then x = u · h
+                    geo = (geo_h[r] if every else geo_h[r][rows]) if geo_h is not None else no_h
+                    kernels.fill_grid(u, self.pool_band, pool_idx, *ov, geo, geo_h is not None,
+                                      ramps[r], g_r, long_of, sp["long_ramp"])
+                    np.multiply(u, h if every else h[rows], out=x)
+                else:
+                    if geo_h is not None:
+                        h *= geo_h[r]
+                    kernels.fill_grid(x, self.pool_band, pool_idx, *ov, h if every else h[rows], True,
+                                      ramps[r], g_r, long_of, sp["long_ramp"])
             elif geo_h is not None:  # far interferer, its geometry symbol by symbol
                 kernels.fill_grid(x, self.pool_band, pool_idx, *ov, geo_h[r] if every else geo_h[r][rows], True,
                                   ramps[r], g_r, long_of, sp["long_ramp"])
@@ -384,6 +434,9 @@ class Synthesizer:
             # LOS phase e^{j(2π f t + φ0)} at receive times, applied while placing
             kernels.place(z, y, starts, cps, n_c, 2 * np.pi * links.f_los_hz[r],
                           float(t_firsts[r]), links.phase0[r], 1.0 / fs)
+            if u is not None and full[r]:
+                self._add_spill(z, u, rows, every, gains, n_c, float(links.tau_s[r]), sp,
+                                2 * np.pi * links.f_los_hz[r], float(t_firsts[r]), float(links.phase0[r]))
         if noise:
             var = links.noise_psd_w_hz * fs * links.n_chains
             # complex AWGN: interleaved (re, im) float32 draws, variance var/2 each

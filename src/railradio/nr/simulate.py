@@ -54,6 +54,10 @@ class Scenario:
     cell_search: CellSearchConfig = field(default_factory=CellSearchConfig)
     full_channel_range_m: float = np.inf
     """RRHs farther than this (2-D) are synthesized as one non-fading tap (inf: none)."""
+    exact_spill: bool = False
+    """Each delayed tap's copy of a symbol spills into the next symbol's first samples, as in
+    the exact reference (:meth:`railradio.nr.receiver.Synthesizer._add_spill`), instead of
+    being wrapped within its own symbol (the shortcut measured by ``nr.fidelity.form``)."""
     synthesis_decimation: int | None = None
     """The bursts are synthesized at F_s/D_s (the central N_FFT/D_s subcarriers) and brought
     to the receiver's front end F_s/D (``receiver.decimation``) by its ideal anti-aliasing
@@ -107,7 +111,7 @@ class Synthesis:
         self.down = d_fe // d_s  # synthesis rate -> the front end's
         self.syn = Synthesizer(dataclasses.replace(scn.receiver, decimation=d_s), scn.profile, pool, scn.n_sinusoids,
                                scn.full_channel_range_m,
-                               scn.data_beam, scn.load)
+                               scn.data_beam, scn.load, exact_spill=scn.exact_spill)
         self.network = ServingCell(scn.serving)
         self.next_epoch: int | None = None
 
@@ -387,6 +391,7 @@ def scenario_from_config(c: dict) -> Scenario:
         full_channel_range_m=(np.inf if c["channel"]["full_channel_range_m"] is None
                               else float(c["channel"]["full_channel_range_m"])),
         synthesis_decimation=int(c["channel"].get("synthesis_decimation", rx["decimation"])),
+        exact_spill=bool(c["channel"].get("exact_spill", False)),
         search_decimation=int(rx.get("search_decimation", rx["decimation"])),
         n_sinusoids=int(c["channel"]["n_sinusoids"]),
         data_beam=c["traffic"]["data_beam"], load=float(c["traffic"]["load"]),
