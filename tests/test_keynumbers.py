@@ -91,3 +91,18 @@ def test_config_macros_cover_values_lists_and_list_elements():
     assert r"\@namedef{cfg@a.radii_m.0}{20000}" in tex and r"\@namedef{cfg@a.radii_m.1}{7000}" in tex
     assert "cfg@a.phases.0" not in tex  # elements only for lists of scalars
     assert r"\@namedef{cfg@a.name}{\texttt{TDL-D}}" in tex
+
+
+def test_the_reports_table_sets_ours_beside_the_sources_value():
+    from railradio.keynumbers import KeySpec, claims_html
+
+    numbers = {
+        "nr.a": KeySpec("nr.a", "m", "RMSE <of> x", source_value=2.5, source_relation="<").entry(1.234),
+        "nr.b": KeySpec("nr.b", "m", "no claim").entry(3.0),
+        "handover.c": KeySpec("handover.c", "1", "rate", source_value=0.9, source_relation="≈").entry(0.95),
+    }
+    html = claims_html(numbers)
+    assert "<h2>nr</h2>" in html and "<h2>handover</h2>" in html
+    row = html.split("<code>nr.a</code>")[1].split("</tr>")[0]
+    assert "RMSE &lt;of&gt; x" in row and "&lt; 2.5" in row and "1.23" in row
+    assert "nr.b" not in html  # no source value: not in the table

@@ -65,8 +65,37 @@ def _sacct_like(job_ids: list[str]) -> dict[str, tuple[str, str]]:
     return {j: tuple(rows[j].split("|")) for j in job_ids if j in rows}
 
 
+SLOW_ONCE = """
+rule all:
+    input: "done.txt"
+
+rule slow_once:
+    output: "done.txt"
+    resources: runtime=lambda wildcards, attempt: attempt, mem_mb=200
+    shell: "if [ -e first_attempt ]; then touch {output}; else touch first_attempt; sleep 600; fi"
+"""
+
+
+@pytest.fixture(scope="module")
+def retry_run(local_cluster, tmp_path_factory):
+    """The time-limit workflow, started at once and left to SLURM while the fusion study
+    runs (its first attempt only sleeps: most of the test's time is SLURM's time limit)."""
+    wd = tmp_path_factory.mktemp("retry")
+    shutil.copytree(ROOT / "workflow/profiles/slurm", wd / "workflow/profiles/slurm")
+    (wd / "Snakefile").write_text(SLOW_ONCE)
+    prof = wd / "workflow/profiles/slurm/config.yaml"
+    cfg = yaml.safe_load(prof.read_text())
+    cfg.pop("configfiles", None)  # the study's shard counts: not this workflow's
+    prof.write_text(yaml.safe_dump(cfg))
+    proc = subprocess.Popen([SNAKEMAKE, "--workflow-profile", "workflow/profiles/slurm", *FAST_POLL], cwd=wd,
+                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    yield wd, proc
+    if proc.poll() is None:
+        proc.kill()
+
+
 @pytest.mark.slow
-def test_the_fusion_study_through_slurm_gives_the_local_key_numbers(local_cluster, ci_run, tmp_path):
+def test_the_fusion_study_through_slurm_gives_the_local_key_numbers(ci_run, local_cluster, retry_run, tmp_path):
     wd = copy_workflow(tmp_path)
     cmd = [SNAKEMAKE, SLICE, "--workflow-profile", "workflow/profiles/slurm", "--configfile", "config/ci.yaml",
            "--jobs", "4", *FAST_POLL]
@@ -86,33 +115,15 @@ def test_the_fusion_study_through_slurm_gives_the_local_key_numbers(local_cluste
     assert {k: v["value"] for k, v in ours.items()} == {k: v["value"] for k, v in local.items()}
 
 
-SLOW_ONCE = """
-rule all:
-    input: "done.txt"
-
-rule slow_once:
-    output: "done.txt"
-    resources: runtime=lambda wildcards, attempt: attempt, mem_mb=200
-    shell: "if [ -e first_attempt ]; then touch {output}; else touch first_attempt; sleep 600; fi"
-"""
-
-
 @pytest.mark.slow
-def test_a_job_killed_at_its_time_limit_is_retried_with_the_doubled_limit(local_cluster, tmp_path):
+def test_a_job_killed_at_its_time_limit_is_retried_with_the_doubled_limit(retry_run):
     """The profile's policy (``retries: 1``, ``runtime: "N * attempt"``) on a rule that
     outlives its 1-minute limit on the first attempt only: SLURM kills it (TIMEOUT) and
     Snakemake submits it again with a 2-minute limit, which completes."""
-    shutil.copytree(ROOT / "workflow/profiles/slurm", tmp_path / "workflow/profiles/slurm")
-    (tmp_path / "Snakefile").write_text(SLOW_ONCE)
-    prof = tmp_path / "workflow/profiles/slurm/config.yaml"
-    cfg = yaml.safe_load(prof.read_text())
-    cfg.pop("configfiles", None)  # the study's shard counts: not this workflow's
-    prof.write_text(yaml.safe_dump(cfg))
-    run = subprocess.run([SNAKEMAKE, "--workflow-profile", "workflow/profiles/slurm", *FAST_POLL], cwd=tmp_path,
-                         capture_output=True, text=True, check=False, timeout=900)
-    log = run.stdout + run.stderr
-    assert run.returncode == 0, log[-5000:]
-    assert (tmp_path / "done.txt").exists()
+    wd, proc = retry_run
+    log, _ = proc.communicate(timeout=900)
+    assert proc.returncode == 0, log[-5000:]
+    assert (wd / "done.txt").exists()
     submitted = [line.split("SLURM jobid ")[1].split()[0] for line in log.splitlines() if "SLURM jobid " in line]
     assert len(submitted) == 2, log[-3000:]
     states = _sacct_like(submitted)

@@ -235,6 +235,33 @@ def claims_table(numbers: Mapping[str, Any], prefixes: Iterable[str] | None = No
     return "\n".join(head + rows + tail) + "\n"
 
 
+def claims_html(numbers: Mapping[str, Any]) -> str:
+    """A self-contained HTML page for the Snakemake report: every key number for which the
+    source paper states a value, ours beside the source's (with its relation: =, <, ≈, …),
+    the unit, the key and its meaning, one table per study."""
+    import html
+
+    studies: dict[str, list[str]] = {}
+    for name, e in numbers.items():
+        if e.get("source_value") is None:
+            continue
+        rel = e.get("source_relation") or "="
+        studies.setdefault(name.split(".")[0], []).append(
+            f"<tr><td><code>{html.escape(name)}</code></td><td>{html.escape(e['description'])}</td>"
+            f"<td class='n'>{html.escape(rel)} {format_number(e['source_value'])}</td>"
+            f"<td class='n'>{format_number(e['value'])}</td><td>{html.escape(e['unit'])}</td></tr>")
+    parts = ["<!DOCTYPE html><html><head><meta charset='utf-8'><title>Key numbers beside the source papers'</title>",
+             "<style>body{font-family:sans-serif;margin:1em}table{border-collapse:collapse;margin-bottom:2em}"
+             "td,th{border-bottom:1px solid #ccc;padding:3px 8px;vertical-align:top}td.n{text-align:right;"
+             "white-space:nowrap}th{text-align:left}</style></head><body>",
+             "<h1>Key numbers beside the source papers' values</h1>"]
+    for study, rows in studies.items():
+        parts += [f"<h2>{html.escape(study)}</h2>", "<table><tr><th>key</th><th>meaning</th><th>source</th>"
+                  "<th>ours</th><th>unit</th></tr>", *rows, "</table>"]
+    parts.append("</body></html>")
+    return "\n".join(parts) + "\n"
+
+
 FLOAT32_PREFIXES = ("nr.", "sens.nr.", "chain.nr_")
 """Keys whose computation passes through float32 arithmetic: the nr receiver synthesizes
 and correlates in single precision, and everything built on its estimates (the nr

@@ -11,6 +11,8 @@ rule key_numbers:
         claims="results/paper/claims.tex",
         all_numbers="results/paper/all_numbers.tex",
         config="results/paper/config.tex",
+        beside=report("results/paper/key_numbers_beside_source.html", caption="../report/key_numbers_beside.rst",
+                      category="numbers"),
     params:
         config=config,
     log:

@@ -87,6 +87,7 @@ wait_idle() {
 start() {
   need munged; need slurmctld; need slurmd; need sinfo
   write_conf
+  stop  # a cluster this script started before: its daemons are replaced (its jobs are lost)
   if ! pgrep -x munged >/dev/null; then
     if [ ! -s /etc/munge/munge.key ]; then
       mkdir -p /etc/munge

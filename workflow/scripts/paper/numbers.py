@@ -1,8 +1,9 @@
-"""Adapter: key-number fragments -> results/key_numbers.json, numbers.tex, claims.tex."""
+"""Adapter: key-number fragments -> results/key_numbers.json, numbers.tex, claims.tex, and the
+report's table of our key numbers beside the source papers'."""
 import json
 
 from railradio.io import write_json, write_text
-from railradio.keynumbers import claims_table, config_to_latex, merge, to_latex
+from railradio.keynumbers import claims_html, claims_table, config_to_latex, merge, to_latex
 from railradio.nr.reproduction_map import CELL_KEY
 from railradio.workflow import setup_script
 
@@ -19,3 +20,4 @@ write_text(smk.output.claims, claims_table(numbers, with_source_only=True))
 # the map's per-cell keys are its figure and results/key_numbers.json, not the appendix
 write_text(smk.output.all_numbers, claims_table({k: e for k, e in numbers.items() if not CELL_KEY.match(k)}))
 write_text(smk.output.config, config_to_latex(smk.params.config))
+write_text(smk.output.beside, claims_html(numbers))
