@@ -110,7 +110,7 @@ def test_the_fusion_study_through_slurm_gives_the_local_key_numbers(ci_run, loca
     assert {s for s, _ in states.values()} == {"COMPLETED"}, states
     ours = json.loads((wd / SLICE).read_text())
     local = json.loads((ci_run / SLICE).read_text())
-    assert len(ours) > 10
+    assert len(ours) >= 10  # the fusion study publishes 10 keys
     assert compare(ours, local, mode="reproduce") == []
     assert {k: v["value"] for k, v in ours.items()} == {k: v["value"] for k, v in local.items()}
 
