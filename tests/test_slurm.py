@@ -57,12 +57,17 @@ def local_cluster():
     subprocess.run([str(LOCAL_CLUSTER), "stop"], capture_output=True, timeout=COMMAND_TIMEOUT_S, check=False)
 
 
-def _sacct_like(job_ids: list[str]) -> dict[str, tuple[str, str]]:
+def _squeue_states(job_ids: list[str]) -> dict[str, tuple[str, str]]:
     """{job id: (state, time limit)} from squeue (finished jobs stay there for MinJobAge)."""
     out = subprocess.run(["squeue", "-h", "-a", "-t", "all", "-o", "%i|%T|%l"], capture_output=True, text=True,
                          check=True, timeout=COMMAND_TIMEOUT_S).stdout
     rows = dict(line.split("|", 1) for line in out.split())
     return {j: tuple(rows[j].split("|")) for j in job_ids if j in rows}
+
+
+def _submitted(log: str) -> list[str]:
+    """The SLURM job ids Snakemake reports submitting, in order."""
+    return [line.split("SLURM jobid ")[1].split()[0] for line in log.splitlines() if "SLURM jobid " in line]
 
 
 SLOW_ONCE = """
@@ -103,10 +108,10 @@ def test_the_fusion_study_through_slurm_gives_the_local_key_numbers(ci_run, loca
                          timeout=1200)
     log = run.stdout + run.stderr
     assert run.returncode == 0, log[-5000:]
-    submitted = [line.split("SLURM jobid ")[1].split()[0] for line in log.splitlines() if "SLURM jobid " in line]
+    submitted = _submitted(log)
     assert len(submitted) >= 5, log[-3000:]  # real sbatch submissions
     assert any("group_fusion_post" in line for line in log.splitlines()), "the profile's group was not submitted"
-    states = _sacct_like(submitted)
+    states = _squeue_states(submitted)
     assert {s for s, _ in states.values()} == {"COMPLETED"}, states
     ours = json.loads((wd / SLICE).read_text())
     local = json.loads((ci_run / SLICE).read_text())
@@ -124,9 +129,9 @@ def test_a_job_killed_at_its_time_limit_is_retried_with_the_doubled_limit(retry_
     log, _ = proc.communicate(timeout=900)
     assert proc.returncode == 0, log[-5000:]
     assert (wd / "done.txt").exists()
-    submitted = [line.split("SLURM jobid ")[1].split()[0] for line in log.splitlines() if "SLURM jobid " in line]
+    submitted = _submitted(log)
     assert len(submitted) == 2, log[-3000:]
-    states = _sacct_like(submitted)
+    states = _squeue_states(submitted)
     assert states[submitted[0]] == ("TIMEOUT", "1:00"), states
     assert states[submitted[1]] == ("COMPLETED", "2:00"), states
 

@@ -13,10 +13,10 @@
 # The configuration goes to SLURM's default path, /etc/slurm/slurm.conf (the executor plugin
 # clears SLURM_* variables, SLURM_CONF among them, before the job steps' srun reads it); a
 # configuration there that this script did not write is never replaced. State, logs and pid
-# files live under RAILRADIO_SLURM_DIR.
+# files live under RAILRADIO_SLURM_DIR (default $TMPDIR/railradio-slurm).
 set -euo pipefail
 
-dir=${RAILRADIO_SLURM_DIR:-/tmp/railradio-slurm}
+dir=${RAILRADIO_SLURM_DIR:-${TMPDIR:-/tmp}/railradio-slurm}
 reserve_mb=${RAILRADIO_SLURM_RESERVE_MB:-2048}
 conf=/etc/slurm/slurm.conf
 marker="# written by railradio's local-cluster.sh"
