@@ -5,6 +5,7 @@ BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 JOBS   ?= 2
 SNAKE  := $(BIN)/snakemake --workflow-profile workflow/profiles/default
+RUFF_PATHS := src workflow tests benchmarks
 export HDF5_USE_FILE_LOCKING := FALSE
 export MPLBACKEND := Agg
 
@@ -29,10 +30,14 @@ paper: $(STAMP)  ## results/paper/main.pdf (needs latexmk, see README)
 report: figures numbers  ## results/report.html
 	$(SNAKE) all --report results/report.html
 
-lint: $(STAMP)
+lint: $(STAMP)  ## ruff (lint and format, pyproject.toml) and Snakemake's linter
+	$(BIN)/ruff check $(RUFF_PATHS)
+	$(BIN)/ruff format --check $(RUFF_PATHS)
 	$(BIN)/snakemake --lint
 
 test: $(STAMP)  ## lint, dry runs, unit + integration tests, CI-scale pipeline, key numbers
+	$(BIN)/ruff check $(RUFF_PATHS)
+	$(BIN)/ruff format --check $(RUFF_PATHS)
 	$(BIN)/snakemake --lint
 	$(SNAKE) all -n -q rules
 	$(BIN)/python -m pytest

@@ -1,4 +1,5 @@
 """Shared output of the benchmarks: one line per value, and the JSON report."""
+
 import time
 
 from railradio.io import write_json

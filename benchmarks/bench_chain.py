@@ -8,6 +8,7 @@ throughput against a per-crossing Python loop drawing the same segments.
 
     python benchmarks/bench_chain.py --out results/benchmarks/chain_bench.json
 """
+
 from __future__ import annotations
 
 import argparse
@@ -36,21 +37,40 @@ def main() -> None:
     t_shared = best_of(lambda: simulate_block(base, speed, 1, 0, args.runs, sigmas, 1.0, {}), 2)
 
     def plain():
-        return {s: ho_simulate_block(replace(base, train=replace(base.train, gnss_sigma_m=s)), speed, 1, 0,
-                                     args.runs, ("joint", "distance", "a3")) for s in sigmas}
+        return {
+            s: ho_simulate_block(
+                replace(base, train=replace(base.train, gnss_sigma_m=s)),
+                speed,
+                1,
+                0,
+                args.runs,
+                ("joint", "distance", "a3"),
+            )
+            for s in sigmas
+        }
 
     t_plain = best_of(plain, 1)
     ours, ref = simulate_block(base, speed, 1, 0, args.runs, sigmas, 1.0, {}), plain()
-    same = all(np.array_equal(ours[gm_label(s)][p]["success"], np.asarray(ref[s][p]["success"][1], dtype=float))
-               for s in sigmas for p in ("joint", "distance", "a3"))
+    same = all(
+        np.array_equal(ours[gm_label(s)][p]["success"], np.asarray(ref[s][p]["success"][1], dtype=float))
+        for s in sigmas
+        for p in ("joint", "distance", "a3")
+    )
 
     # bootstrap: vectorized vs a per-crossing loop over the same draws
     n = 20_000
     t_epochs = np.arange(n) * 0.1
     import xarray as xr
+
     rng = np.random.default_rng(0)
-    ds = xr.Dataset({"along_err": (("filter", "epoch"), rng.standard_normal((1, n))), "t": ("epoch", t_epochs),
-                     "x_true": ("epoch", speed / 3.6 * t_epochs)}, coords={"filter": ["ekf"]})
+    ds = xr.Dataset(
+        {
+            "along_err": (("filter", "epoch"), rng.standard_normal((1, n))),
+            "t": ("epoch", t_epochs),
+            "x_true": ("epoch", speed / 3.6 * t_epochs),
+        },
+        coords={"filter": ["ekf"]},
+    )
     series = series_from_runs([ds], "ekf", speed, 50.0, 0.5)
     n_runs, k = 2000, 431
     t_boot = best_of(lambda: bootstrap(series, n_runs, k, 0.04, np.random.default_rng(1)), 3)

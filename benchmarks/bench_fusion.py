@@ -7,6 +7,7 @@ the sensitivity study's TDOA on a circular-arc track (safeguarded Newton vs Bren
 
     python benchmarks/bench_fusion.py --out results/benchmarks/fusion_bench.json
 """
+
 from __future__ import annotations
 
 import argparse

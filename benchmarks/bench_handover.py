@@ -6,6 +6,7 @@ outcomes agree on the crossings both simulated.
 
     python benchmarks/bench_handover.py --out results/benchmarks/handover_bench.json
 """
+
 from __future__ import annotations
 
 import argparse
@@ -49,14 +50,19 @@ def main() -> None:
         times.append(time.perf_counter() - t0)
     t_vec = min(times)
 
-    sub = type(draws)(draws.field_white[: args.runs_loop], draws.meas_white[: args.runs_loop],
-                      draws.gnss_white[: args.runs_loop])
+    sub = type(draws)(
+        draws.field_white[: args.runs_loop], draws.meas_white[: args.runs_loop], draws.gnss_white[: args.runs_loop]
+    )
     t0 = time.perf_counter()
     ref = simulate_reference(scn, kin, sub, POLICIES)
     t_loop = time.perf_counter() - t0
-    agree = all(np.allclose(vec[p][k][1][: args.runs_loop].astype(float), ref[p][k].astype(float),
-                            rtol=1e-9, atol=1e-9, equal_nan=True)
-                for p in POLICIES for k in ("command_x_m", "success", "attempts", "pingpong", "delay_s"))
+    agree = all(
+        np.allclose(
+            vec[p][k][1][: args.runs_loop].astype(float), ref[p][k].astype(float), rtol=1e-9, atol=1e-9, equal_nan=True
+        )
+        for p in POLICIES
+        for k in ("command_x_m", "success", "attempts", "pingpong", "delay_s")
+    )
 
     vec_rate = args.runs_vector * n_nodes / t_vec
     loop_rate = args.runs_loop * n_nodes / t_loop

@@ -12,6 +12,7 @@ choice of what to keep is measured.
 
     python benchmarks/bench_nr.py --out results/benchmarks/nr_bench.json
 """
+
 from __future__ import annotations
 
 import argparse
@@ -23,9 +24,9 @@ import sys
 import time
 
 import numpy as np
-from _report import best_of, emit
 import scipy.fft as sfft
 import yaml
+from _report import best_of, emit
 
 from railradio.nr.link import ShadowingMap, link_budget
 from railradio.nr.numerology import Numerology
@@ -61,9 +62,14 @@ def shard_run(config: str, n_epochs: int, tunables: bool, exact_spill: bool = Fa
     env = {**os.environ, **JOB_ENV}
     if not tunables:
         del env["GLIBC_TUNABLES"]
-    out = subprocess.run([sys.executable, "-c", _SHARD_RUN, config, str(n_epochs),
-                          "exact_spill" if exact_spill else "wrapped"], env=env,
-                         check=True, capture_output=True, text=True, timeout=1800).stdout
+    out = subprocess.run(
+        [sys.executable, "-c", _SHARD_RUN, config, str(n_epochs), "exact_spill" if exact_spill else "wrapped"],
+        env=env,
+        check=True,
+        capture_output=True,
+        text=True,
+        timeout=1800,
+    ).stdout
     return json.loads(out.strip().splitlines()[-1])
 
 
@@ -89,10 +95,9 @@ def fft_backends(repeat: int = 30) -> dict:
     µs per batch, best of ``repeat``."""
     rng = np.random.default_rng(2)
     out = {}
-    backends = {"scipy": lambda a: sfft.ifft(a, axis=-1, workers=1),
-                "numpy": lambda a: np.fft.ifft(a, axis=-1)}
+    backends = {"scipy": lambda a: sfft.ifft(a, axis=-1, workers=1), "numpy": lambda a: np.fft.ifft(a, axis=-1)}
     try:
-        import ducc0  # noqa: PLC0415 - optional, for comparison only
+        import ducc0
 
         backends["ducc0"] = lambda a: ducc0.fft.c2c(a, axes=(a.ndim - 1,), forward=False, inorm=2, nthreads=1)
     except ImportError:
@@ -108,10 +113,15 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--config", default="config/config.yaml")
     ap.add_argument("--epochs", type=int, default=6)
-    ap.add_argument("--shard-epochs", type=int, default=100,
-                    help="bursts of the shard-like runs with and without the malloc settings")
-    ap.add_argument("--exact-epochs", type=int, default=3,
-                    help="epochs of the fidelity paths (the exact reference costs ~6 s each)")
+    ap.add_argument(
+        "--shard-epochs",
+        type=int,
+        default=100,
+        help="bursts of the shard-like runs with and without the malloc settings",
+    )
+    ap.add_argument(
+        "--exact-epochs", type=int, default=3, help="epochs of the fidelity paths (the exact reference costs ~6 s each)"
+    )
     ap.add_argument("--out", default=None)
     args = ap.parse_args()
     with open(args.config, encoding="utf-8") as fh:
@@ -123,13 +133,16 @@ def main() -> None:
     d_fe = scn.receiver.decimation
     d_s = scn.synthesis_decimation or d_fe
     d_c = scn.search_decimation or d_fe
-    fast_syn = Synthesizer(dataclasses.replace(scn.receiver, decimation=d_s), scn.profile, pool, scn.n_sinusoids,
-                           scn.full_channel_range_m)
-    fast_cor = Correlator(dataclasses.replace(scn.receiver, decimation=d_c), scn.detector, scn.pfa,
-                          template_decimation=d_fe)
+    fast_syn = Synthesizer(
+        dataclasses.replace(scn.receiver, decimation=d_s), scn.profile, pool, scn.n_sinusoids, scn.full_channel_range_m
+    )
+    fast_cor = Correlator(
+        dataclasses.replace(scn.receiver, decimation=d_c), scn.detector, scn.pfa, template_decimation=d_fe
+    )
 
     def front(z):  # the front end's samples on the correlator's lag grid
         return upsample(project(z, d_fe // d_s), d_fe // d_c)
+
     cfg1 = dataclasses.replace(scn.receiver, decimation=1)
     full_syn = Synthesizer(cfg1, scn.profile, pool, scn.n_sinusoids, scn.full_channel_range_m)
     t_traj = 250.0 + 0.1 * np.arange(args.epochs)  # consecutive epochs at cruise speed
@@ -183,8 +196,9 @@ def main() -> None:
     runs = {"malloc_default": [], "malloc_tuned": [], "exact_spill": []}
     for _ in range(2):
         for name in runs:
-            runs[name].append(shard_run(args.config, args.shard_epochs, name != "malloc_default",
-                                        exact_spill=name == "exact_spill"))
+            runs[name].append(
+                shard_run(args.config, args.shard_epochs, name != "malloc_default", exact_spill=name == "exact_spill")
+            )
     for name in runs:
         best = min(runs[name], key=lambda r: r["wall_s"])
         report[f"{name}_ms_per_burst"] = 1e3 * best["wall_s"] / best["n"]

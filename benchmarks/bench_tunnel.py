@@ -8,6 +8,7 @@ rays, lifted at the exact offsets), with the largest difference between the two.
 
     python benchmarks/bench_tunnel.py --out results/benchmarks/tunnel_bench.json
 """
+
 from __future__ import annotations
 
 import argparse

@@ -1,6 +1,7 @@
 """A headless Chromium driven over the DevTools protocol on a pipe (``--remote-debugging-pipe``:
 NUL-terminated JSON messages on file descriptors 3 and 4), for the report tests. No
 browser-automation package: the protocol's few commands used here are plain JSON."""
+
 from __future__ import annotations
 
 import base64
@@ -37,11 +38,23 @@ class Browser:
             os.dup2(w, 4)
 
         self._proc = subprocess.Popen(
-            [exe, "--headless=new", "--no-sandbox", "--disable-gpu", "--hide-scrollbars", "--no-first-run",
-             "--remote-debugging-pipe", f"--user-data-dir={self._profile}", f"--window-size={width},{height}",
-             "about:blank"],
-            close_fds=False, preexec_fn=fds, stdout=subprocess.DEVNULL,
-            stderr=subprocess.DEVNULL)
+            [
+                exe,
+                "--headless=new",
+                "--no-sandbox",
+                "--disable-gpu",
+                "--hide-scrollbars",
+                "--no-first-run",
+                "--remote-debugging-pipe",
+                f"--user-data-dir={self._profile}",
+                f"--window-size={width},{height}",
+                "about:blank",
+            ],
+            close_fds=False,
+            preexec_fn=fds,
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+        )
         os.close(to_chrome_r)
         os.close(from_chrome_w)
         self._buf = b""
@@ -49,8 +62,14 @@ class Browser:
         target = self.call("Target.createTarget", url="about:blank")["targetId"]
         self._session = self.call("Target.attachToTarget", targetId=target, flatten=True)["sessionId"]
         self.call("Page.enable", session=True)
-        self.call("Emulation.setDeviceMetricsOverride", session=True, width=width, height=height,
-                  deviceScaleFactor=1, mobile=False)
+        self.call(
+            "Emulation.setDeviceMetricsOverride",
+            session=True,
+            width=width,
+            height=height,
+            deviceScaleFactor=1,
+            mobile=False,
+        )
 
     def __enter__(self) -> Browser:
         return self
@@ -61,7 +80,7 @@ class Browser:
     def close(self) -> None:
         try:
             self.call("Browser.close")
-        except Exception:  # noqa: BLE001 - the browser may already be gone
+        except Exception:
             pass
         try:
             self._proc.wait(timeout=10)
@@ -99,8 +118,7 @@ class Browser:
 
     def evaluate(self, expression: str):
         """The value of a JavaScript expression in the page (awaited if a promise)."""
-        res = self.call("Runtime.evaluate", session=True, expression=expression, returnByValue=True,
-                        awaitPromise=True)
+        res = self.call("Runtime.evaluate", session=True, expression=expression, returnByValue=True, awaitPromise=True)
         if "exceptionDetails" in res:
             raise RuntimeError(f"{expression[:80]}: {res['exceptionDetails']}")
         return res["result"].get("value")

@@ -3,6 +3,7 @@
 The CI-scale pipeline (``config/ci.yaml``) runs once per test session, in a private copy of
 the workflow (:func:`ci_run`); every test that needs its results shares that run.
 """
+
 import os
 import shutil
 import subprocess
@@ -41,14 +42,21 @@ def workflow_env(wd: Path, **extra: str) -> dict[str, str]:
     return {**os.environ, "PYTHONPATH": str(wd / "src"), "MPLBACKEND": "Agg", **extra}
 
 
-def smk(wd: Path, *args: str, check: bool = True, ci: bool = True, timeout: float = PIPELINE_TIMEOUT_S,
-        env: dict[str, str] | None = None) -> subprocess.CompletedProcess:
+def smk(
+    wd: Path,
+    *args: str,
+    check: bool = True,
+    ci: bool = True,
+    timeout: float = PIPELINE_TIMEOUT_S,
+    env: dict[str, str] | None = None,
+) -> subprocess.CompletedProcess:
     """Run Snakemake in ``wd`` with the default profile (and the CI config unless ``ci=False``)."""
     cmd = [SNAKEMAKE, *args, "--workflow-profile", "workflow/profiles/default"]
     if ci:
         cmd += ["--configfile", "config/ci.yaml"]
-    run = subprocess.run(cmd, cwd=wd, env=env or workflow_env(wd), capture_output=True, text=True,
-                         check=False, timeout=timeout)
+    run = subprocess.run(
+        cmd, cwd=wd, env=env or workflow_env(wd), capture_output=True, text=True, check=False, timeout=timeout
+    )
     if check and run.returncode != 0:
         raise AssertionError(f"{' '.join(cmd)} failed:\n{run.stdout[-3000:]}\n{run.stderr[-5000:]}")
     return run

@@ -18,11 +18,34 @@ ROOT = Path(__file__).resolve().parents[1]
 def test_bench_nr_smoke(tmp_path):
     out = tmp_path / "nr_bench.json"
     env = dict(os.environ, OPENBLAS_NUM_THREADS="1")
-    subprocess.run([sys.executable, str(ROOT / "benchmarks" / "bench_nr.py"), "--epochs", "1",
-                    "--shard-epochs", "2", "--exact-epochs", "1", "--out", str(out)], cwd=ROOT, env=env, check=True, timeout=600)
+    subprocess.run(
+        [
+            sys.executable,
+            str(ROOT / "benchmarks" / "bench_nr.py"),
+            "--epochs",
+            "1",
+            "--shard-epochs",
+            "2",
+            "--exact-epochs",
+            "1",
+            "--out",
+            str(out),
+        ],
+        cwd=ROOT,
+        env=env,
+        check=True,
+        timeout=600,
+    )
     rep = json.loads(out.read_text())
-    for key in ("project_ms_per_epoch", "naive_ms_per_epoch", "speedup", "malloc_speedup",
-                "exact_path_ms.exact", "exact_path_ratio.search", "exact_spill_cost_ratio"):
+    for key in (
+        "project_ms_per_epoch",
+        "naive_ms_per_epoch",
+        "speedup",
+        "malloc_speedup",
+        "exact_path_ms.exact",
+        "exact_path_ratio.search",
+        "exact_spill_cost_ratio",
+    ):
         assert math.isfinite(rep[key]) and rep[key] > 0, key
     shares = [rep[f"project_share_{k}"] for k in ("link", "synthesis_and_channel", "correlation")]
     assert sum(shares) == pytest.approx(1.0)

@@ -1,5 +1,6 @@
 """Code hashes derived from imports: every rule re-runs exactly when code its script runs
 changes (railradio.codedeps), checked over every rule and every library module."""
+
 from __future__ import annotations
 
 import json
@@ -37,7 +38,7 @@ def _dynamic_closure(scripts: list[Path]) -> dict[str, list[str]]:
     (forked after the third-party packages are imported), the script's import statements
     (and its ``sys.path`` set-up) are executed and the railradio modules and helper files
     in ``sys.modules`` listed."""
-    prog = r'''
+    prog = r"""
 import ast, json, os, sys
 import numpy, scipy, xarray, numba, matplotlib, filterpy, pandas, h5netcdf  # noqa: F401
 out = {}
@@ -74,10 +75,16 @@ for script in sys.argv[1:]:
     os.waitpid(pid, 0)
     out[script] = json.loads(data)
 print(json.dumps(out))
-'''
+"""
     env = {**os.environ, "PYTHONPATH": str(ROOT / "src"), "MPLBACKEND": "Agg"}
-    run = subprocess.run([sys.executable, "-c", prog, *map(str, scripts)], env=env, capture_output=True,
-                         text=True, check=False, timeout=600)
+    run = subprocess.run(
+        [sys.executable, "-c", prog, *map(str, scripts)],
+        env=env,
+        capture_output=True,
+        text=True,
+        check=False,
+        timeout=600,
+    )
     assert run.returncode == 0, run.stderr[-3000:]
     out = json.loads(run.stdout.splitlines()[-1])
     errors = {s: v["error"] for s, v in out.items() if isinstance(v, dict)}
@@ -115,8 +122,11 @@ def test_changing_a_module_changes_exactly_the_hashes_of_the_rules_that_run_it(t
     rules = {r: tmp_path / "scripts" / p.relative_to(ROOT / "workflow/scripts") for r, p in rule_scripts().items()}
     closures = {r: script_closure(s, root) for r, s in rules.items()}
     base = {r: script_code_hash(s, root) for r, s in rules.items()}
-    files = sorted(root.rglob("*.py")) + sorted((root / "data").iterdir()) + sorted(
-        p for p in (tmp_path / "scripts").glob("*/*.py") if p not in rules.values())
+    files = (
+        sorted(root.rglob("*.py"))
+        + sorted((root / "data").iterdir())
+        + sorted(p for p in (tmp_path / "scripts").glob("*/*.py") if p not in rules.values())
+    )
     reached = set()
     for f in files:
         original = f.read_bytes()
@@ -162,14 +172,31 @@ def test_the_workflow_sets_each_rule_hash_from_its_script(tmp_path):
         'include: "Snakefile"\n'
         "import json as _json\n"
         "print('PROBE' + _json.dumps({r.name: [getattr(r.params, 'code', None), r.script]"
-        " for r in workflow.rules}))\n")
+        " for r in workflow.rules}))\n"
+    )
     env = {**os.environ, "PYTHONPATH": str(wd / "src")}
-    run = subprocess.run([str(Path(sys.executable).parent / "snakemake"), "-s", "probe.smk", "-n", "-q",
-                          "rules", "--workflow-profile", "workflow/profiles/default", "all"],
-                         cwd=wd, env=env, capture_output=True, text=True, check=False, timeout=300)
+    run = subprocess.run(
+        [
+            str(Path(sys.executable).parent / "snakemake"),
+            "-s",
+            "probe.smk",
+            "-n",
+            "-q",
+            "rules",
+            "--workflow-profile",
+            "workflow/profiles/default",
+            "all",
+        ],
+        cwd=wd,
+        env=env,
+        capture_output=True,
+        text=True,
+        check=False,
+        timeout=300,
+    )
     assert run.returncode == 0, run.stderr[-2000:]
     line = next(x for x in run.stdout.splitlines() if x.startswith("PROBE"))
-    loaded = json.loads(line[len("PROBE"):])
+    loaded = json.loads(line[len("PROBE") :])
     assert set(loaded) >= set(rule_scripts())
     for name, (code, script) in loaded.items():
         if script is None:
@@ -177,14 +204,18 @@ def test_the_workflow_sets_each_rule_hash_from_its_script(tmp_path):
             continue
         path = (wd / "workflow/rules" / script).resolve()
         assert code == script_code_hash(path, wd / "src/railradio"), name
-    assert not re.search(r"(?<!script_)code_hash\(", "".join(p.read_text() for p in (ROOT / "workflow/rules").glob("*.smk")))
+    assert not re.search(
+        r"(?<!script_)code_hash\(", "".join(p.read_text() for p in (ROOT / "workflow/rules").glob("*.smk"))
+    )
 
 
 def test_a_data_file_named_by_the_script_itself_counts(tmp_path):
     scripts = tmp_path / "scripts" / "study"
     scripts.mkdir(parents=True)
-    (scripts / "reader.py").write_text('import json\nfrom importlib.resources import files\n'
-                                       'json.loads((files("railradio") / "data" / "tdl.json").read_text())\n')
+    (scripts / "reader.py").write_text(
+        "import json\nfrom importlib.resources import files\n"
+        'json.loads((files("railradio") / "data" / "tdl.json").read_text())\n'
+    )
     assert "data/tdl.json" in script_closure(scripts / "reader.py")
     a = script_code_hash(scripts / "reader.py")
     (scripts / "reader.py").write_text((scripts / "reader.py").read_text() + "# edited\n")

@@ -1,5 +1,6 @@
 """Config validation: the schema (types, ranges, a default for every key) and the rules
 between keys (railradio.config_checks), one test per kind of bad value; all in process."""
+
 import copy
 
 import pytest
@@ -65,14 +66,17 @@ def test_every_key_has_a_default_and_a_description():
 def test_every_array_bounds_its_length_or_says_why_empty_is_meaningful():
     """An array without minItems must be one whose empty value means something (stated in
     its description): the distance bins of W (one W) and the handover switches (not varied)."""
+
     def arrays(node, key=""):
         if "array" in ([node.get("type")] if isinstance(node.get("type"), str) else node.get("type", [])):
             yield key, node
         for name, sub in (node.get("properties") or {}).items():
             yield from arrays(sub, f"{key}.{name}" if key else name)
+
     free = sorted(k for k, n in arrays(SCHEMA) if "minItems" not in n)
-    assert all(k == "nr.tracker.w_distance_edges_m" or k.startswith("handover.sensitivity.switches.")
-               for k in free), free
+    assert all(k == "nr.tracker.w_distance_edges_m" or k.startswith("handover.sensitivity.switches.") for k in free), (
+        free
+    )
 
 
 def test_shipped_configs_pass_every_rule():
@@ -96,8 +100,7 @@ def test_defaults_filled():
         (("fusion", "n_trials"), "many", ["fusion.n_trials", "integer", ">= 2"]),
         (("fusion", "clip"), "sometimes", ["fusion.clip", "no_solution"]),
         (("seed",), -3, ["seed", ">= 0"]),
-        (("nr", "sensitivity", "tracker_variants"), ["aod", "toa"],
-         ["nr.sensitivity.tracker_variants", "aod_toa"]),
+        (("nr", "sensitivity", "tracker_variants"), ["aod", "toa"], ["nr.sensitivity.tracker_variants", "aod_toa"]),
     ],
 )
 def test_bad_values_name_key_and_range(path, value, must_mention):
@@ -160,8 +163,10 @@ def test_schema_rejects_each_kind_of_bad_value(dotted, value, must_mention):
         ({"nr.n_shards": 500}, ["nr.n_shards", "160 epochs"]),  # shards <= epochs (CI: 160)
         ({"nr.sensitivity.n_shards": 100}, ["nr.sensitivity.n_shards", "<= nr.sensitivity.epochs = 60"]),
         ({"nr.calibration.epochs": 100000}, ["nr.calibration.epochs", "trajectory"]),
-        ({"nr.calibration.trajectory.phases": [[10.0, 1.0], [20.0, -1.0]]},
-         ["nr.calibration.trajectory.phases[1]", "speed >= 0"]),
+        (
+            {"nr.calibration.trajectory.phases": [[10.0, 1.0], [20.0, -1.0]]},
+            ["nr.calibration.trajectory.phases[1]", "speed >= 0"],
+        ),
         ({"chain.sigmas_m": [0.0, 20.0, 2.0]}, ["chain.sigmas_m", "ascending"]),
         ({"nr.tracker.w_distance_edges_m": [750.0, 250.0]}, ["nr.tracker.w_distance_edges_m", "ascending"]),
         ({"nr.imm.receiver": "fancy"}, ["nr.imm.receiver", "robust"]),  # a name that does not exist
@@ -172,14 +177,22 @@ def test_schema_rejects_each_kind_of_bad_value(dotted, value, must_mention):
         ({"handover.cost.alpha_min": 0.95}, ["handover.cost.alpha_min", "alpha_max"]),
         ({"nr.trajectory.phases": [[100.0, 0.5], [200.0, -0.5]]}, ["nr.trajectory.phases[1]", "speed"]),
         ({"nr.sync": {"rrh_sigma_s": 1e-9, "train_bias_s": 0.0}}, ["nr.sync", "main run"]),
-        ({"nr.sensitivity.sweeps": {"s": {"label": "x", "cases": ["nope"], "values": [1]}}},
-         ["nr.sensitivity.sweeps.s.cases", "nr.sensitivity.cases"]),
-        ({"nr.sensitivity.sweeps": {"s": {"label": "x", "cases": ["base"], "values": [1, 2]}}},
-         ["nr.sensitivity.sweeps.s.values", "one value per case"]),
-        ({"nr.sensitivity.cases": {"loud": {"radio": {"tx_power_dbm": 900}}}},
-         ["nr.sensitivity.cases.loud.radio.tx_power_dbm", "<= 80"]),
-        ({"nr.sensitivity.cases": {"far": {"n_shards": 1, "calibration": {"epochs": 10**5}}}},
-         ["nr.sensitivity.cases.far.calibration.epochs"]),
+        (
+            {"nr.sensitivity.sweeps": {"s": {"label": "x", "cases": ["nope"], "values": [1]}}},
+            ["nr.sensitivity.sweeps.s.cases", "nr.sensitivity.cases"],
+        ),
+        (
+            {"nr.sensitivity.sweeps": {"s": {"label": "x", "cases": ["base"], "values": [1, 2]}}},
+            ["nr.sensitivity.sweeps.s.values", "one value per case"],
+        ),
+        (
+            {"nr.sensitivity.cases": {"loud": {"radio": {"tx_power_dbm": 900}}}},
+            ["nr.sensitivity.cases.loud.radio.tx_power_dbm", "<= 80"],
+        ),
+        (
+            {"nr.sensitivity.cases": {"far": {"n_shards": 1, "calibration": {"epochs": 10**5}}}},
+            ["nr.sensitivity.cases.far.calibration.epochs"],
+        ),
         ({"tunnel.rays.offset_step_m": 0.3}, ["tunnel.rays.offset_step_m", "slot_spacing_m"]),
         ({"tunnel.trains.freight.length_m": 1500.0}, ["tunnel.trains.freight.length_m", "length_m = 1200"]),
         ({"tunnel.geometry.rx_y_m": 9.0}, ["tunnel.geometry", "outside"]),  # a study's own check
@@ -187,10 +200,14 @@ def test_schema_rejects_each_kind_of_bad_value(dotted, value, must_mention):
         ({"fusion.sensitivity.radii_m": [1000.0]}, ["fusion.sensitivity.radii_m[0]", "d_m"]),
         ({"nr.sensitivity.epochs": 500}, ["nr.sensitivity.epochs", "main run's 160 epochs"]),
         ({"chain.speed_halfwidth_kmh": 10.0}, ["chain.speed_halfwidth_kmh", "reaches"]),  # CI: 0-57 km/h
-        ({("handover", "sensitivity", "switches", "radio.spacing_m"): [10.0]},
-         ["handover.sensitivity.switches.radio.spacing_m[0]", ">= 500"]),
-        ({("handover", "sensitivity", "switches", "a3.ttt_s"): [0.33]},  # not a TS 36.331 TimeToTrigger
-         ["handover.sensitivity.switches.a3.ttt_s[0]", "0.32"]),
+        (
+            {("handover", "sensitivity", "switches", "radio.spacing_m"): [10.0]},
+            ["handover.sensitivity.switches.radio.spacing_m[0]", ">= 500"],
+        ),
+        (
+            {("handover", "sensitivity", "switches", "a3.ttt_s"): [0.33]},  # not a TS 36.331 TimeToTrigger
+            ["handover.sensitivity.switches.a3.ttt_s[0]", "0.32"],
+        ),
     ],
 )
 def test_rules_between_keys_name_the_key(changes, must_mention):

@@ -8,8 +8,15 @@ def test_entry_and_merge():
     b = {"y.b": KeySpec("y.b", "1", "b").entry(3.0)}
     m = merge([b, a])
     assert list(m) == ["x.a", "y.b"]
-    assert m["x.a"] == {"value": 1.2, "unit": "m", "source_value": 1.3, "source_relation": "<",
-                        "description": "a thing", "mc_stderr": 0.01, "digits": 3}
+    assert m["x.a"] == {
+        "value": 1.2,
+        "unit": "m",
+        "source_value": 1.3,
+        "source_relation": "<",
+        "description": "a thing",
+        "mc_stderr": 0.01,
+        "digits": 3,
+    }
     with pytest.raises(ValueError, match="twice"):
         merge([a, a])
 
@@ -23,8 +30,18 @@ def test_spec_validation():
         KeySpec("k", "m", "d").entry(float("nan"))
 
 
-@pytest.mark.parametrize(("v", "s"), [(15.126, "15.1"), (0.66, "0.660"), (3.0, "3"), (0.0025, "0.00250"),
-                                      (123456.7, "123457"), (1.5e-7, r"\ensuremath{1.50\times10^{-7}}"), (None, "--")])
+@pytest.mark.parametrize(
+    ("v", "s"),
+    [
+        (15.126, "15.1"),
+        (0.66, "0.660"),
+        (3.0, "3"),
+        (0.0025, "0.00250"),
+        (123456.7, "123457"),
+        (1.5e-7, r"\ensuremath{1.50\times10^{-7}}"),
+        (None, "--"),
+    ],
+)
 def test_format_number(v, s):
     assert format_number(v) == s
 
@@ -83,8 +100,7 @@ def test_tex_escape_is_ascii_and_pdflatex_safe():
 def test_config_macros_cover_values_lists_and_list_elements():
     from railradio.keynumbers import config_to_latex
 
-    tex = config_to_latex({"a": {"x": 2.5, "radii_m": [20000.0, 7000.0], "phases": [[1.0, 2.0]],
-                                 "name": "TDL-D"}})
+    tex = config_to_latex({"a": {"x": 2.5, "radii_m": [20000.0, 7000.0], "phases": [[1.0, 2.0]], "name": "TDL-D"}})
     assert r"\@namedef{cfg@a.x}{2.5}" in tex
     assert r"\@namedef{cfg@a.radii_m}{20000, 7000}" in tex
     assert r"\@namedef{cfgn@a.radii_m}{2}" in tex

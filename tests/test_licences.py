@@ -1,5 +1,6 @@
 """The project is MIT: no dependency, direct or transitive, may be licensed under the GPL
 only (a GPL-only library would make the whole program GPL)."""
+
 from __future__ import annotations
 
 import re
@@ -35,7 +36,8 @@ def _closure(root: str = "railradio") -> dict[str, list[str]]:
             continue
         md = dist.metadata
         seen[key] = [x for x in (md.get("License-Expression"), md.get("License")) if x] + [
-            c for c in (md.get_all("Classifier") or []) if c.startswith("License ::")]
+            c for c in (md.get_all("Classifier") or []) if c.startswith("License ::")
+        ]
         for r in dist.requires or []:
             req = Requirement(r)
             if req.marker is None or any(req.marker.evaluate({"extra": e}) for e in ("", "test")):
@@ -58,8 +60,17 @@ def test_no_dependency_is_gpl_only():
 
 
 def test_the_rule_catches_a_gpl_only_licence():
-    assert _gpl_only(["GPL-2.0-or-later",  # ducc0's
-                      "License :: OSI Approved :: GNU General Public License v2 or later (GPLv2+)"])
-    assert not _gpl_only(["License :: Public Domain", "License :: OSI Approved :: BSD License",
-                          "License :: OSI Approved :: GNU General Public License (GPL)"])  # docutils: a choice
+    assert _gpl_only(
+        [
+            "GPL-2.0-or-later",  # ducc0's
+            "License :: OSI Approved :: GNU General Public License v2 or later (GPLv2+)",
+        ]
+    )
+    assert not _gpl_only(
+        [
+            "License :: Public Domain",
+            "License :: OSI Approved :: BSD License",
+            "License :: OSI Approved :: GNU General Public License (GPL)",
+        ]
+    )  # docutils: a choice
     assert not _gpl_only(["LGPL-3.0-or-later"]) and not _gpl_only(["MIT"])

@@ -1,6 +1,7 @@
 """The manuscript's macros without LaTeX: every ``\\kn``, ``\\knm``, ``\\knsrc``, ``\\cfg`` and
 ``\\cfgn`` key in ``paper/main.tex`` exists (the PDF build itself is tests/test_workflow.py's);
 no published tracker accuracy exceeds 10 km."""
+
 from __future__ import annotations
 
 import json
@@ -53,6 +54,12 @@ def test_no_published_nr_accuracy_exceeds_10_km():
     from railradio.nr.loss import ACCURACY_CAP_M
 
     published = json.loads((ROOT / "paper/numbers.json").read_text())
-    bad = {k: e["value"] for k, e in published.items() if k.startswith(("nr.", "sens.nr."))
-           and ".err_m." in k and e["value"] is not None and e["value"] > ACCURACY_CAP_M}
+    bad = {
+        k: e["value"]
+        for k, e in published.items()
+        if k.startswith(("nr.", "sens.nr."))
+        and ".err_m." in k
+        and e["value"] is not None
+        and e["value"] > ACCURACY_CAP_M
+    }
     assert not bad, bad

@@ -1,4 +1,5 @@
 """The rule-graph drawing (no Graphviz): layers from the DOT edges, an error on bad input."""
+
 import pytest
 
 from railradio.plotting import plot_rulegraph

@@ -11,6 +11,7 @@ handled (railradio.workflow.cpu_pins):
   and OpenBLAS's kernels really sum differently).
 * scipy.fft's pocketfft is compiled for SSE2 only and has no run-time dispatch.
 """
+
 from __future__ import annotations
 
 import json
@@ -38,9 +39,14 @@ def test_generic_cpu_build_of_the_kernels_gives_the_same_nr_numbers(ci_run, tmp_
     wd = copy_workflow(tmp_path)
     env = workflow_env(wd, NUMBA_CPU_NAME="generic")
     smk(wd, *NR_SLICE, "-j1", env=env)
-    probe = subprocess.run([sys.executable, "-c", "from numba.core import config; print(config.CPU_NAME, "
-                            "repr(config.CPU_FEATURES))"], env=env, capture_output=True, text=True,
-                           check=True, timeout=COMMAND_TIMEOUT_S)
+    probe = subprocess.run(
+        [sys.executable, "-c", "from numba.core import config; print(config.CPU_NAME, repr(config.CPU_FEATURES))"],
+        env=env,
+        capture_output=True,
+        text=True,
+        check=True,
+        timeout=COMMAND_TIMEOUT_S,
+    )
     assert probe.stdout.split()[:2] == ["generic", "''"], probe.stdout  # no host features
     n_keys = 0
     for frag in NR_SLICE:
@@ -72,11 +78,19 @@ def test_the_pins_are_known_to_numpy_and_in_effect_in_a_job():
     no loop above AVX2, and both OpenBLAS libraries run the Haswell kernels."""
     if not cpu_pins():
         pytest.skip("not an x86-64-v3 machine: nothing is pinned")
-    prog = ("import json; from railradio.arithmetic import in_effect, pins_hold; "
-            "print(json.dumps([pins_hold(), in_effect()]))")
+    prog = (
+        "import json; from railradio.arithmetic import in_effect, pins_hold; "
+        "print(json.dumps([pins_hold(), in_effect()]))"
+    )
     env = workflow_env(ROOT, **JOB_ENV)
-    run = subprocess.run([sys.executable, "-W", "error::ImportWarning", "-c", prog], env=env, capture_output=True,
-                         text=True, check=False, timeout=COMMAND_TIMEOUT_S)
+    run = subprocess.run(
+        [sys.executable, "-W", "error::ImportWarning", "-c", prog],
+        env=env,
+        capture_output=True,
+        text=True,
+        check=False,
+        timeout=COMMAND_TIMEOUT_S,
+    )
     assert run.returncode == 0, run.stderr[-2000:]
     holds, eff = json.loads(run.stdout)
     assert holds and eff["numpy_simd"] == "X86_V3" and set(eff["openblas_core"].values()) == {"Haswell"}, eff
@@ -93,8 +107,14 @@ print(hashlib.sha256((a @ b).tobytes() + (x @ x.T).tobytes()).hexdigest())
 
 def _blas_digest(coretype: str) -> str:
     env = workflow_env(ROOT, OPENBLAS_CORETYPE=coretype, OPENBLAS_NUM_THREADS="1")
-    return subprocess.run([sys.executable, "-c", _BLAS_SUMS], env=env, capture_output=True, text=True,
-                          check=True, timeout=COMMAND_TIMEOUT_S).stdout.strip()
+    return subprocess.run(
+        [sys.executable, "-c", _BLAS_SUMS],
+        env=env,
+        capture_output=True,
+        text=True,
+        check=True,
+        timeout=COMMAND_TIMEOUT_S,
+    ).stdout.strip()
 
 
 def test_openblas_kernels_sum_differently_so_the_pin_matters():

@@ -6,6 +6,7 @@ from the report or an image that does not load fails.
 Chromium is Debian's ``chromium``: the test is skipped where it is missing, unless
 ``RAILRADIO_REQUIRE_CHROMIUM=1`` (set by ``.ci/run``, which installs it).
 """
+
 from __future__ import annotations
 
 import json
@@ -41,13 +42,17 @@ def _not_blank(png) -> float:
     return 1.0 - counts.max() / codes.size
 
 
-CLICK = ("(text => {const el = [...document.querySelectorAll('a, button, li, span, div')]"
-         ".filter(e => e.innerText && e.innerText.trim().toLowerCase() === text.toLowerCase()).pop(); "
-         "if (!el) return false; el.click(); return true;})")
+CLICK = (
+    "(text => {const el = [...document.querySelectorAll('a, button, li, span, div')]"
+    ".filter(e => e.innerText && e.innerText.trim().toLowerCase() === text.toLowerCase()).pop(); "
+    "if (!el) return false; el.click(); return true;})"
+)
 """Click the innermost element whose text is ``text`` (the report's menu entries; the menu
 shows some in capitals)."""
-VIEW = ("(name => {const row = [...document.querySelectorAll('tr')].find(r => r.innerText.includes(name)); "
-        "if (!row) return false; row.querySelector('a[iconname=eye]').click(); return true;})")
+VIEW = (
+    "(name => {const row = [...document.querySelectorAll('tr')].find(r => r.innerText.includes(name)); "
+    "if (!row) return false; row.querySelector('a[iconname=eye]').click(); return true;})"
+)
 """Click the view button (the eye) of the result listed under ``name``."""
 
 
@@ -68,8 +73,9 @@ def test_the_report_renders_its_figures_and_the_key_numbers_beside_the_sources(r
     assert len(figures) > 10
     with Browser() as b:
         b.open(report.as_uri())
-        b.wait_for("typeof app !== 'undefined' && "
-                   "document.querySelector('#app').innerText.toLowerCase().includes('results')")
+        b.wait_for(
+            "typeof app !== 'undefined' && document.querySelector('#app').innerText.toLowerCase().includes('results')"
+        )
         main = b.screenshot(tmp_path / "main.png")
         assert _not_blank(main) > 0.02, "the main page rendered blank"
         in_report = set(b.evaluate("Object.keys(results)"))
@@ -81,10 +87,13 @@ def test_the_report_renders_its_figures_and_the_key_numbers_beside_the_sources(r
         # a figure page, reached through the menu
         target = next(f for f in sorted(in_report) if f.startswith("results/figures/nr_") and f.endswith(".png"))
         _show(b, "nr", target.rsplit("/", 1)[1])
-        b.wait_for("[...document.images].some(i => i.src.startsWith('data:image/png') && i.complete "
-                   "&& i.naturalWidth > 200)")
-        shown = b.evaluate("Math.max(...[...document.images].filter(i => i.src.startsWith('data:image/png'))"
-                           ".map(i => i.getBoundingClientRect().width))")
+        b.wait_for(
+            "[...document.images].some(i => i.src.startsWith('data:image/png') && i.complete && i.naturalWidth > 200)"
+        )
+        shown = b.evaluate(
+            "Math.max(...[...document.images].filter(i => i.src.startsWith('data:image/png'))"
+            ".map(i => i.getBoundingClientRect().width))"
+        )
         assert shown > 300, f"the figure is shown {shown} px wide"
         page = b.screenshot(tmp_path / "figure.png")
         assert _not_blank(page) > 0.05, "the figure page rendered blank"
@@ -94,10 +103,12 @@ def test_the_report_renders_its_figures_and_the_key_numbers_beside_the_sources(r
         b.wait_for("document.querySelector('iframe')")
         table = b.screenshot(tmp_path / "key_numbers.png")
         assert _not_blank(table) > 0.02, "the key-number table rendered blank"
-        text = b.evaluate(f"(u => {{const d = u.split(',').slice(1).join(','); "
-                          f"return u.includes(';base64,') ? new TextDecoder().decode("
-                          f"Uint8Array.from(atob(d), c => c.charCodeAt(0))) : decodeURIComponent(d);}})"
-                          f"(document.querySelector('iframe').src)")
+        text = b.evaluate(
+            "(u => {const d = u.split(',').slice(1).join(','); "
+            "return u.includes(';base64,') ? new TextDecoder().decode("
+            "Uint8Array.from(atob(d), c => c.charCodeAt(0))) : decodeURIComponent(d);})"
+            "(document.querySelector('iframe').src)"
+        )
     numbers = json.loads((ci_run / "results/key_numbers.json").read_text())
     claimed = [k for k, e in numbers.items() if e.get("source_value") is not None]
     assert claimed and all(f"<code>{k}</code>" in text for k in claimed), "a key with a source value is missing"

@@ -7,8 +7,7 @@ from railradio.rng import canonical_json, make_rng, spawn_key, stable_id
 def test_stable_id_is_fixed_across_runs_and_machines():
     # SHA-256 based: these values must never change, or every published number moves.
     assert stable_id({"a": 1, "b": [1.5, "x"]}) == stable_id({"b": [1.5, "x"], "a": 1})
-    assert stable_id("fusion") == int.from_bytes(
-        __import__("hashlib").sha256(b'"fusion"').digest()[:4], "little")
+    assert stable_id("fusion") == int.from_bytes(__import__("hashlib").sha256(b'"fusion"').digest()[:4], "little")
     assert stable_id({"d_m": 1500.0}) != stable_id({"d_m": 1500.5})
 
 

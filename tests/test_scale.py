@@ -6,6 +6,7 @@ Each sharding test compares the one-piece computation with several splits, exact
 compared outputs are random draws (another key gives other values), so equality means
 the same draws and not a vacuous comparison.
 """
+
 from __future__ import annotations
 
 import importlib.util
@@ -86,10 +87,11 @@ def test_every_rule_has_measured_resources_in_the_slurm_profile():
 
 
 def test_derivation_margins():
-    rows = [{"rule": "a", "jobs": 1, "wall_s_max": 111.2, "max_rss_mb_max": 640.2, "source": "x"},
-            {"rule": "b", "jobs": 1, "wall_s_max": 0.3, "max_rss_mb_max": 100.0, "source": "x"}]
-    assert derive.derive(rows) == {"a": {"mem_mb": 1500, "runtime": 6},
-                                   "b": {"mem_mb": 1000, "runtime": 5}}
+    rows = [
+        {"rule": "a", "jobs": 1, "wall_s_max": 111.2, "max_rss_mb_max": 640.2, "source": "x"},
+        {"rule": "b", "jobs": 1, "wall_s_max": 0.3, "max_rss_mb_max": 100.0, "source": "x"},
+    ]
+    assert derive.derive(rows) == {"a": {"mem_mb": 1500, "runtime": 6}, "b": {"mem_mb": 1000, "runtime": 5}}
 
 
 def test_cluster_shards_are_valid_and_fit_the_work():
@@ -123,11 +125,29 @@ def _dry_run_jobs(out: str) -> list[tuple[str, dict[str, str]]]:
 @pytest.mark.slow
 def test_slurm_dry_run_gives_every_job_its_rule_resources_and_cluster_shards(tmp_path):
     _copy_workflow(tmp_path)
-    run = subprocess.run([SNAKEMAKE, "all", "paper", "nr_imm_all", "fidelity", "-n", "--forceall",
-                          "--workflow-profile", "workflow/profiles/slurm"], cwd=tmp_path,
-                         env={"PATH": str(Path(sys.executable).parent) + ":/usr/bin:/bin",
-                              "PYTHONPATH": str(tmp_path / "src"), "HOME": str(tmp_path)},
-                         capture_output=True, text=True, check=False, timeout=COMMAND_TIMEOUT_S)
+    run = subprocess.run(
+        [
+            SNAKEMAKE,
+            "all",
+            "paper",
+            "nr_imm_all",
+            "fidelity",
+            "-n",
+            "--forceall",
+            "--workflow-profile",
+            "workflow/profiles/slurm",
+        ],
+        cwd=tmp_path,
+        env={
+            "PATH": str(Path(sys.executable).parent) + ":/usr/bin:/bin",
+            "PYTHONPATH": str(tmp_path / "src"),
+            "HOME": str(tmp_path),
+        },
+        capture_output=True,
+        text=True,
+        check=False,
+        timeout=COMMAND_TIMEOUT_S,
+    )
     out = run.stdout + run.stderr
     assert run.returncode == 0, out[-3000:]
     prof = _yaml(PROFILE / "config.yaml")
@@ -145,8 +165,9 @@ def test_slurm_dry_run_gives_every_job_its_rule_resources_and_cluster_shards(tmp
     shards, base = _yaml(PROFILE / "shards.yaml"), _yaml(ROOT / "config/config.yaml")
     assert counts["nr_shard"] == base["nr"]["realizations"] * shards["nr"]["n_shards"]
     assert counts["nr_fidelity_shard"] == shards["nr"]["fidelity"]["n_shards"]
-    assert counts["handover_shard"] == (len(base["handover"]["sweep"]["speeds_kmh"])
-                                        * shards["handover"]["sweep"]["n_batches"])
+    assert counts["handover_shard"] == (
+        len(base["handover"]["sweep"]["speeds_kmh"]) * shards["handover"]["sweep"]["n_batches"]
+    )
     for group in prof["group-components"]:
         assert f"Group job {group} " in out
 
@@ -211,16 +232,16 @@ def test_handover_crossings_and_summary_identical_whatever_the_batches():
     n_blocks, runs = 4, 40
     whole = simulate_blocks(scn, 350.0, 3, range(n_blocks), runs, pols)
     for n_batches in (2, 3, 4):
-        parts = [simulate_blocks(scn, 350.0, 3, shard_blocks(n_blocks, n_batches, b), runs, pols)
-                 for b in range(n_batches)]
+        parts = [
+            simulate_blocks(scn, 350.0, 3, shard_blocks(n_blocks, n_batches, b), runs, pols) for b in range(n_batches)
+        ]
         # as workflow/scripts/handover/summary.py joins them
         joined = xr.concat(parts, dim="run", data_vars="minimal")
         xr.testing.assert_identical(joined, whole)
         for p in pols:
             assert policy_metrics(joined, p) == policy_metrics(whole, p)
     other = simulate_blocks(scn, 350.0, 4, range(1), runs, pols)  # another seed
-    assert not np.array_equal(other["joint__command_x_m"].values,
-                              whole["joint__command_x_m"].values[:runs])
+    assert not np.array_equal(other["joint__command_x_m"].values, whole["joint__command_x_m"].values[:runs])
 
 
 @pytest.mark.slow
@@ -230,20 +251,43 @@ def test_handover_workflow_identical_for_one_and_two_batches(tmp_path):
     from railradio.io import read_dataset
 
     wd = _copy_workflow(tmp_path)
-    env = {"PATH": str(Path(sys.executable).parent) + ":/usr/bin:/bin", "HOME": str(tmp_path),
-           "PYTHONPATH": str(wd / "src"), "MPLBACKEND": "Agg"}
+    env = {
+        "PATH": str(Path(sys.executable).parent) + ":/usr/bin:/bin",
+        "HOME": str(tmp_path),
+        "PYTHONPATH": str(wd / "src"),
+        "MPLBACKEND": "Agg",
+    }
     speeds = _ci("handover")["sweep"]["speeds_kmh"]
     out = {}
     for n_batches in (1, 2):
         (wd / "batches.yaml").write_text(f"handover:\n  sweep:\n    n_batches: {n_batches}\n")
-        run = subprocess.run([SNAKEMAKE, "results/handover/summary.nc", "-j1", "--workflow-profile",
-                              "workflow/profiles/default", "--configfile", "config/ci.yaml", "batches.yaml"],
-                             cwd=wd, env=env, capture_output=True, text=True, check=False,
-                             timeout=PIPELINE_TIMEOUT_S)
+        run = subprocess.run(
+            [
+                SNAKEMAKE,
+                "results/handover/summary.nc",
+                "-j1",
+                "--workflow-profile",
+                "workflow/profiles/default",
+                "--configfile",
+                "config/ci.yaml",
+                "batches.yaml",
+            ],
+            cwd=wd,
+            env=env,
+            capture_output=True,
+            text=True,
+            check=False,
+            timeout=PIPELINE_TIMEOUT_S,
+        )
         assert run.returncode == 0, (run.stdout + run.stderr)[-3000:]
-        shards = {v: xr.concat([read_dataset(wd / f"results/handover/shards/v{v}/b{b}.nc")
-                                for b in range(n_batches)], dim="run", data_vars="minimal")
-                  for v in speeds}
+        shards = {
+            v: xr.concat(
+                [read_dataset(wd / f"results/handover/shards/v{v}/b{b}.nc") for b in range(n_batches)],
+                dim="run",
+                data_vars="minimal",
+            )
+            for v in speeds
+        }
         out[n_batches] = (shards, read_dataset(wd / "results/handover/summary.nc"))
     for v in speeds:
         xr.testing.assert_equal(out[2][0][v], out[1][0][v])
@@ -273,8 +317,14 @@ def test_tunnel_realizations_identical_whatever_the_subset():
     """Monte Carlo realizations are keyed by their ID: any subset (a would-be shard) gives
     the same errors per realization as the whole set."""
     from railradio.tunnel.simulate import calibrate_separable, kf_realizations
-    from railradio.tunnel.study import (cable_from_config, make_order, make_table, measurement_from_config,
-                                        train_from_config, tunnel_from_config)
+    from railradio.tunnel.study import (
+        cable_from_config,
+        make_order,
+        make_table,
+        measurement_from_config,
+        train_from_config,
+        tunnel_from_config,
+    )
 
     cfg = _ci("tunnel")
     table = make_table(cfg, "image", 7, make_order(cfg))

@@ -15,6 +15,7 @@
 SLURM needs root and Debian's ``slurm-wlm`` and ``munge``: the tests are skipped where they
 are missing, unless ``RAILRADIO_REQUIRE_SLURM=1`` (set by ``.ci/run``, which installs them).
 """
+
 from __future__ import annotations
 
 import json
@@ -34,8 +35,14 @@ from .conftest import COMMAND_TIMEOUT_S, ROOT, SNAKEMAKE, copy_workflow, workflo
 LOCAL_CLUSTER = ROOT / "workflow/profiles/slurm/local-cluster.sh"
 FIT = ROOT / "workflow/profiles/slurm/fit.py"
 SLICE = "results/fusion/key_numbers.json"
-FAST_POLL = ["--slurm-status-command", "squeue", "--slurm-init-seconds-before-status-checks", "5",
-             "--seconds-between-status-checks", "5"]
+FAST_POLL = [
+    "--slurm-status-command",
+    "squeue",
+    "--slurm-init-seconds-before-status-checks",
+    "5",
+    "--seconds-between-status-checks",
+    "5",
+]
 """The local cluster has no accounting database (squeue reports the states) and answers at
 once, so Snakemake may poll it often."""
 
@@ -50,8 +57,9 @@ def local_cluster():
         if os.environ.get("RAILRADIO_REQUIRE_SLURM") == "1":
             pytest.fail("SLURM (slurm-wlm, munge) and root are required here (RAILRADIO_REQUIRE_SLURM=1)")
         pytest.skip("needs root and Debian's slurm-wlm and munge")
-    run = subprocess.run([str(LOCAL_CLUSTER), "start"], capture_output=True, text=True, timeout=COMMAND_TIMEOUT_S,
-                         check=False)
+    run = subprocess.run(
+        [str(LOCAL_CLUSTER), "start"], capture_output=True, text=True, timeout=COMMAND_TIMEOUT_S, check=False
+    )
     assert run.returncode == 0, run.stdout + run.stderr
     yield
     subprocess.run([str(LOCAL_CLUSTER), "stop"], capture_output=True, timeout=COMMAND_TIMEOUT_S, check=False)
@@ -59,8 +67,13 @@ def local_cluster():
 
 def _squeue_states(job_ids: list[str]) -> dict[str, tuple[str, str]]:
     """{job id: (state, time limit)} from squeue (finished jobs stay there for MinJobAge)."""
-    out = subprocess.run(["squeue", "-h", "-a", "-t", "all", "-o", "%i|%T|%l"], capture_output=True, text=True,
-                         check=True, timeout=COMMAND_TIMEOUT_S).stdout
+    out = subprocess.run(
+        ["squeue", "-h", "-a", "-t", "all", "-o", "%i|%T|%l"],
+        capture_output=True,
+        text=True,
+        check=True,
+        timeout=COMMAND_TIMEOUT_S,
+    ).stdout
     rows = dict(line.split("|", 1) for line in out.split())
     return {j: tuple(rows[j].split("|")) for j in job_ids if j in rows}
 
@@ -92,8 +105,13 @@ def retry_run(local_cluster, tmp_path_factory):
     cfg = yaml.safe_load(prof.read_text())
     cfg.pop("configfiles", None)  # the study's shard counts: not this workflow's
     prof.write_text(yaml.safe_dump(cfg))
-    proc = subprocess.Popen([SNAKEMAKE, "--workflow-profile", "workflow/profiles/slurm", *FAST_POLL], cwd=wd,
-                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    proc = subprocess.Popen(
+        [SNAKEMAKE, "--workflow-profile", "workflow/profiles/slurm", *FAST_POLL],
+        cwd=wd,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+    )
     yield wd, proc
     if proc.poll() is None:
         proc.kill()
@@ -102,10 +120,18 @@ def retry_run(local_cluster, tmp_path_factory):
 @pytest.mark.slow
 def test_the_fusion_study_through_slurm_gives_the_local_key_numbers(ci_run, local_cluster, retry_run, tmp_path):
     wd = copy_workflow(tmp_path)
-    cmd = [SNAKEMAKE, SLICE, "--workflow-profile", "workflow/profiles/slurm", "--configfile", "config/ci.yaml",
-           "--jobs", "4", *FAST_POLL]
-    run = subprocess.run(cmd, cwd=wd, env=workflow_env(wd), capture_output=True, text=True, check=False,
-                         timeout=1200)
+    cmd = [
+        SNAKEMAKE,
+        SLICE,
+        "--workflow-profile",
+        "workflow/profiles/slurm",
+        "--configfile",
+        "config/ci.yaml",
+        "--jobs",
+        "4",
+        *FAST_POLL,
+    ]
+    run = subprocess.run(cmd, cwd=wd, env=workflow_env(wd), capture_output=True, text=True, check=False, timeout=1200)
     log = run.stdout + run.stderr
     assert run.returncode == 0, log[-5000:]
     submitted = _submitted(log)
@@ -137,8 +163,15 @@ def test_a_job_killed_at_its_time_limit_is_retried_with_the_doubled_limit(retry_
 
 
 def _fit(wd: Path, *extra: str) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, str(FIT), "--json", str(wd / "fit.json"), "--", *extra], cwd=wd,
-                          env=workflow_env(wd), capture_output=True, text=True, check=False, timeout=COMMAND_TIMEOUT_S)
+    return subprocess.run(
+        [sys.executable, str(FIT), "--json", str(wd / "fit.json"), "--", *extra],
+        cwd=wd,
+        env=workflow_env(wd),
+        capture_output=True,
+        text=True,
+        check=False,
+        timeout=COMMAND_TIMEOUT_S,
+    )
 
 
 def test_every_paper_scale_submission_fits_a_two_cpu_node(tmp_path):

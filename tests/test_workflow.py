@@ -4,6 +4,7 @@ Each test works in a temporary copy of Snakefile, workflow/, config/, paper/ and
 (with PYTHONPATH pointing at the copy, so a test may edit library code without touching
 the repository).
 """
+
 from __future__ import annotations
 
 import json
@@ -55,7 +56,7 @@ def rerun_reasons(output: str) -> dict[str, str]:
         if m:
             rule = m.group(1)
         elif rule and line.strip().startswith("reason:"):
-            out[rule] = out.get(rule, "") + line.strip()[len("reason:"):]
+            out[rule] = out.get(rule, "") + line.strip()[len("reason:") :]
     return out
 
 
@@ -64,8 +65,9 @@ def _numbers(wd: Path) -> dict:
 
 
 def test_lint_is_clean():
-    run = subprocess.run([SNAKEMAKE, "--lint"], cwd=ROOT, capture_output=True, text=True, check=False,
-                         timeout=COMMAND_TIMEOUT_S)
+    run = subprocess.run(
+        [SNAKEMAKE, "--lint"], cwd=ROOT, capture_output=True, text=True, check=False, timeout=COMMAND_TIMEOUT_S
+    )
     assert run.returncode == 0, run.stdout + run.stderr
 
 
@@ -79,27 +81,44 @@ def test_paper_scale_dag_resolves(tmp_path):
 
 def test_slurm_profile_dry_run_resolves(tmp_path):
     wd = _copy_workflow(tmp_path)
-    run = subprocess.run([SNAKEMAKE, "figures", "-n", "--workflow-profile", "workflow/profiles/slurm"],
-                         cwd=wd, env=_env(wd), capture_output=True, text=True, check=False,
-                         timeout=COMMAND_TIMEOUT_S)
+    run = subprocess.run(
+        [SNAKEMAKE, "figures", "-n", "--workflow-profile", "workflow/profiles/slurm"],
+        cwd=wd,
+        env=_env(wd),
+        capture_output=True,
+        text=True,
+        check=False,
+        timeout=COMMAND_TIMEOUT_S,
+    )
     assert run.returncode == 0, run.stdout[-2000:] + run.stderr[-2000:]
     assert job_counts(run.stdout + run.stderr)["fusion_point"] == 32  # figures: no reference point
 
 
 @pytest.mark.parametrize(
     ("override", "key"),
-    [("seed: 10.0\n", "seed"),  # a float where an integer belongs (the schema)
-     ("fusion:\n  sweeps:\n    d_m: []\n", "fusion.sweeps.d_m"),
-     ("nr:\n  n_shards: 500\n", "nr.n_shards"),  # more shards than the CI run's 160 epochs
-     ("handover:\n  sweep:\n    n_batches: 3\n", "handover.sweep.n_batches"),  # more batches than blocks
-     ("nr:\n  sensitivity:\n    cases:\n      loud:\n        radio: {tx_power_dbm: 900}\n",
-      "nr.sensitivity.cases.loud.radio.tx_power_dbm")],
+    [
+        ("seed: 10.0\n", "seed"),  # a float where an integer belongs (the schema)
+        ("fusion:\n  sweeps:\n    d_m: []\n", "fusion.sweeps.d_m"),
+        ("nr:\n  n_shards: 500\n", "nr.n_shards"),  # more shards than the CI run's 160 epochs
+        ("handover:\n  sweep:\n    n_batches: 3\n", "handover.sweep.n_batches"),  # more batches than blocks
+        (
+            "nr:\n  sensitivity:\n    cases:\n      loud:\n        radio: {tx_power_dbm: 900}\n",
+            "nr.sensitivity.cases.loud.radio.tx_power_dbm",
+        ),
+    ],
 )
 def test_bad_config_stops_before_any_job(tmp_path, override, key):
     wd = _copy_workflow(tmp_path)
     (wd / "bad.yaml").write_text(override)
-    run = subprocess.run([SNAKEMAKE, "all", "-j1", "--configfile", "config/ci.yaml", "bad.yaml"], cwd=wd,
-                         env=_env(wd), capture_output=True, text=True, check=False, timeout=COMMAND_TIMEOUT_S)
+    run = subprocess.run(
+        [SNAKEMAKE, "all", "-j1", "--configfile", "config/ci.yaml", "bad.yaml"],
+        cwd=wd,
+        env=_env(wd),
+        capture_output=True,
+        text=True,
+        check=False,
+        timeout=COMMAND_TIMEOUT_S,
+    )
     assert run.returncode != 0
     assert f"config key '{key}'" in run.stderr + run.stdout
     assert "Allowed:" in run.stderr + run.stdout
@@ -127,8 +146,9 @@ def test_ci_numbers_consistent_with_published_paper_scale(ci_run):
 def test_intermediates_are_self_explaining(ci_run):
     paths = sorted((ci_run / "results/fusion").rglob("*.nc"))
     assert len(paths) == 4 + 4 + 4 + 1 + 3
-    nr_paths = sorted(p for p in (ci_run / "results/nr").rglob("*.nc")
-                      if "cases" not in p.parts and "map" not in p.parts)
+    nr_paths = sorted(
+        p for p in (ci_run / "results/nr").rglob("*.nc") if "cases" not in p.parts and "map" not in p.parts
+    )
     # trajectory, samples, 2 calibration + 2 evaluation shards, 1 track, 1 bounds, 1 IMM/RTS
     assert len(nr_paths) == 1 + 1 + 2 + 2 + 1 + 1 + 1
     case_paths = sorted((ci_run / "results/nr/cases").rglob("*.nc"))
@@ -152,15 +172,34 @@ def test_intermediates_are_self_explaining(ci_run):
                 assert "units" in var.attrs and "long_name" in var.attrs, (p, name)
             for attr in ("config_json", "config_sha256", "seed_spawn_key", "railradio_version", "git_commit"):
                 assert attr in ds.attrs, (p, attr)
-    for name in ("fusion_rmse_vs_distance", "fusion_rmse_vs_tdoa_error", "fusion_rmse_vs_aoa_error",
-                 "nr_trajectory", "nr_burst_correlation", "nr_measurement_error_cdf",
-                 "nr_position_error_cdf", "nr_position_error_vs_time", "nr_sensitivity", "nr_imm_lag",
-                 "nr_reproduction_map",
-                 "handover_cost_vs_m", "handover_pingpong_vs_speed", "handover_rsrp_gap_vs_speed",
-                 "handover_delay_vs_speed", "handover_interruption_vs_speed",
-                 "tunnel_rssi_map", "tunnel_delay_spread", "tunnel_gdop", "tunnel_position_error_cdf",
-                 "tunnel_ray_engines", "tunnel_seed_vs_physical", "tunnel_sensitivity",
-                 "nr_sweeps", "fusion_sensitivity", "chain_success_vs_sigma"):
+    for name in (
+        "fusion_rmse_vs_distance",
+        "fusion_rmse_vs_tdoa_error",
+        "fusion_rmse_vs_aoa_error",
+        "nr_trajectory",
+        "nr_burst_correlation",
+        "nr_measurement_error_cdf",
+        "nr_position_error_cdf",
+        "nr_position_error_vs_time",
+        "nr_sensitivity",
+        "nr_imm_lag",
+        "nr_reproduction_map",
+        "handover_cost_vs_m",
+        "handover_pingpong_vs_speed",
+        "handover_rsrp_gap_vs_speed",
+        "handover_delay_vs_speed",
+        "handover_interruption_vs_speed",
+        "tunnel_rssi_map",
+        "tunnel_delay_spread",
+        "tunnel_gdop",
+        "tunnel_position_error_cdf",
+        "tunnel_ray_engines",
+        "tunnel_seed_vs_physical",
+        "tunnel_sensitivity",
+        "nr_sweeps",
+        "fusion_sensitivity",
+        "chain_success_vs_sigma",
+    ):
         assert (ci_run / f"results/figures/{name}.pdf").stat().st_size > 1000
     tex = (ci_run / "results/paper/numbers.tex").read_text()
     assert r"\@namedef{kn@fusion.d1500.rmse_fused_m}" in tex
@@ -174,8 +213,14 @@ def test_only_affected_rules_rerun(ci_run, tmp_path):
     ci = (wd / "config/ci.yaml").read_text().replace("sigma_aoa_rad: [0.005,", "sigma_aoa_rad: [0.004,")
     (wd / "config/ci.yaml").write_text(ci)
     counts = job_counts(smk(wd, "all", "-n").stdout)
-    assert counts == {"all": 1, "fusion_point": 1, "fusion_sweep": 1, "fusion_figure": 1,
-                      "fusion_key_numbers": 1, "key_numbers": 1}, counts
+    assert counts == {
+        "all": 1,
+        "fusion_point": 1,
+        "fusion_sweep": 1,
+        "fusion_figure": 1,
+        "fusion_key_numbers": 1,
+        "key_numbers": 1,
+    }, counts
     # a plotting change re-runs the figures only, never a simulation
     (wd / "config/ci.yaml").write_text((ci_run / "config/ci.yaml").read_text())
     fig = wd / "src/railradio/fusion/figures.py"
@@ -203,14 +248,27 @@ def test_interrupted_run_leaves_nothing_half_written_and_resumes_to_the_same_num
     file; resumed at -j1 it finishes the rest, and its numbers and sweeps equal those of
     the session's uninterrupted -j2 run (same config: identical at any -j)."""
     wd = _copy_workflow(tmp_path)
-    cmd = [SNAKEMAKE, "fusion", "-j1", "--workflow-profile", "workflow/profiles/default",
-           "--configfile", "config/ci.yaml"]
+    cmd = [
+        SNAKEMAKE,
+        "fusion",
+        "-j1",
+        "--workflow-profile",
+        "workflow/profiles/default",
+        "--configfile",
+        "config/ci.yaml",
+    ]
     # SIGINT at its default in the run, as at a terminal: a shell that starts the test suite
     # in the background (`cmd &`) hands its children SIGINT ignored, and Snakemake would then
     # finish the run instead of stopping
-    proc = subprocess.Popen(cmd, cwd=wd, env=_env(wd), stdout=subprocess.DEVNULL,
-                            stderr=subprocess.DEVNULL, start_new_session=True,
-                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    proc = subprocess.Popen(
+        cmd,
+        cwd=wd,
+        env=_env(wd),
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+        start_new_session=True,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+    )
     points = wd / "results/fusion/points"
     deadline = time.time() + 120
     try:
@@ -235,8 +293,10 @@ def test_interrupted_run_leaves_nothing_half_written_and_resumes_to_the_same_num
     for frag in ("results/fusion/key_numbers.json", "results/sens/fusion/key_numbers.json"):
         assert json.loads((wd / frag).read_text()) == json.loads((ci_run / frag).read_text()), frag
     for sweep in ("d_m", "sigma_tdoa_us", "sigma_aoa_rad"):
-        with xr.open_dataset(wd / f"results/fusion/sweep_{sweep}.nc") as a, \
-                xr.open_dataset(ci_run / f"results/fusion/sweep_{sweep}.nc") as b:
+        with (
+            xr.open_dataset(wd / f"results/fusion/sweep_{sweep}.nc") as a,
+            xr.open_dataset(ci_run / f"results/fusion/sweep_{sweep}.nc") as b,
+        ):
             xr.testing.assert_equal(a, b)
 
 
@@ -247,9 +307,11 @@ def test_paper_builds_without_undefined_references(ci_run):
     if shutil.which("latexmk") is None:
         if os.environ.get("RAILRADIO_SKIP_PAPER") == "1":
             pytest.skip("latexmk not installed and RAILRADIO_SKIP_PAPER=1")
-        pytest.fail("latexmk is not installed: apt-get install latexmk texlive-latex-recommended "
-                    "texlive-latex-extra texlive-fonts-recommended texlive-science (or set "
-                    "RAILRADIO_SKIP_PAPER=1)")
+        pytest.fail(
+            "latexmk is not installed: apt-get install latexmk texlive-latex-recommended "
+            "texlive-latex-extra texlive-fonts-recommended texlive-science (or set "
+            "RAILRADIO_SKIP_PAPER=1)"
+        )
     smk(ci_run, "paper", "-j2")
     pdf = ci_run / "results/paper/main.pdf"
     assert pdf.read_bytes()[:5] == b"%PDF-" and pdf.stat().st_size > 10_000

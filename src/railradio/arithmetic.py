@@ -43,8 +43,9 @@ def beyond_v3(dispatch: list[str]) -> list[str]:
     return [t for t in dispatch if t == "X86_V4" or "AVX512" in t]
 
 
-def cpu_pins(machine: str | None = None, features: dict[str, bool] | None = None,
-             dispatch: list[str] | None = None) -> dict[str, str]:
+def cpu_pins(
+    machine: str | None = None, features: dict[str, bool] | None = None, dispatch: list[str] | None = None
+) -> dict[str, str]:
     """The environment that pins NumPy's and OpenBLAS's code paths on this machine (empty
     where nothing is pinned); the arguments default to this machine's."""
     machine = platform.machine() if machine is None else machine
@@ -63,8 +64,10 @@ def _openblas_cores() -> dict[str, str]:
     import scipy
 
     out = {}
-    for pkg, syms in ((numpy, ("scipy_openblas_get_corename64_", "openblas_get_corename64_")),
-                      (scipy, ("scipy_openblas_get_corename", "openblas_get_corename"))):
+    for pkg, syms in (
+        (numpy, ("scipy_openblas_get_corename64_", "openblas_get_corename64_")),
+        (scipy, ("scipy_openblas_get_corename", "openblas_get_corename")),
+    ):
         libs = glob.glob(str(Path(pkg.__file__).parent.parent / f"{pkg.__name__}.libs" / "*openblas*"))
         for path in libs:
             lib = ctypes.CDLL(path)
@@ -82,8 +85,12 @@ def in_effect() -> dict[str, object]:
     kernels (recorded in every output's provenance)."""
     features, _ = _numpy_cpu()
     groups = [g for g in ("X86_V2", "X86_V3", "X86_V4") if features.get(g)]
-    return {"machine": platform.machine(), "numpy_simd": groups[-1] if groups else "baseline",
-            "openblas_core": _openblas_cores(), "pinned": all(k in os.environ for k in PIN_KEYS)}
+    return {
+        "machine": platform.machine(),
+        "numpy_simd": groups[-1] if groups else "baseline",
+        "openblas_core": _openblas_cores(),
+        "pinned": all(k in os.environ for k in PIN_KEYS),
+    }
 
 
 def pins_hold() -> bool:
@@ -92,5 +99,6 @@ def pins_hold() -> bool:
     if not want:
         return True
     eff = in_effect()
-    return eff["numpy_simd"] == "X86_V3" and all(c.lower() == OPENBLAS_CORE.lower()
-                                                  for c in eff["openblas_core"].values())
+    return eff["numpy_simd"] == "X86_V3" and all(
+        c.lower() == OPENBLAS_CORE.lower() for c in eff["openblas_core"].values()
+    )

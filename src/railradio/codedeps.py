@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import ast
 import hashlib
-from functools import lru_cache
+from functools import cache, lru_cache
 from pathlib import Path
 
 PACKAGE = "railradio"
@@ -59,8 +59,8 @@ def _facts(path: Path) -> tuple[tuple[str, ...], frozenset[str]]:
     return _facts_cached(path, st.st_mtime_ns, st.st_size)
 
 
-@lru_cache(maxsize=None)
-def _facts_cached(path: Path, mtime_ns: int, size: int) -> tuple[tuple[str, ...], frozenset[str]]:  # noqa: ARG001
+@cache
+def _facts_cached(path: Path, mtime_ns: int, size: int) -> tuple[tuple[str, ...], frozenset[str]]:
     names: list[str] = []
     strings: set[str] = set()
     for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"), filename=str(path))):
@@ -107,7 +107,7 @@ def _references(path: Path, local_dirs: tuple[Path, ...] | None, root: Path) -> 
     return modules, local
 
 
-@lru_cache(maxsize=None)
+@cache
 def _file_names(directory: Path, suffix: str = "") -> frozenset[str]:
     return frozenset(p.name for p in directory.iterdir() if p.is_file() and p.name.endswith(suffix))
 

@@ -117,8 +117,7 @@ def deep_merge(base: Mapping[str, Any], override: Mapping[str, Any]) -> dict[str
     return out
 
 
-def validate_config(cfg: MutableMapping[str, Any], schema: dict[str, Any],
-                    root: str = "") -> MutableMapping[str, Any]:
+def validate_config(cfg: MutableMapping[str, Any], schema: dict[str, Any], root: str = "") -> MutableMapping[str, Any]:
     """Fill schema defaults into ``cfg`` in place and validate it.
 
     ``root`` prefixes the key paths in messages (for a sub-config such as a sensitivity

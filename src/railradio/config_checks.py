@@ -62,8 +62,10 @@ def _fusion(cfg: Mapping[str, Any]) -> Iterator[Problem]:
 
     f = cfg["fusion"]
     for i, r in enumerate(f["sensitivity"]["radii_m"]):
-        yield from _probe(f"fusion.sensitivity.radii_m[{i}]",
-                          lambda r=r: ArcGeometry(f["reference"]["d_m"], r, f["cell_radius_factor"]))
+        yield from _probe(
+            f"fusion.sensitivity.radii_m[{i}]",
+            lambda r=r: ArcGeometry(f["reference"]["d_m"], r, f["cell_radius_factor"]),
+        )
 
 
 def main_epochs(nr: Mapping[str, Any]) -> int | None:
@@ -92,22 +94,37 @@ def nr_problems(nr: Mapping[str, Any], root: str = "nr", main: bool = True) -> I
         yield f"{root}.n_shards", nr["n_shards"], f"<= the run's {n_epochs} epochs (one epoch per shard at least)"
     n_cal = calibration_trajectory(dict(nr)).n_epochs
     if nr["calibration"]["epochs"] > n_cal:
-        yield f"{root}.calibration.epochs", nr["calibration"]["epochs"], \
-            f"<= the calibration trajectory's {n_cal} epochs"
+        yield (
+            f"{root}.calibration.epochs",
+            nr["calibration"]["epochs"],
+            f"<= the calibration trajectory's {n_cal} epochs",
+        )
     mp = nr["map"]
-    for where, phases, v0 in (("trajectory.phases", nr["trajectory"]["phases"], 0.0),
-                              ("calibration.trajectory.phases", nr["calibration"]["trajectory"]["phases"],
-                               nr["calibration"]["trajectory"].get("v0_m_s", 0.0)),
-                              ("map.calibration.phases", mp["calibration"]["phases"], mp["calibration"]["v0_m_s"])):
+    for where, phases, v0 in (
+        ("trajectory.phases", nr["trajectory"]["phases"], 0.0),
+        (
+            "calibration.trajectory.phases",
+            nr["calibration"]["trajectory"]["phases"],
+            nr["calibration"]["trajectory"].get("v0_m_s", 0.0),
+        ),
+        ("map.calibration.phases", mp["calibration"]["phases"], mp["calibration"]["v0_m_s"]),
+    ):
         v = float(v0)
         for i, (dur, acc) in enumerate(phases):
             v += dur * acc
             if v < -1e-9:
-                yield (f"{root}.{where}[{i}]", [dur, acc],
-                       f"phases that keep the speed >= 0 (this one ends at {v:.3g} m/s)")
+                yield (
+                    f"{root}.{where}[{i}]",
+                    [dur, acc],
+                    f"phases that keep the speed >= 0 (this one ends at {v:.3g} m/s)",
+                )
     yield from _prefixed(root, _ascending(nr, "tracker.w_distance_edges_m"))
     if main and nr["fidelity"]["realization"] >= nr["realizations"]:
-        yield f"{root}.fidelity.realization", nr["fidelity"]["realization"], f"< {root}.realizations = {nr['realizations']}"
+        yield (
+            f"{root}.fidelity.realization",
+            nr["fidelity"]["realization"],
+            f"< {root}.realizations = {nr['realizations']}",
+        )
     if main and nr["fidelity"]["n_epochs"] > n_epochs:
         yield f"{root}.fidelity.n_epochs", nr["fidelity"]["n_epochs"], f"<= the run's {n_epochs} epochs"
     if main and nr["fidelity"]["n_shards"] > nr["fidelity"]["n_epochs"]:
@@ -122,8 +139,11 @@ def nr_problems(nr: Mapping[str, Any], root: str = "nr", main: bool = True) -> I
     if "seed" in nr["receiver_variants"]:
         yield f"{root}.receiver_variants.seed", "…", "a name other than 'seed' (the source's receiver, nr.receiver)"
     if nr["imm"]["receiver"] not in receivers:
-        yield (f"{root}.imm.receiver", nr["imm"]["receiver"],
-               f"one of {sorted(receivers)} (seed or a receiver_variants name)")
+        yield (
+            f"{root}.imm.receiver",
+            nr["imm"]["receiver"],
+            f"one of {sorted(receivers)} (seed or a receiver_variants name)",
+        )
     dt = nr["trajectory"]["dt_s"]
     for i, tau in enumerate(nr["imm"]["sojourn_s"]):
         if tau < dt:
@@ -141,14 +161,20 @@ def _nr(cfg: Mapping[str, Any], schema: Mapping[str, Any]) -> Iterator[Problem]:
     nr = cfg["nr"]
     yield from nr_problems(nr)
     if any(nr["sync"].values()):
-        yield "nr.sync", dict(nr["sync"]), ("zeros in the main run (clock errors are a sensitivity "
-                                            "case's: nr.sensitivity.cases.<case>.sync)")
+        yield (
+            "nr.sync",
+            dict(nr["sync"]),
+            ("zeros in the main run (clock errors are a sensitivity case's: nr.sensitivity.cases.<case>.sync)"),
+        )
     sens = nr["sensitivity"]
     yield from _at_most(cfg, "nr.sensitivity.n_shards", "nr.sensitivity.epochs")
     n_main = main_epochs(nr)
     if n_main is not None and sens["epochs"] > n_main:
-        yield "nr.sensitivity.epochs", sens["epochs"], \
-            f"<= the main run's {n_main} epochs (the cases are compared with its r0 on the same epochs)"
+        yield (
+            "nr.sensitivity.epochs",
+            sens["epochs"],
+            f"<= the main run's {n_main} epochs (the cases are compared with its r0 on the same epochs)",
+        )
     try:
         cases = nr_cases.merged_cases(nr, schema["properties"]["nr"])
     except ConfigError as exc:
@@ -188,13 +214,18 @@ def _nr_map(nr: Mapping[str, Any], schema: Mapping[str, Any], n_main: int | None
     if mp["n_shards"] > end - first:
         yield "nr.map.n_shards", mp["n_shards"], f"<= the segment's {end - first} epochs"
     c = mp["calibration"]
-    n_cal = calibration_trajectory({"calibration": nr_map.calibration_section(dict(nr)),
-                                    "trajectory": nr["trajectory"]}).n_epochs
+    n_cal = calibration_trajectory(
+        {"calibration": nr_map.calibration_section(dict(nr)), "trajectory": nr["trajectory"]}
+    ).n_epochs
     if c["epochs"] > n_cal:
         yield "nr.map.calibration.epochs", c["epochs"], f"<= its trajectory's {n_cal} epochs"
     if nr["antenna"]["rrh_elements"] not in mp["rrh_elements"]:
-        yield "nr.map.rrh_elements", mp["rrh_elements"], \
-            f"a list holding the main run's nr.antenna.rrh_elements = {nr['antenna']['rrh_elements']} (the default cell)"
+        yield (
+            "nr.map.rrh_elements",
+            mp["rrh_elements"],
+            f"a list holding the main run's nr.antenna.rrh_elements = {nr['antenna']['rrh_elements']} (the default "
+            f"cell)",
+        )
         return
     try:
         cells = nr_map.cells(dict(nr), schema["properties"]["nr"])
@@ -217,30 +248,42 @@ def _handover(cfg: Mapping[str, Any], schema: Mapping[str, Any]) -> Iterator[Pro
         node = sections[section]["properties"][key]
         for i, v in enumerate(values):  # a switch value must be a valid value of its key
             if not Validator(node).is_valid(v):
-                yield f"handover.sensitivity.switches.{switch}[{i}]", v, \
-                    f"a value of handover.{switch}: {describe_allowed(node)}"
+                yield (
+                    f"handover.sensitivity.switches.{switch}[{i}]",
+                    v,
+                    f"a value of handover.{switch}: {describe_allowed(node)}",
+                )
     try:
         base = scenario_from_config(dict(ho))
     except (ValueError, KeyError):
         base = None
     if base is not None:
         for vid, variant in variants(ho["sensitivity"]).items():
-            yield from _probe(f"handover.sensitivity.switches.{variant.get('switch', vid)}",
-                              lambda variant=variant: apply_variant(base, variant))
+            yield from _probe(
+                f"handover.sensitivity.switches.{variant.get('switch', vid)}",
+                lambda variant=variant: apply_variant(base, variant),
+            )
     yield from _at_most(cfg, "handover.sweep.n_batches", "handover.sweep.n_blocks")
     yield from _at_most(cfg, "handover.sensitivity.n_blocks", "handover.sweep.n_blocks")
     speeds = ho["sweep"]["speeds_kmh"]
     if ho["sensitivity"]["speed_kmh"] not in speeds:
-        yield "handover.sensitivity.speed_kmh", ho["sensitivity"]["speed_kmh"], \
-            f"one of handover.sweep.speeds_kmh = {speeds} (the variants reuse its draws)"
+        yield (
+            "handover.sensitivity.speed_kmh",
+            ho["sensitivity"]["speed_kmh"],
+            f"one of handover.sweep.speeds_kmh = {speeds} (the variants reuse its draws)",
+        )
     yield from _at_most(cfg, "handover.cost.alpha_min", "handover.cost.alpha_max")
-    yield from _at_most(cfg, "handover.cost.full_grid_max_m", "handover.cost.m_values",
-                        limit=max(ho["cost"]["m_values"]))
+    yield from _at_most(
+        cfg, "handover.cost.full_grid_max_m", "handover.cost.m_values", limit=max(ho["cost"]["m_values"])
+    )
     yield from _ascending(cfg, "handover.joint.exponent_bounds")
     yield from _ascending(cfg, "handover.sweep.speeds_kmh")
     if ho["radio"]["q_in_db"] < ho["radio"]["q_out_db"]:
-        yield "handover.radio.q_in_db", ho["radio"]["q_in_db"], \
-            f">= handover.radio.q_out_db = {ho['radio']['q_out_db']} (in-sync needs the better link)"
+        yield (
+            "handover.radio.q_in_db",
+            ho["radio"]["q_in_db"],
+            f">= handover.radio.q_out_db = {ho['radio']['q_out_db']} (in-sync needs the better link)",
+        )
     yield from _probe("handover", lambda: scenario_from_config(dict(ho)))
 
 
@@ -252,8 +295,11 @@ def _chain(cfg: Mapping[str, Any]) -> Iterator[Problem]:
     yield from _ascending(cfg, "chain.sigmas_m")
     speeds = cfg["handover"]["sweep"]["speeds_kmh"]
     if ch["speed_kmh"] not in speeds:
-        yield "chain.speed_kmh", ch["speed_kmh"], \
-            f"one of handover.sweep.speeds_kmh = {speeds} (the chain reuses its draws)"
+        yield (
+            "chain.speed_kmh",
+            ch["speed_kmh"],
+            f"one of handover.sweep.speeds_kmh = {speeds} (the chain reuses its draws)",
+        )
     yield from _probe("chain", lambda: params_from_config(dict(ch)))
     # the chain's nr input: epochs of the main run at the chain's speed
     from railradio.nr.simulate import scenario_from_config
@@ -264,9 +310,14 @@ def _chain(cfg: Mapping[str, Any]) -> Iterator[Problem]:
         _, v, _ = traj.state(np.arange(n_main) * traj.dt_s)
         kmh = 3.6 * np.asarray(v)
         if not np.any(np.abs(kmh - ch["speed_kmh"]) <= ch["speed_halfwidth_kmh"]):
-            yield "chain.speed_halfwidth_kmh", ch["speed_halfwidth_kmh"], (
-                f"a window around chain.speed_kmh = {ch['speed_kmh']} that the nr run reaches (its speeds "
-                f"span {kmh.min():.0f}-{kmh.max():.0f} km/h)")
+            yield (
+                "chain.speed_halfwidth_kmh",
+                ch["speed_halfwidth_kmh"],
+                (
+                    f"a window around chain.speed_kmh = {ch['speed_kmh']} that the nr run reaches (its speeds "
+                    f"span {kmh.min():.0f}-{kmh.max():.0f} km/h)"
+                ),
+            )
 
 
 def _tunnel(cfg: Mapping[str, Any]) -> Iterator[Problem]:
@@ -276,32 +327,47 @@ def _tunnel(cfg: Mapping[str, Any]) -> Iterator[Problem]:
     g, r, m = tu["geometry"], tu["rays"], tu["measurement"]
     steps = g["slot_spacing_m"] / r["offset_step_m"]
     if abs(steps - round(steps)) > 1e-9:
-        yield "tunnel.rays.offset_step_m", r["offset_step_m"], \
-            f"a divisor of tunnel.geometry.slot_spacing_m = {g['slot_spacing_m']}"
+        yield (
+            "tunnel.rays.offset_step_m",
+            r["offset_step_m"],
+            f"a divisor of tunnel.geometry.slot_spacing_m = {g['slot_spacing_m']}",
+        )
     if tu["coverage"]["blind_spot_dbm"] > tu["coverage"]["threshold_dbm"]:
-        yield "tunnel.coverage.blind_spot_dbm", tu["coverage"]["blind_spot_dbm"], \
-            f"<= tunnel.coverage.threshold_dbm = {tu['coverage']['threshold_dbm']}"
+        yield (
+            "tunnel.coverage.blind_spot_dbm",
+            tu["coverage"]["blind_spot_dbm"],
+            f"<= tunnel.coverage.threshold_dbm = {tu['coverage']['threshold_dbm']}",
+        )
     for name, t in tu["trains"].items():
         if t["length_m"] >= g["length_m"]:
             yield f"tunnel.trains.{name}.length_m", t["length_m"], f"< tunnel.geometry.length_m = {g['length_m']}"
     yield from _at_most(cfg, "tunnel.tracking.calibration_m", "tunnel.geometry.length_m")
     extent = study.table_extent_m(tu)
     if m["window_m"] > extent:
-        yield "tunnel.measurement.window_m", m["window_m"], f"<= the table's extent (tunnel.rays.max_offset_m) = {extent}"
+        yield (
+            "tunnel.measurement.window_m",
+            m["window_m"],
+            f"<= the table's extent (tunnel.rays.max_offset_m) = {extent}",
+        )
     if r["far_decay_m"][1] <= r["far_decay_m"][0]:
         yield "tunnel.rays.far_decay_m[1]", r["far_decay_m"][1], f"> tunnel.rays.far_decay_m[0] = {r['far_decay_m'][0]}"
     for i, off in enumerate(r["engine_offsets_m"]):
         if off > extent:
-            yield f"tunnel.rays.engine_offsets_m[{i}]", off, f"<= the table's extent (tunnel.rays.max_offset_m) = {extent}"
+            yield (
+                f"tunnel.rays.engine_offsets_m[{i}]",
+                off,
+                f"<= the table's extent (tunnel.rays.max_offset_m) = {extent}",
+            )
     n_window = int(2 * m["window_m"] // g["slot_spacing_m"])
     if m["n_slots"] > n_window:
-        yield "tunnel.measurement.n_slots", m["n_slots"], \
-            f"<= the {n_window} slots within ±tunnel.measurement.window_m"
+        yield "tunnel.measurement.n_slots", m["n_slots"], f"<= the {n_window} slots within ±tunnel.measurement.window_m"
     for shape in ("circle", "rect"):
         yield from _probe("tunnel.geometry", lambda shape=shape: study.tunnel_from_config(tu, shape))
     side_shape = study.TABLES[tu["engine"] + study.SIDE_WALL][0]  # the positioning engine's cross-section
-    yield from _probe("tunnel.sensitivity.side_wall_slot_z_m",
-                      lambda: study.tunnel_from_config(study.side_wall_config(tu), side_shape))
+    yield from _probe(
+        "tunnel.sensitivity.side_wall_slot_z_m",
+        lambda: study.tunnel_from_config(study.side_wall_config(tu), side_shape),
+    )
     yield from _probe("tunnel.cable", lambda: study.cable_from_config(tu))
     yield from _probe("tunnel.measurement", lambda: study.measurement_from_config(tu))
     for name in tu["trains"]:
@@ -323,6 +389,10 @@ def check_config(cfg: Mapping[str, Any], schema: Mapping[str, Any]) -> None:
     """Raise :class:`ConfigError` naming each key whose value breaks a rule between keys."""
     found = problems(cfg, schema)
     if found:
-        lines = [f"config key '{k}': " + ("the values are inconsistent" if v == "…" else f"{v!r} is not allowed")
-                 + f". Allowed: {rule}." for k, v, rule in found]
+        lines = [
+            f"config key '{k}': "
+            + ("the values are inconsistent" if v == "…" else f"{v!r} is not allowed")
+            + f". Allowed: {rule}."
+            for k, v, rule in found
+        ]
         raise ConfigError("invalid configuration:\n  " + "\n  ".join(lines))

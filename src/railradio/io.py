@@ -29,22 +29,15 @@ from typing import Any
 # atomic renames of private temporary files, so locking buys nothing.  Before h5py loads.
 os.environ.setdefault("HDF5_USE_FILE_LOCKING", "FALSE")
 
-import numpy as np  # noqa: E402
-import xarray as xr  # noqa: E402
+import numpy as np
+import xarray as xr
 
 from railradio import __version__
 from railradio.arithmetic import in_effect
 from railradio.rng import canonical_json
 
 ENGINE = "h5netcdf"
-PROVENANCE_ATTRS = (
-    "config_json",
-    "config_sha256",
-    "seed_spawn_key",
-    "railradio_version",
-    "git_commit",
-    "arithmetic",
-)
+PROVENANCE_ATTRS = ("config_json", "config_sha256", "seed_spawn_key", "railradio_version", "git_commit", "arithmetic")
 
 
 def git_commit() -> str:
@@ -52,12 +45,15 @@ def git_commit() -> str:
     here = Path(__file__).resolve().parent
     try:
         sha = subprocess.run(
-            ["git", "rev-parse", "HEAD"], cwd=here, capture_output=True, text=True,
-            check=True, timeout=10,
+            ["git", "rev-parse", "HEAD"], cwd=here, capture_output=True, text=True, check=True, timeout=10
         ).stdout.strip()
         dirty = subprocess.run(
             ["git", "status", "--porcelain", "--untracked-files=no", "--", "."],
-            cwd=here, capture_output=True, text=True, check=True, timeout=10,
+            cwd=here,
+            capture_output=True,
+            text=True,
+            check=True,
+            timeout=10,
         ).stdout.strip()
     except (OSError, subprocess.SubprocessError):
         return "unknown"
@@ -115,8 +111,9 @@ def _check_attrs(ds: xr.Dataset) -> None:
     for name, var in {**ds.data_vars, **ds.coords}.items():
         missing = [a for a in ("units", "long_name") if a not in var.attrs]
         if missing:
-            raise ValueError(f"variable {name!r} lacks attribute(s) {missing}; "
-                             "every variable needs 'units' and 'long_name'")
+            raise ValueError(
+                f"variable {name!r} lacks attribute(s) {missing}; every variable needs 'units' and 'long_name'"
+            )
 
 
 def _split_complex(ds: xr.Dataset) -> xr.Dataset:
@@ -128,18 +125,16 @@ def _split_complex(ds: xr.Dataset) -> xr.Dataset:
             for part, fn in (("real", np.real), ("imag", np.imag)):
                 out[f"{name}_{part}"] = var.copy(data=fn(var.values))
                 out[f"{name}_{part}"].attrs = {
-                    **attrs, "long_name": f"{attrs['long_name']} ({part} part)",
-                    "complex_part": part}
+                    **attrs,
+                    "long_name": f"{attrs['long_name']} ({part} part)",
+                    "complex_part": part,
+                }
             out = out.drop_vars(name)
     return out
 
 
 def write_dataset(
-    ds: xr.Dataset,
-    path: str | os.PathLike[str],
-    config: Mapping[str, Any],
-    key: tuple[int, ...] | None,
-    title: str,
+    ds: xr.Dataset, path: str | os.PathLike[str], config: Mapping[str, Any], key: tuple[int, ...] | None, title: str
 ) -> None:
     """Write ``ds`` to NetCDF at ``path`` with provenance, atomically.
 
@@ -163,10 +158,12 @@ def write_dataset(
     """
     _check_attrs(ds)
     ds = _split_complex(ds)
-    ds.attrs = {**ds.attrs, "title": title, "Conventions": "CF-1.10",
-                **provenance(config, key)}
-    encoding = {name: {"zlib": True, "complevel": 4} for name in ds.data_vars
-                if ds[name].dtype.kind in "fiub" and ds[name].ndim > 0}
+    ds.attrs = {**ds.attrs, "title": title, "Conventions": "CF-1.10", **provenance(config, key)}
+    encoding = {
+        name: {"zlib": True, "complevel": 4}
+        for name in ds.data_vars
+        if ds[name].dtype.kind in "fiub" and ds[name].ndim > 0
+    }
     with atomic_path(path) as tmp:
         ds.to_netcdf(tmp, engine=ENGINE, encoding=encoding, invalid_netcdf=False)
 

@@ -39,8 +39,9 @@ class KeySpec:
         if self.source_relation is not None and self.source_relation not in RELATIONS:
             raise ValueError(f"{self.name}: source_relation must be one of {RELATIONS}")
 
-    def entry(self, value: float | None, mc_stderr: float | None = None,
-              lost_frac: float | None = None) -> dict[str, Any]:
+    def entry(
+        self, value: float | None, mc_stderr: float | None = None, lost_frac: float | None = None
+    ) -> dict[str, Any]:
         """The JSON entry of this key with our ``value``.
 
         ``lost_frac``: for a tracker's accuracy, the share of epochs its track was lost
@@ -174,16 +175,42 @@ def config_to_latex(cfg: Mapping[str, Any]) -> str:
     return "\n".join(lines) + "\n"
 
 
-_TEX_REPL = {"_": r"\_", "%": r"\%", "&": r"\&", "#": r"\#", "$": r"\$", "{": r"\{", "}": r"\}",
-             "\\": r"\textbackslash{}", "^": r"\^{}", "~": r"\~{}", "|": r"$|$", "<": r"$<$",
-             ">": r"$>$", "≥": r"$\ge$", "≤": r"$\le$", "µ": r"$\mu$", "°": r"$^\circ$",
-             "≈": r"$\approx$", "−": "-", "–": "--", "—": "---", "×": r"$\times$", "·": r"$\cdot$",
-             "±": r"$\pm$", "→": r"$\to$", "²": r"$^2$", "³": r"$^3$", "…": r"\dots{}", "’": "'",
-             "√": r"$\surd$", "∞": r"$\infty$"}
+_TEX_REPL = {
+    "_": r"\_",
+    "%": r"\%",
+    "&": r"\&",
+    "#": r"\#",
+    "$": r"\$",
+    "{": r"\{",
+    "}": r"\}",
+    "\\": r"\textbackslash{}",
+    "^": r"\^{}",
+    "~": r"\~{}",
+    "|": r"$|$",
+    "<": r"$<$",
+    ">": r"$>$",
+    "≥": r"$\ge$",
+    "≤": r"$\le$",
+    "µ": r"$\mu$",
+    "°": r"$^\circ$",
+    "≈": r"$\approx$",
+    "−": "-",
+    "–": "--",
+    "—": "---",
+    "×": r"$\times$",
+    "·": r"$\cdot$",
+    "±": r"$\pm$",
+    "→": r"$\to$",
+    "²": r"$^2$",
+    "³": r"$^3$",
+    "…": r"\dots{}",
+    "’": "'",
+    "√": r"$\surd$",
+    "∞": r"$\infty$",
+}
 
 
-_TEX_GREEK_CAPITALS = {"Gamma", "Delta", "Theta", "Lambda", "Xi", "Pi", "Sigma", "Upsilon", "Phi",
-                       "Psi", "Omega"}
+_TEX_GREEK_CAPITALS = {"Gamma", "Delta", "Theta", "Lambda", "Xi", "Pi", "Sigma", "Upsilon", "Phi", "Psi", "Omega"}
 
 
 def _tex_escape(text: str) -> str:
@@ -211,8 +238,9 @@ def _tex_escape(text: str) -> str:
     return "".join(out)
 
 
-def claims_table(numbers: Mapping[str, Any], prefixes: Iterable[str] | None = None,
-                 with_source_only: bool = False) -> str:
+def claims_table(
+    numbers: Mapping[str, Any], prefixes: Iterable[str] | None = None, with_source_only: bool = False
+) -> str:
     """A LaTeX ``longtable`` (booktabs): key, meaning, source claim, ours, unit, a row per key.
 
     The whole environment is generated (an ``\\input`` between rows breaks ``\\bottomrule``);
@@ -229,8 +257,13 @@ def claims_table(numbers: Mapping[str, Any], prefixes: Iterable[str] | None = No
             rf"\texttt{{\footnotesize {key}}} & {_tex_escape(e['description'])} & "
             rf"\knsrc{{{name}}} & \kn{{{name}}} & {_tex_escape(e['unit'])} \\"
         )
-    head = [r"\begin{longtable}{@{}p{0.30\linewidth}p{0.40\linewidth}llr@{}}", r"\toprule",
-            r"key & meaning & source & ours & unit\\", r"\midrule", r"\endhead"]
+    head = [
+        r"\begin{longtable}{@{}p{0.30\linewidth}p{0.40\linewidth}llr@{}}",
+        r"\toprule",
+        r"key & meaning & source & ours & unit\\",
+        r"\midrule",
+        r"\endhead",
+    ]
     tail = [r"\bottomrule", r"\end{longtable}"]
     return "\n".join(head + rows + tail) + "\n"
 
@@ -249,15 +282,22 @@ def claims_html(numbers: Mapping[str, Any]) -> str:
         studies.setdefault(name.split(".")[0], []).append(
             f"<tr><td><code>{html.escape(name)}</code></td><td>{html.escape(e['description'])}</td>"
             f"<td class='n'>{html.escape(rel)} {format_number(e['source_value'])}</td>"
-            f"<td class='n'>{format_number(e['value'])}</td><td>{html.escape(e['unit'])}</td></tr>")
-    parts = ["<!DOCTYPE html><html><head><meta charset='utf-8'><title>Key numbers beside the source papers'</title>",
-             "<style>body{font-family:sans-serif;margin:1em}table{border-collapse:collapse;margin-bottom:2em}"
-             "td,th{border-bottom:1px solid #ccc;padding:3px 8px;vertical-align:top}td.n{text-align:right;"
-             "white-space:nowrap}th{text-align:left}</style></head><body>",
-             "<h1>Key numbers beside the source papers' values</h1>"]
+            f"<td class='n'>{format_number(e['value'])}</td><td>{html.escape(e['unit'])}</td></tr>"
+        )
+    parts = [
+        "<!DOCTYPE html><html><head><meta charset='utf-8'><title>Key numbers beside the source papers'</title>",
+        "<style>body{font-family:sans-serif;margin:1em}table{border-collapse:collapse;margin-bottom:2em}"
+        "td,th{border-bottom:1px solid #ccc;padding:3px 8px;vertical-align:top}td.n{text-align:right;"
+        "white-space:nowrap}th{text-align:left}</style></head><body>",
+        "<h1>Key numbers beside the source papers' values</h1>",
+    ]
     for study, rows in studies.items():
-        parts += [f"<h2>{html.escape(study)}</h2>", "<table><tr><th>key</th><th>meaning</th><th>source</th>"
-                  "<th>ours</th><th>unit</th></tr>", *rows, "</table>"]
+        parts += [
+            f"<h2>{html.escape(study)}</h2>",
+            "<table><tr><th>key</th><th>meaning</th><th>source</th><th>ours</th><th>unit</th></tr>",
+            *rows,
+            "</table>",
+        ]
     parts.append("</body></html>")
     return "\n".join(parts) + "\n"
 
@@ -282,8 +322,9 @@ def rel_tol(name: str) -> float:
     return REL_TOL_FLOAT32 if name.startswith(FLOAT32_PREFIXES) else REL_TOL_FLOAT64
 
 
-def tolerance(name: str, ours: Mapping[str, Any], reference: Mapping[str, Any],
-              mode: str = "reproduce", n_sigma: float = 4.0) -> float:
+def tolerance(
+    name: str, ours: Mapping[str, Any], reference: Mapping[str, Any], mode: str = "reproduce", n_sigma: float = 4.0
+) -> float:
     """How far two values of key ``name`` may differ (the rule in ``config/README.md``).
 
     ``mode="reproduce"``: the two sets come from the same config and seed, hence the same
@@ -301,8 +342,9 @@ def tolerance(name: str, ours: Mapping[str, Any], reference: Mapping[str, Any],
     return tol
 
 
-def compare(ours: Mapping[str, Any], reference: Mapping[str, Any], mode: str = "reproduce",
-            n_sigma: float = 4.0) -> list[str]:
+def compare(
+    ours: Mapping[str, Any], reference: Mapping[str, Any], mode: str = "reproduce", n_sigma: float = 4.0
+) -> list[str]:
     """Differences between two key-number sets, as messages (empty when they agree):
     missing or new keys, a value where the other has none, and values farther apart
     than :func:`tolerance`."""
@@ -334,9 +376,13 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=main.__doc__)
     ap.add_argument("new")
     ap.add_argument("reference")
-    ap.add_argument("--mode", choices=("reproduce", "statistical"), default="reproduce",
-                    help="reproduce: same config and seed (precision floors only); statistical: "
-                         "different draws (adds --n-sigma Monte Carlo errors)")
+    ap.add_argument(
+        "--mode",
+        choices=("reproduce", "statistical"),
+        default="reproduce",
+        help="reproduce: same config and seed (precision floors only); statistical: "
+        "different draws (adds --n-sigma Monte Carlo errors)",
+    )
     ap.add_argument("--n-sigma", type=float, default=4.0)
     args = ap.parse_args(argv)
     with open(args.new, encoding="utf-8") as fh:

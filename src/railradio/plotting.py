@@ -14,7 +14,7 @@ from pathlib import Path
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
+import matplotlib.pyplot as plt
 
 STYLE = str(files("railradio") / "data" / "railradio.mplstyle")
 plt.style.use(STYLE)  # every figure of the process (each workflow job is its own process)
@@ -46,8 +46,11 @@ def save(fig, pdf_path: str | os.PathLike[str], png_path: str | os.PathLike[str]
     pdf_path = Path(pdf_path)
     png_path = Path(png_path) if png_path is not None else pdf_path.with_suffix(".png")
     with atomic_path(pdf_path) as tmp:
-        fig.savefig(tmp, format="pdf", metadata={"CreationDate": None, "ModDate": None,
-                                                 "Producer": None, "Creator": "railradio"})
+        fig.savefig(
+            tmp,
+            format="pdf",
+            metadata={"CreationDate": None, "ModDate": None, "Producer": None, "Creator": "railradio"},
+        )
     with atomic_path(png_path) as tmp:
         fig.savefig(tmp, format="png", metadata={"Software": None})
     plt.close(fig)
@@ -82,11 +85,19 @@ def plot_rulegraph(dot: str, png: str, svg: str | None = None) -> None:
     colour = {s: f"C{i}" for i, s in enumerate(studies)}
     fig, ax = plt.subplots(figsize=(max(8.0, 1.6 * width), 0.9 * (len(rows) + 1)))
     for a, b in edges:
-        ax.annotate("", xy=pos[b], xytext=pos[a],
-                    arrowprops=dict(arrowstyle="->", color="0.6", lw=0.8, shrinkA=9, shrinkB=9))
+        ax.annotate(
+            "", xy=pos[b], xytext=pos[a], arrowprops=dict(arrowstyle="->", color="0.6", lw=0.8, shrinkA=9, shrinkB=9)
+        )
     for n, (x, y) in pos.items():
-        ax.text(x, y, labels[n], ha="center", va="center", fontsize=7,
-                bbox=dict(boxstyle="round,pad=0.3", fc="white", ec=colour[labels[n].split("_")[0]], lw=1.5))
+        ax.text(
+            x,
+            y,
+            labels[n],
+            ha="center",
+            va="center",
+            fontsize=7,
+            bbox=dict(boxstyle="round,pad=0.3", fc="white", ec=colour[labels[n].split("_")[0]], lw=1.5),
+        )
     ax.set_xlim(-0.2, width + 0.2)
     ax.set_ylim(-max(rows) - 0.6, 0.6)
     ax.axis("off")

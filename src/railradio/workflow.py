@@ -53,13 +53,16 @@ def setup_script(log_path: str | None) -> logging.Logger:
     if log_path:
         Path(log_path).parent.mkdir(parents=True, exist_ok=True)
         handler = logging.FileHandler(log_path, mode="w", encoding="utf-8")
-        sys.stderr = open(log_path, "a", encoding="utf-8")  # noqa: SIM115 - lives with the job
+        sys.stderr = open(log_path, "a", encoding="utf-8")
     else:
         handler = logging.StreamHandler()
     handler.setFormatter(logging.Formatter("%(asctime)s %(levelname)s %(message)s"))
     logger.handlers[:] = [handler]
     logger.info("arithmetic: %s", in_effect())
     if not pins_hold():
-        logger.warning("NumPy's or OpenBLAS's CPU code paths are not pinned in this job (%s): its "
-                       "numbers may differ from another machine's beyond rounding", in_effect())
+        logger.warning(
+            "NumPy's or OpenBLAS's CPU code paths are not pinned in this job (%s): its "
+            "numbers may differ from another machine's beyond rounding",
+            in_effect(),
+        )
     return logger

@@ -1,4 +1,5 @@
 """Tests of the chain study: nr tracked position error -> handover position input."""
+
 from dataclasses import replace
 
 import numpy as np
@@ -6,8 +7,7 @@ import pytest
 import xarray as xr
 import yaml
 
-from railradio.chain.nr_error import (bootstrap, error_stats, hold_and_drift, nofix_share,
-                                      series_from_runs)
+from railradio.chain.nr_error import bootstrap, error_stats, hold_and_drift, nofix_share, series_from_runs
 from railradio.chain.params import ChainParams, params_from_config
 from railradio.chain.sim import gm_error_m, simulate_block, simulate_blocks
 from railradio.chain.summary import crossover, key_numbers, summarize
@@ -28,9 +28,10 @@ def _nr_dataset(err: np.ndarray, v_m_s: np.ndarray, dt: float = 0.1) -> xr.Datas
     """A stand-in nr IMM file: along_err for ekf and imm, speed profile v_m_s."""
     t = dt * np.arange(err.size)
     x = np.concatenate([[0.0], np.cumsum(v_m_s[:-1] * dt)])
-    return xr.Dataset({"along_err": (("filter", "epoch"), np.stack([err, 2 * err])),
-                       "t": ("epoch", t), "x_true": ("epoch", x)},
-                      coords={"filter": ["ekf", "imm"], "epoch": np.arange(err.size)})
+    return xr.Dataset(
+        {"along_err": (("filter", "epoch"), np.stack([err, 2 * err])), "t": ("epoch", t), "x_true": ("epoch", x)},
+        coords={"filter": ["ekf", "imm"], "epoch": np.arange(err.size)},
+    )
 
 
 def _series(rng, n=3000, drift=0.5):
@@ -40,6 +41,7 @@ def _series(rng, n=3000, drift=0.5):
 
 
 # --- sigma = 0 is the handover study's own run with a zero GNSS error -------------------
+
 
 def test_sigma0_chain_equals_handover_with_zero_gnss_error():
     chained = simulate_block(_scn(2.0), SPEED, 7, 3, 12, [0.0], 1.0, {})["gm_0"]
@@ -68,11 +70,14 @@ def test_a3_ignores_position_and_shards_do_not_matter(rng):
     a3 = whole["success"].sel(policy="a3").values
     assert np.all(a3 == a3[0])  # identical for every position input
     # a 50 m error changes the joint decision's commands somewhere
-    assert np.any(whole["delay_s"].sel(policy="joint", input="gm_0").values
-                  != whole["delay_s"].sel(policy="joint", input="gm_50").values)
+    assert np.any(
+        whole["delay_s"].sel(policy="joint", input="gm_0").values
+        != whole["delay_s"].sel(policy="joint", input="gm_50").values
+    )
 
 
 # --- the Gauss-Markov input -------------------------------------------------------------
+
 
 def test_gm_error_is_untruncated_with_the_stated_std_and_correlation(rng):
     w = rng.standard_normal((4000, 200))
@@ -85,6 +90,7 @@ def test_gm_error_is_untruncated_with_the_stated_std_and_correlation(rng):
 
 
 # --- the nr bootstrap --------------------------------------------------------------------
+
 
 def test_bootstrap_reproduces_the_input_error_distribution(rng):
     s, e = _series(rng)
@@ -135,15 +141,22 @@ def test_nofix_share_counts_epochs_without_any_detection():
     aod[1, 1:3] = np.nan
     rng_err = aod.copy()
     rng_err[1, 2, 0] = 0.0  # epoch 2 has a TOA: not an outage
-    ds = xr.Dataset({"aod_err": (("receiver", "epoch", "slot"), aod), "range_err": (("receiver", "epoch", "slot"), rng_err),
-                     "t": ("epoch", 0.1 * np.arange(n)), "x_true": ("epoch", SPEED / 3.6 * 0.1 * np.arange(n))},
-                    coords={"receiver": ["seed", "robust"]})
+    ds = xr.Dataset(
+        {
+            "aod_err": (("receiver", "epoch", "slot"), aod),
+            "range_err": (("receiver", "epoch", "slot"), rng_err),
+            "t": ("epoch", 0.1 * np.arange(n)),
+            "x_true": ("epoch", SPEED / 3.6 * 0.1 * np.arange(n)),
+        },
+        coords={"receiver": ["seed", "robust"]},
+    )
     assert nofix_share([ds], "robust", SPEED, 50.0) == pytest.approx(1 / 4)
     with pytest.raises(ValueError, match="receiver"):
         nofix_share([ds], "other", SPEED, 50.0)
 
 
 # --- crossover ---------------------------------------------------------------------------
+
 
 def test_crossover_interpolates_the_first_crossing():
     assert crossover([0, 10, 20], [0.9, 0.7, 0.5], 0.6) == (pytest.approx(15.0), "found")
@@ -159,10 +172,13 @@ def test_key_numbers_report_the_crossover_and_nr_points():
     sig = np.array([0.0, 10.0, 100.0, np.nan])
     labels = ["gm_0", "gm_10", "gm_100", "nr_ekf"]
     succ = np.array([[0.9, 0.95, 0.6], [0.85, 0.94, 0.6], [0.5, 0.3, 0.6], [0.9, 0.95, 0.6]])
-    d = {n: (("input", "policy"), succ + off) for n, off in
-         (("success", 0), ("success_lo", -0.01), ("success_hi", 0.01), ("success_se", 0.0 * succ + 0.005))}
-    d.update({n: (("input", "policy"), np.zeros((4, 3))) for n in ("pingpong", "pingpong_lo", "pingpong_hi",
-                                                                  "pingpong_se")})
+    d = {
+        n: (("input", "policy"), succ + off)
+        for n, off in (("success", 0), ("success_lo", -0.01), ("success_hi", 0.01), ("success_se", 0.0 * succ + 0.005))
+    }
+    d.update(
+        {n: (("input", "policy"), np.zeros((4, 3))) for n in ("pingpong", "pingpong_lo", "pingpong_hi", "pingpong_se")}
+    )
     d["err_rms_m"] = (("input",), np.array([0, 10, 100, 0.2]))
     summ = xr.Dataset(d, coords={"input": labels, "sigma_m": ("input", sig), "policy": ["joint", "distance", "a3"]})
     summ["speed_kmh"] = 350.0
@@ -178,14 +194,18 @@ def test_key_numbers_report_the_crossover_and_nr_points():
 
 # --- bad input ---------------------------------------------------------------------------
 
-@pytest.mark.parametrize(("kw", "name"), [
-    ({"sigmas_m": (0.0, -1.0)}, "sigmas_m"),
-    ({"sigmas_m": (0.0, 5.0, 2.0)}, "sigmas_m"),
-    ({"nr_filters": ("rts",)}, "nr_filters"),
-    ({"speed_kmh": 0.0}, "speed_kmh"),
-    ({"outage_drift_m_s": -1.0}, "outage_drift_m_s"),
-    ({"n_blocks": 0}, "n_blocks"),
-])
+
+@pytest.mark.parametrize(
+    ("kw", "name"),
+    [
+        ({"sigmas_m": (0.0, -1.0)}, "sigmas_m"),
+        ({"sigmas_m": (0.0, 5.0, 2.0)}, "sigmas_m"),
+        ({"nr_filters": ("rts",)}, "nr_filters"),
+        ({"speed_kmh": 0.0}, "speed_kmh"),
+        ({"outage_drift_m_s": -1.0}, "outage_drift_m_s"),
+        ({"n_blocks": 0}, "n_blocks"),
+    ],
+)
 def test_bad_parameters_raise_naming_the_parameter(kw, name):
     with pytest.raises(ValueError, match=name):
         ChainParams(**kw)
@@ -212,8 +232,10 @@ def test_bad_inputs_raise(rng):
         error_stats(np.array([np.nan]))
 
 
-@pytest.mark.parametrize(("key", "value"), [("sigmas_m", [0.0, -2.0]), ("nr_filters", ["rts"]),
-                                            ("n_blocks", 0), ("speed_halfwidth_kmh", 0.0)])
+@pytest.mark.parametrize(
+    ("key", "value"),
+    [("sigmas_m", [0.0, -2.0]), ("nr_filters", ["rts"]), ("n_blocks", 0), ("speed_halfwidth_kmh", 0.0)],
+)
 def test_schema_rejects_bad_chain_values(key, value):
     cfg = yaml.safe_load((ROOT / "config/config.yaml").read_text())
     schema = load_schema(ROOT / "workflow/schemas/config.schema.yaml")
@@ -230,5 +252,6 @@ def test_summary_rates_match_the_raw_outcomes(rng):
     for lab in ("gm_0", "nr_ekf"):
         for p in ("joint", "a3"):
             assert float(summ["success"].sel(input=lab, policy=p)) == pytest.approx(
-                float(ds["success"].sel(input=lab, policy=p).mean()))
+                float(ds["success"].sel(input=lab, policy=p).mean())
+            )
     assert float(summ["err_rms_m"].sel(input="gm_0")) == 0.0

@@ -1,4 +1,5 @@
 """The CRLB against a finite-difference Fisher information and against Monte Carlo."""
+
 import math
 
 import numpy as np
@@ -12,10 +13,12 @@ from railradio.fusion.montecarlo import sweep_dataset
 def _fd_fisher(x, s_delta, s_theta, g, h=1e-3):
     """J = mu'(x)^T Sigma^-1 mu'(x) for z = (r2 - r1, theta) + Gaussian noise, mu' by central
     differences of the measurement functions written out here from the geometry."""
+
     def mu(x):
         r1 = math.hypot(x, g.d_m)
         r2 = math.hypot(g.baseline_m - x, g.d_m)
         return np.array([r2 - r1, math.atan2(-g.d_m, x)])
+
     dmu = (mu(x + h) - mu(x - h)) / (2 * h)
     return dmu[0] ** 2 / s_delta**2 + dmu[1] ** 2 / s_theta**2
 
@@ -42,16 +45,23 @@ NONLINEARITY_ALLOWANCE = {"reference": 0.01, "large": 0.05}
 
 @pytest.mark.parametrize(
     ("sigma_tdoa_s", "sigma_aoa_rad", "allow"),
-    [(1e-7, 0.01, NONLINEARITY_ALLOWANCE["reference"]),
-     (6e-7, 0.01, NONLINEARITY_ALLOWANCE["large"]),
-     (1e-7, 0.06, NONLINEARITY_ALLOWANCE["large"])],
+    [
+        (1e-7, 0.01, NONLINEARITY_ALLOWANCE["reference"]),
+        (6e-7, 0.01, NONLINEARITY_ALLOWANCE["large"]),
+        (1e-7, 0.06, NONLINEARITY_ALLOWANCE["large"]),
+    ],
 )
 def test_monte_carlo_fused_rmse_sits_on_the_crlb(sigma_tdoa_s, sigma_aoa_rad, allow):
     p = PointParams(1500.0, sigma_tdoa_s, sigma_aoa_rad, n_positions=100, n_trials=4000)
     s = summarize(simulate_point(p, 11, (2, 99)))
     assert s["crlb_m"] == pytest.approx(
-        crlb_rmse_m((np.arange(100) + 0.5) / 100 * p.geometry.half_segment_m,
-                    SPEED_OF_LIGHT_M_S * sigma_tdoa_s, sigma_aoa_rad, p.geometry))
+        crlb_rmse_m(
+            (np.arange(100) + 0.5) / 100 * p.geometry.half_segment_m,
+            SPEED_OF_LIGHT_M_S * sigma_tdoa_s,
+            sigma_aoa_rad,
+            p.geometry,
+        )
+    )
     for est in ("fused_genie", "fused_propagated"):
         gap = abs(s[f"rmse_{est}_m"] - s["crlb_m"])
         assert gap <= 4 * s[f"rmse_{est}_se_m"] + allow * s["crlb_m"], (est, s)

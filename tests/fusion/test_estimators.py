@@ -1,4 +1,5 @@
 """TDOA/AOA ∩ track: closed form against brute-force root finding and exact geometry."""
+
 import math
 
 import numpy as np
@@ -67,8 +68,9 @@ def test_seed_geometry():
     assert g.train_interval_m == pytest.approx((0.0, math.sqrt(3) * 1500))
 
 
-@pytest.mark.parametrize("bad", [dict(d_m=0.0), dict(d_m=-1.0), dict(d_m=10.0, cell_radius_factor=1.0),
-                                 dict(d_m=float("nan"))])
+@pytest.mark.parametrize(
+    "bad", [dict(d_m=0.0), dict(d_m=-1.0), dict(d_m=10.0, cell_radius_factor=1.0), dict(d_m=float("nan"))]
+)
 def test_bad_geometry_raises(bad):
     with pytest.raises(ValueError):
         CellGeometry(**bad)

@@ -1,6 +1,7 @@
 """Fusion sensitivity (docs/model/fusion.md §5): the arc geometry and its estimators against independent
 geometry and root finding, the correlated-noise generator, the CRLBs against numerical
 Fisher information, whitening at ρ = 0, Monte Carlo against the bounds, bad input."""
+
 import math
 import re
 
@@ -48,8 +49,7 @@ def _arc_indep(s, d, radius):
     big_d = 2 * math.sqrt(3) * d
     phi = s / radius
     p = np.array([radius * math.sin(phi), radius - radius * math.cos(phi)])
-    bs = [np.array([(radius - d) * math.sin(a), radius - (radius - d) * math.cos(a)])
-          for a in (0.0, big_d / radius)]
+    bs = [np.array([(radius - d) * math.sin(a), radius - (radius - d) * math.cos(a)]) for a in (0.0, big_d / radius)]
     return p, bs
 
 
@@ -83,8 +83,11 @@ def test_straight_arc_is_the_source_geometry():
     np.testing.assert_allclose(g.range_difference_m(x), c.range_difference_m(x), rtol=1e-14)
     np.testing.assert_allclose(g.range_difference_slope(x), c.range_difference_slope(x), rtol=1e-14)
     np.testing.assert_allclose(g.aoa_slope(x), c.aoa_slope(x), rtol=1e-14)
-    np.testing.assert_allclose(fisher_information_arc(x, SIGMA_DELTA_M, SIGMA_THETA_RAD, g),
-                               fisher_information(x, SIGMA_DELTA_M, SIGMA_THETA_RAD, c), rtol=1e-13)
+    np.testing.assert_allclose(
+        fisher_information_arc(x, SIGMA_DELTA_M, SIGMA_THETA_RAD, g),
+        fisher_information(x, SIGMA_DELTA_M, SIGMA_THETA_RAD, c),
+        rtol=1e-13,
+    )
     assert g.tdoa_branch_m == (-math.inf, math.inf)
 
 
@@ -138,8 +141,9 @@ def test_tdoa_on_arc_tends_to_the_straight_closed_form(rng):
     for radius in (1e9, 1e12):  # the curvature's effect is of the order of the sagitta
         g = ArcGeometry(1500.0, radius)
         s_big_r, _ = tdoa_on_arc(deltas, g)
-        np.testing.assert_allclose(s_big_r, tdoa_on_track(deltas, c)[0],
-                                   atol=1e-6 + 2 * float(g.sagitta_m(g.half_segment_m)))
+        np.testing.assert_allclose(
+            s_big_r, tdoa_on_track(deltas, c)[0], atol=1e-6 + 2 * float(g.sagitta_m(g.half_segment_m))
+        )
 
 
 @pytest.mark.parametrize("radius", RADII)
@@ -149,8 +153,11 @@ def test_aoa_on_arc_exact_and_unique(radius, rng):
     np.testing.assert_allclose(aoa_on_arc(g.aoa_rad(s_true), g), s_true, atol=1e-6)
     # brute force: the bearing along the arc crosses theta once (BS1 inside the circle)
     theta = g.aoa_rad(0.7 * g.half_segment_m) + 0.02
-    s = np.linspace(-math.pi * radius + 1.0, math.pi * radius - 1.0, 200001) if radius < 1e6 else \
-        np.linspace(-1e5, 1e5, 200001)
+    s = (
+        np.linspace(-math.pi * radius + 1.0, math.pi * radius - 1.0, 200001)
+        if radius < 1e6
+        else np.linspace(-1e5, 1e5, 200001)
+    )
     f = np.angle(np.exp(1j * (g.aoa_rad(s) - theta)))
     crossings = np.flatnonzero((np.sign(f[:-1]) != np.sign(f[1:])) & (np.abs(f[:-1] - f[1:]) < 1.0))
     assert len(crossings) == 1
@@ -193,17 +200,21 @@ def test_mismatch_line_estimator_matches_root_finding(radius, rng):
 def test_line_estimator_is_the_source_closed_form_on_the_straight_layout(rng):
     c = CellGeometry(1500.0)
     deltas = rng.uniform(-0.99, 0.99, 100) * c.baseline_m
-    np.testing.assert_allclose(tdoa_on_line(deltas, 1500.0, (c.baseline_m, 1500.0))[0],
-                               tdoa_on_track(deltas, c)[0], rtol=1e-9, atol=1e-7)
+    np.testing.assert_allclose(
+        tdoa_on_line(deltas, 1500.0, (c.baseline_m, 1500.0))[0], tdoa_on_track(deltas, c)[0], rtol=1e-9, atol=1e-7
+    )
 
 
-@pytest.mark.parametrize(("kwargs", "name"), [
-    (dict(d_m=1500.0, radius_m=1500.0), "radius_m"),
-    (dict(d_m=1500.0, radius_m=1600.0), "radius_m"),  # D/R > pi
-    (dict(d_m=1500.0, radius_m=-5.0), "radius_m"),
-    (dict(d_m=1500.0, radius_m=float("nan")), "radius_m"),
-    (dict(d_m=0.0, radius_m=5000.0), "d_m"),
-])
+@pytest.mark.parametrize(
+    ("kwargs", "name"),
+    [
+        (dict(d_m=1500.0, radius_m=1500.0), "radius_m"),
+        (dict(d_m=1500.0, radius_m=1600.0), "radius_m"),  # D/R > pi
+        (dict(d_m=1500.0, radius_m=-5.0), "radius_m"),
+        (dict(d_m=1500.0, radius_m=float("nan")), "radius_m"),
+        (dict(d_m=0.0, radius_m=5000.0), "d_m"),
+    ],
+)
 def test_bad_arc_geometry_raises_naming_the_parameter(kwargs, name):
     with pytest.raises(ValueError, match=name):
         ArcGeometry(**kwargs)
@@ -284,11 +295,13 @@ def test_whitened_fusion_is_gls_and_reduces_to_the_source_at_rho_zero(rng):
             assert got[k] == pytest.approx(w @ x[:, k] / w.sum(), rel=1e-12)
     # rho = 0: inverse-variance weighting of three independent estimates
     w = np.array([1 / sd2**2, 1 / sd0**2, 1 / var_a])
-    np.testing.assert_allclose(fuse_two_tdoa_aoa(x[0], sd2, x[1], sd0, x[2], var_a, 0.0),
-                               (w * x).sum(0) / w.sum(0), rtol=1e-13)
+    np.testing.assert_allclose(
+        fuse_two_tdoa_aoa(x[0], sd2, x[1], sd0, x[2], var_a, 0.0), (w * x).sum(0) / w.sum(0), rtol=1e-13
+    )
     # one TDOA (the second dropped): the source's two-estimate fusion (eq. 9-10)
-    np.testing.assert_allclose(fuse_two_tdoa_aoa(x[0], sd2, np.inf, np.inf, x[2], var_a, 0.0),
-                               fuse(x[0], sd2**2, x[2], var_a), rtol=1e-13)
+    np.testing.assert_allclose(
+        fuse_two_tdoa_aoa(x[0], sd2, np.inf, np.inf, x[2], var_a, 0.0), fuse(x[0], sd2**2, x[2], var_a), rtol=1e-13
+    )
 
 
 @pytest.mark.parametrize("rho", [1.0, -1.0, float("nan")])
@@ -317,8 +330,7 @@ def _point(kind, n_pos=60, n_trials=2000, **kw):
 
 def test_whitened_equals_naive_at_rho_zero_in_the_monte_carlo():
     ds = simulate_sens_point(_point("rho", 10, 200, rho=0.0), 1, (2, 3))
-    np.testing.assert_array_equal(ds["mse"].sel(estimator="whitened").values,
-                                  ds["mse"].sel(estimator="naive").values)
+    np.testing.assert_array_equal(ds["mse"].sel(estimator="whitened").values, ds["mse"].sel(estimator="naive").values)
 
 
 @pytest.mark.parametrize("rho", [0.0, 0.5, 0.9])
@@ -347,8 +359,9 @@ def test_whitened_sits_on_the_correlated_crlb_and_naive_on_its_prediction(rho):
 
 def test_curve_straight_base_equal_for_both_constraints_and_arc_on_its_crlb():
     base = simulate_sens_point(_point("curve"), 3, (2, 5))
-    np.testing.assert_allclose(base["mse"].sel(estimator="mismatch_fused").values,
-                               base["mse"].sel(estimator="arc_fused").values, rtol=1e-9)
+    np.testing.assert_allclose(
+        base["mse"].sel(estimator="mismatch_fused").values, base["mse"].sel(estimator="arc_fused").values, rtol=1e-9
+    )
     prev_bias = 0.0
     for radius in (20000.0, 7000.0, 4000.0):
         s = summarize_sens(simulate_sens_point(_point("curve", radius_m=radius), 3, (2, 5)))
@@ -364,9 +377,13 @@ def test_results_do_not_depend_on_chunking_and_use_common_random_numbers():
     a = simulate_sens_point(p, 3, (2, 1), chunk_positions=4)
     b = simulate_sens_point(p, 3, (2, 1), chunk_positions=50)
     np.testing.assert_array_equal(a["mse"].values, b["mse"].values)
-    cfg = {"reference": {"d_m": 1500.0, "sigma_tdoa_us": 0.1, "sigma_aoa_rad": 0.01},
-           "position_sampling": "grid", "cell_radius_factor": 2.0, "clip": "no_solution",
-           "sensitivity": {"n_positions": 5, "n_trials": 50, "radii_m": [4000.0, 2000.0], "rho": [0.0, 0.5]}}
+    cfg = {
+        "reference": {"d_m": 1500.0, "sigma_tdoa_us": 0.1, "sigma_aoa_rad": 0.01},
+        "position_sampling": "grid",
+        "cell_radius_factor": 2.0,
+        "clip": "no_solution",
+        "sensitivity": {"n_positions": 5, "n_trials": 50, "radii_m": [4000.0, 2000.0], "rho": [0.0, 0.5]},
+    }
     for kind in ("curve", "rho"):
         keys = {point_key(pt) for pt in sens_points(cfg, kind)}
         assert len(keys) == 1  # the same random numbers at every point of a sweep
@@ -374,9 +391,13 @@ def test_results_do_not_depend_on_chunking_and_use_common_random_numbers():
 
 
 def test_sens_points_reject_a_radius_the_layout_cannot_take():
-    cfg = {"reference": {"d_m": 1500.0, "sigma_tdoa_us": 0.1, "sigma_aoa_rad": 0.01},
-           "position_sampling": "grid", "cell_radius_factor": 2.0, "clip": "no_solution",
-           "sensitivity": {"n_positions": 5, "n_trials": 50, "radii_m": [1000.0], "rho": [0.5]}}
+    cfg = {
+        "reference": {"d_m": 1500.0, "sigma_tdoa_us": 0.1, "sigma_aoa_rad": 0.01},
+        "position_sampling": "grid",
+        "cell_radius_factor": 2.0,
+        "clip": "no_solution",
+        "sensitivity": {"n_positions": 5, "n_trials": 50, "radii_m": [1000.0], "rho": [0.5]},
+    }
     with pytest.raises(ValueError, match="radius_m"):
         sens_points(cfg, "curve")
     with pytest.raises(ValueError, match="kind"):
@@ -384,29 +405,40 @@ def test_sens_points_reject_a_radius_the_layout_cannot_take():
 
 
 def test_key_numbers_names_and_values():
-    curve = sens_sweep_dataset([simulate_sens_point(_point("curve", 8, 50, radius_m=r), 1, (2, 9))
-                                for r in (math.inf, 4000.0)], "curve")
-    rho = sens_sweep_dataset([simulate_sens_point(_point("rho", 8, 50, rho=r), 1, (2, 9))
-                              for r in (0.0, 0.5)], "rho")
+    curve = sens_sweep_dataset(
+        [simulate_sens_point(_point("curve", 8, 50, radius_m=r), 1, (2, 9)) for r in (math.inf, 4000.0)], "curve"
+    )
+    rho = sens_sweep_dataset([simulate_sens_point(_point("rho", 8, 50, rho=r), 1, (2, 9)) for r in (0.0, 0.5)], "rho")
     nums = key_numbers(curve, rho)
-    for name in ("sens.fusion.curve_r4000.mismatch.rmse_m", "sens.fusion.curve_r4000.arc.rmse_m",
-                 "sens.fusion.curve_rinf.crlb_m", "sens.fusion.curve_r4000.sagitta_m",
-                 "sens.fusion.rho0.5.naive.rmse_m", "sens.fusion.rho0.5.whitened.rmse_m",
-                 "sens.fusion.rho0.5.crlb_m", "sens.fusion.rho0.crlb_m", "sens.fusion.one_tdoa.rmse_m"):
+    for name in (
+        "sens.fusion.curve_r4000.mismatch.rmse_m",
+        "sens.fusion.curve_r4000.arc.rmse_m",
+        "sens.fusion.curve_rinf.crlb_m",
+        "sens.fusion.curve_r4000.sagitta_m",
+        "sens.fusion.rho0.5.naive.rmse_m",
+        "sens.fusion.rho0.5.whitened.rmse_m",
+        "sens.fusion.rho0.5.crlb_m",
+        "sens.fusion.rho0.crlb_m",
+        "sens.fusion.one_tdoa.rmse_m",
+    ):
         assert name in nums, name
     assert nums["sens.fusion.curve_rinf.sagitta_m"]["value"] == 0.0
     g = ArcGeometry(1500.0, 4000.0)
     assert nums["sens.fusion.curve_r4000.sagitta_m"]["value"] == pytest.approx(
-        4000.0 * (1 - math.cos(g.half_segment_m / 4000.0)))
+        4000.0 * (1 - math.cos(g.half_segment_m / 4000.0))
+    )
     assert all(e["value"] is not None and math.isfinite(e["value"]) for e in nums.values())
 
 
-@pytest.mark.parametrize(("key", "bad", "text"), [
-    ("rho", [0.5, 1.0], "fusion.sensitivity.rho[1]"),
-    ("radii_m", [50.0], "fusion.sensitivity.radii_m[0]"),
-    ("n_trials", 1, "fusion.sensitivity.n_trials"),
-    ("radii", [4000.0], "radii"),
-])
+@pytest.mark.parametrize(
+    ("key", "bad", "text"),
+    [
+        ("rho", [0.5, 1.0], "fusion.sensitivity.rho[1]"),
+        ("radii_m", [50.0], "fusion.sensitivity.radii_m[0]"),
+        ("n_trials", 1, "fusion.sensitivity.n_trials"),
+        ("radii", [4000.0], "radii"),
+    ],
+)
 def test_schema_rejects_bad_sensitivity_config_naming_the_key(key, bad, text):
     import copy
 
@@ -426,10 +458,10 @@ def test_schema_rejects_bad_sensitivity_config_naming_the_key(key, bad, text):
 def test_sensitivity_figure_is_written(tmp_path):
     from railradio.fusion.sensitivity_figures import plot_sensitivity
 
-    curve = sens_sweep_dataset([simulate_sens_point(_point("curve", 6, 30, radius_m=r), 1, (2, 4))
-                                for r in (math.inf, 7000.0)], "curve")
-    rho = sens_sweep_dataset([simulate_sens_point(_point("rho", 6, 30, rho=r), 1, (2, 4))
-                              for r in (0.0, 0.9)], "rho")
+    curve = sens_sweep_dataset(
+        [simulate_sens_point(_point("curve", 6, 30, radius_m=r), 1, (2, 4)) for r in (math.inf, 7000.0)], "curve"
+    )
+    rho = sens_sweep_dataset([simulate_sens_point(_point("rho", 6, 30, rho=r), 1, (2, 4)) for r in (0.0, 0.9)], "rho")
     plot_sensitivity(curve, rho, tmp_path / "f.pdf", tmp_path / "f.png")
     assert (tmp_path / "f.pdf").stat().st_size > 1000 and (tmp_path / "f.png").stat().st_size > 1000
     with pytest.raises(ValueError, match="curve"):

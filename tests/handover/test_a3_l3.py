@@ -1,16 +1,12 @@
 """A3 entering/leaving conditions and the L3 filter against TS 36.331 on hand-made sequences."""
+
 import math
 
 import numpy as np
 import pytest
 
 from railradio.handover.a3 import a3_entering, a3_leaving, first_true, held_for, run_length, ttt_samples
-from railradio.handover.radio import (
-    filtered_gap_noise_std_db,
-    l3_coefficient,
-    l3_coefficient_at,
-    l3_filter,
-)
+from railradio.handover.radio import filtered_gap_noise_std_db, l3_coefficient, l3_coefficient_at, l3_filter
 
 
 def test_a3_entering_and_leaving_follow_the_inequalities():

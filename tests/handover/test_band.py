@@ -1,4 +1,5 @@
 """Band edges PL/PR, the inverse gap map, the fit and WSLR against closed forms."""
+
 import numpy as np
 import pytest
 from scipy.optimize import brentq
@@ -100,13 +101,14 @@ def test_position_correction_piecewise():
     pl, pr = band_edges_m(gaph, a, n, RADIO)
     xm, pr_retry = 0.5 * (pl + pr), pr - 20.0
     args = (xm, pl, pr_retry, gaph, a, n, 0.5, RADIO)
-    assert position_correction_m(0.3, *args) == 0.0                     # dead zone
+    assert position_correction_m(0.3, *args) == 0.0  # dead zone
     assert position_correction_m(9.0, *args) == pytest.approx(pr_retry - xm)
     assert position_correction_m(-9.0, *args) == pytest.approx(pl - xm)
-    dx = float(position_correction_m(2.0, *args))                      # serving stronger: later
+    dx = float(position_correction_m(2.0, *args))  # serving stronger: later
     assert dx > 0
     assert float(model_gap_db(xm + dx, a, n, RADIO)) + 2.0 == pytest.approx(
-        float(model_gap_db(xm, a, n, RADIO)), abs=1e-9)
+        float(model_gap_db(xm, a, n, RADIO)), abs=1e-9
+    )
 
 
 def test_first_attempt_bound_closed_form_against_sampling():

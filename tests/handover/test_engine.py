@@ -1,5 +1,6 @@
 """The vectorized engine against the per-step loop reference, noise-free theory, and
 independence of the batch split."""
+
 from dataclasses import replace
 
 import numpy as np
@@ -17,8 +18,17 @@ from railradio.handover.reference import simulate_reference
 from railradio.handover.train import kinematics
 
 ALL = ("joint", "a3", "distance")
-COMPARED = ("command_x_m", "attempts", "success", "pingpong", "delay_s", "completion_x_m", "rsrp_gap_db",
-            "delay_all_s", "delay_trigger_s")
+COMPARED = (
+    "command_x_m",
+    "attempts",
+    "success",
+    "pingpong",
+    "delay_s",
+    "completion_x_m",
+    "rsrp_gap_db",
+    "delay_all_s",
+    "delay_trigger_s",
+)
 EX = Scenario().execution
 
 
@@ -27,20 +37,44 @@ def _scn(**joint):
     return replace(base, joint=replace(base.joint, **joint)) if joint else base
 
 
-@pytest.mark.parametrize(("speed", "scn"), [
-    (350.0, _scn()),
-    (120.0, replace(_scn(wslr="mean", retry_rule="completed"), execution=replace(EX, retry="joint_band", failure_rule="instant"))),
-    (380.0, replace(_scn(), execution=replace(EX, retry="joint_band"))),
-    (460.0, _scn(band_fit="offset", measurements="raw", gaph_variant="narrow")),
-    (250.0, replace(Scenario().with_weights(1, 0.5), a3=replace(Scenario().a3, ttt_s=0.04),
-                    execution=replace(EX, failure_rule="instant", max_attempts=10))),
-    (350.0, replace(_scn(), execution=replace(Scenario().execution, failure_rule="rlf"))),
-    (150.0, replace(_scn(), execution=replace(Scenario().execution, failure_rule="rlf", rlf_t310_s=0.4,
-                                               rlf_eval_s=0.12))),
-    (350.0, replace(_scn(), execution=replace(EX, failure_rule="rlm", max_attempts=4, reestablish_s=0.1))),
-    (100.0, replace(_scn(), execution=replace(Scenario().execution, failure_rule="rlm", rlf_t310_s=0.2,
-                                               rlm_n310=3, rlm_n311=2))),
-])
+@pytest.mark.parametrize(
+    ("speed", "scn"),
+    [
+        (350.0, _scn()),
+        (
+            120.0,
+            replace(
+                _scn(wslr="mean", retry_rule="completed"),
+                execution=replace(EX, retry="joint_band", failure_rule="instant"),
+            ),
+        ),
+        (380.0, replace(_scn(), execution=replace(EX, retry="joint_band"))),
+        (460.0, _scn(band_fit="offset", measurements="raw", gaph_variant="narrow")),
+        (
+            250.0,
+            replace(
+                Scenario().with_weights(1, 0.5),
+                a3=replace(Scenario().a3, ttt_s=0.04),
+                execution=replace(EX, failure_rule="instant", max_attempts=10),
+            ),
+        ),
+        (350.0, replace(_scn(), execution=replace(Scenario().execution, failure_rule="rlf"))),
+        (
+            150.0,
+            replace(
+                _scn(), execution=replace(Scenario().execution, failure_rule="rlf", rlf_t310_s=0.4, rlf_eval_s=0.12)
+            ),
+        ),
+        (350.0, replace(_scn(), execution=replace(EX, failure_rule="rlm", max_attempts=4, reestablish_s=0.1))),
+        (
+            100.0,
+            replace(
+                _scn(),
+                execution=replace(Scenario().execution, failure_rule="rlm", rlf_t310_s=0.2, rlm_n310=3, rlm_n311=2),
+            ),
+        ),
+    ],
+)
 def test_vectorized_engine_equals_the_per_step_loop(speed, scn):
     kin = kinematics(scn, speed)
     draws = draw_block(7, speed, 3, 5, kin, scn.train.n_nodes)
@@ -49,8 +83,14 @@ def test_vectorized_engine_equals_the_per_step_loop(speed, scn):
     for pol in ALL:
         out = run_policy(make_policy(pol), ctx)
         for key in COMPARED:
-            np.testing.assert_allclose(out[key][1].astype(float), ref[pol][key].astype(float),
-                                       rtol=1e-9, atol=1e-9, equal_nan=True, err_msg=f"{pol}.{key}")
+            np.testing.assert_allclose(
+                out[key][1].astype(float),
+                ref[pol][key].astype(float),
+                rtol=1e-9,
+                atol=1e-9,
+                equal_nan=True,
+                err_msg=f"{pol}.{key}",
+            )
     # the comparison is not vacuous: some handovers fail, A3 sometimes ping-pongs
     assert 0 < ref["a3"]["success"].mean() < 1 or 0 < ref["joint"]["success"].mean() < 1
 
@@ -102,9 +142,12 @@ def test_zero_noise_with_l3_filter_never_fails_or_ping_pongs(speed):
         assert out["success"][1].all() and not out["pingpong"][1].any(), pol
     # the filtered A3 triggers after the unfiltered one (filter lag), never before
     a3 = run_policy(make_policy("a3"), ctx)["command_x_m"][1]
-    unf = run_policy(make_policy("a3"), build_context(
-        replace(scn, radio=replace(scn.radio, l3_k=0)), kin,
-        draw_block(1, speed, 0, 2, kin, scn.train.n_nodes)))["command_x_m"][1]
+    unf = run_policy(
+        make_policy("a3"),
+        build_context(
+            replace(scn, radio=replace(scn.radio, l3_k=0)), kin, draw_block(1, speed, 0, 2, kin, scn.train.n_nodes)
+        ),
+    )["command_x_m"][1]
     assert np.all(a3 > unf)
 
 
@@ -191,8 +234,11 @@ def test_noise_free_joint_handover_completes_at_zero_rsrp_gap(speed, m):
     where the true mean RSRP gap is zero, within the one-sample quantization of its command,
     and its execution starts v·T0 before that (the band is shifted back by v·T0, seed eq. 2)."""
     base = Scenario().with_weights(m, 0.5)
-    scn = replace(base, radio=replace(base.radio, shadow_sigma_db=0.0, meas_sigma_db=0.0),
-                  train=replace(base.train, gnss_sigma_m=0.0))
+    scn = replace(
+        base,
+        radio=replace(base.radio, shadow_sigma_db=0.0, meas_sigma_db=0.0),
+        train=replace(base.train, gnss_sigma_m=0.0),
+    )
     kin = kinematics(scn, speed)
     out = run_policy(make_policy("joint"), build_context(scn, kin, draw_block(1, speed, 0, 2, kin, 8)))
     # the zero of the true mean gap, by bisection on the model
@@ -215,5 +261,5 @@ def test_noise_free_joint_handover_completes_at_zero_rsrp_gap(speed, m):
     # at or past X_m; the predecessors' deviations are zero, so there is no correction)
     assert np.all((he >= xm_done[:, None] - 1e-6) & (he < xm_done[:, None] + step + 1e-6)), (he - x0, step)
     # and the true gap there is that distance times the gap's slope at x0
-    slope_db_m = 2 * 10 * scn.radio.pathloss_exponent / np.log(10) * (x0 / (x0 ** 2 + scn.radio.offset_m ** 2))
+    slope_db_m = 2 * 10 * scn.radio.pathloss_exponent / np.log(10) * (x0 / (x0**2 + scn.radio.offset_m**2))
     assert np.all(np.abs(out["rsrp_gap_db"][1]) <= slope_db_m * (step + 2.0))

@@ -1,6 +1,7 @@
 """Radio-link monitoring (TS 36.133 §7.6, TS 36.331 §5.3.11): indications, the
 N310/N311/T310 procedure against a step-by-step reading of it, and the ``rlm`` failure rule
 of the handover execution."""
+
 from dataclasses import replace
 
 import numpy as np
@@ -39,7 +40,7 @@ def test_first_rlf_equals_the_procedure_step_by_step(n310, n311, t310_s):
 
 def test_t310_runs_from_n310_out_of_sync_and_stops_on_n311_in_sync():
     cfg = RlmConfig(n310=2, n311=2, t310_s=0.05)  # 5 indications
-    f, o, i = False, True, True
+    f, o = False, True
     oos = np.array([f, o, o, f, f, f, f, f, f, f])
     none = np.zeros(10, dtype=bool)
     # T310 starts at the second out-of-sync (index 2), expires 5 indications later
@@ -63,8 +64,16 @@ def test_indications_use_full_windows_and_out_of_sync_takes_precedence():
     np.testing.assert_array_equal(ins, [False, True, False, False, False, False, False, False, True, True])
 
 
-@pytest.mark.parametrize(("kw", "name"), [({"n310": 0}, "n310"), ({"n311": 21}, "n311"), ({"t310_s": -1}, "t310_s"),
-                                         ({"indication_s": 0}, "indication_s"), ({"q_in_db": -9}, "q_in_db")])
+@pytest.mark.parametrize(
+    ("kw", "name"),
+    [
+        ({"n310": 0}, "n310"),
+        ({"n311": 21}, "n311"),
+        ({"t310_s": -1}, "t310_s"),
+        ({"indication_s": 0}, "indication_s"),
+        ({"q_in_db": -9}, "q_in_db"),
+    ],
+)
 def test_bad_constants_raise_naming_the_parameter(kw, name):
     with pytest.raises(ValueError, match=name):
         RlmConfig(**kw)

@@ -1,5 +1,6 @@
 """Binomial intervals against scipy, the clustered rate, the cost grid's noise-free limit,
 and the schema rejecting bad handover values."""
+
 from dataclasses import replace
 from pathlib import Path
 
@@ -48,8 +49,11 @@ def test_cost_grid_noise_free_limit_is_one_over_n():
     """Without noise every node converges at once (C = 1) and no correction spreads the
     triggers (F = 0): J = 1/N for every (m, alpha)."""
     base = Scenario()
-    scn = replace(base, radio=replace(base.radio, shadow_sigma_db=0.0, meas_sigma_db=0.0, offset_m=0.01),
-                  train=replace(base.train, gnss_sigma_m=0.0))
+    scn = replace(
+        base,
+        radio=replace(base.radio, shadow_sigma_db=0.0, meas_sigma_db=0.0, offset_m=0.01),
+        train=replace(base.train, gnss_sigma_m=0.0),
+    )
     ds = cost_grid(scn, 300.0, 1, 1, 3, [1, 2, 3], np.array([0.2, 0.7]), 2, 0.5)
     np.testing.assert_allclose(ds["cost"].values, 1 / scn.train.n_nodes)
     assert geometric_weight_table(3, np.array([0.5]))[0].tolist() == [0.5, 0.25, 0.125]
@@ -61,13 +65,16 @@ def _config():
     return cfg, load_schema(ROOT / "workflow/schemas/config.schema.yaml")
 
 
-@pytest.mark.parametrize(("path", "value"), [
-    (("joint", "wslr"), "median"),
-    (("radio", "load_factor"), 1.5),
-    (("sweep", "speeds_kmh"), [100, "fast"]),
-    (("a3", "ttt_s"), -0.1),
-    (("train", "n_nodes"), 0),
-])
+@pytest.mark.parametrize(
+    ("path", "value"),
+    [
+        (("joint", "wslr"), "median"),
+        (("radio", "load_factor"), 1.5),
+        (("sweep", "speeds_kmh"), [100, "fast"]),
+        (("a3", "ttt_s"), -0.1),
+        (("train", "n_nodes"), 0),
+    ],
+)
 def test_schema_rejects_bad_handover_values(path, value):
     cfg, schema = _config()
     validate_config(cfg, schema)  # the paper-scale config is valid
@@ -85,8 +92,10 @@ def test_pingpong_claim_is_strict_and_can_fail():
     # speeds: A3 and distance clearly above joint; distance zero (a tie); overlapping intervals
     hi = np.array([[0.001, 0.001, 0.001], [0.05, 0.05, 0.05], [0.03, 0.0005, 0.004]])
     lo = np.array([[0.0, 0.0, 0.0], [0.04, 0.04, 0.04], [0.02, 0.0, 0.0005]])
-    ds = xr.Dataset({"pingpong_hi": (("policy", "speed_kmh"), hi), "pingpong_lo": (("policy", "speed_kmh"), lo)},
-                    coords={"policy": ["joint", "a3", "distance"], "speed_kmh": [100.0, 250.0, 350.0]})
+    ds = xr.Dataset(
+        {"pingpong_hi": (("policy", "speed_kmh"), hi), "pingpong_lo": (("policy", "speed_kmh"), lo)},
+        coords={"policy": ["joint", "a3", "distance"], "speed_kmh": [100.0, 250.0, 350.0]},
+    )
     np.testing.assert_array_equal(pingpong_strictly_lowest(ds), [True, False, False])
 
 
@@ -96,12 +105,20 @@ def test_sensitivity_variant_values_print_as_configured():
     from railradio.handover.keys import sens_values
     from railradio.keynumbers import format_number
 
-    ds = xr.Dataset({"switch": ("variant", ["none", "a3.ttt_s", "radio.load_factor", "joint.wslr"]),
-                     "value": ("variant", ["reference", "0.64", "0.3", "mean"])},
-                    coords={"variant": ["reference", "ttt_s_0p64", "load_factor_0p3", "wslr_mean"]})
+    ds = xr.Dataset(
+        {
+            "switch": ("variant", ["none", "a3.ttt_s", "radio.load_factor", "joint.wslr"]),
+            "value": ("variant", ["reference", "0.64", "0.3", "mean"]),
+        },
+        coords={"variant": ["reference", "ttt_s_0p64", "load_factor_0p3", "wslr_mean"]},
+    )
     out = sens_values(ds)
     assert set(out) == {"handover.sens.ttt_s_0p64.value", "handover.sens.load_factor_0p3.value"}
     e = out["handover.sens.ttt_s_0p64.value"]
     assert e["unit"] == "s" and format_number(e["value"], e["digits"]) == "0.64"
-    assert format_number(out["handover.sens.load_factor_0p3.value"]["value"],
-                         out["handover.sens.load_factor_0p3.value"]["digits"]) == "0.3"
+    assert (
+        format_number(
+            out["handover.sens.load_factor_0p3.value"]["value"], out["handover.sens.load_factor_0p3.value"]["digits"]
+        )
+        == "0.3"
+    )

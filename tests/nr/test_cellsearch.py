@@ -97,9 +97,11 @@ def test_estimates_see_no_truth(monkeypatch):
     def blinded(self, epoch):
         b = real_call(self, epoch)
         lb = b.links
-        nan = {f.name: np.full(np.shape(getattr(lb, f.name)), np.nan)
-               for f in dataclasses.fields(lb)
-               if f.name not in ("rrh", "links", "panel", "link_rrh") and getattr(lb, f.name) is not None}
+        nan = {
+            f.name: np.full(np.shape(getattr(lb, f.name)), np.nan)
+            for f in dataclasses.fields(lb)
+            if f.name not in ("rrh", "links", "panel", "link_rrh") and getattr(lb, f.name) is not None
+        }
         return sim.Burst(b.z, b.s_min, np.nan, np.nan, np.nan, dataclasses.replace(lb, **nan), -1)
 
     monkeypatch.setattr(sim.Synthesis, "__call__", blinded)
@@ -117,11 +119,11 @@ def test_estimates_identical_for_any_shard_count():
     first, n, key = 2400, 30, spawn_key("nr", 0)
     runs = {}
     for n_shards in (1, 2, 5):
-        parts = [sim.simulate_epochs(scn, first + sim.shard_epochs(n, n_shards, s), 5, key)
-                 for s in range(n_shards)]
-        runs[n_shards] = {name: np.concatenate([p[name].values for p in parts],
-                                               axis=parts[0][name].dims.index("epoch"))
-                          for name in ESTIMATES}
+        parts = [sim.simulate_epochs(scn, first + sim.shard_epochs(n, n_shards, s), 5, key) for s in range(n_shards)]
+        runs[n_shards] = {
+            name: np.concatenate([p[name].values for p in parts], axis=parts[0][name].dims.index("epoch"))
+            for name in ESTIMATES
+        }
     ref = runs[1]
     assert ref["acquired"].sum() >= 4
     for n_shards in (2, 5):

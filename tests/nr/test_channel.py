@@ -1,26 +1,32 @@
 """Channel: TDL-D against an independent transcription, path loss against hand values,
 fading statistics against theory (tolerances named below)."""
+
 import numpy as np
 import pytest
 from scipy import special, stats
 
-from railradio.nr.channel import (
-    breakpoint_distance_m,
-    pathloss_umi_los_db,
-    shadowing_field_db,
-    sos_taps,
-    tdl_profile,
-)
+from railradio.nr.channel import breakpoint_distance_m, pathloss_umi_los_db, shadowing_field_db, sos_taps, tdl_profile
 
 # TR 38.901 v17 Table 7.7.2-4, TDL-D, transcribed independently of the code:
 # (normalized delay, power dB); the first row is the LOS (specular) part of tap 1.
 TDL_D_INDEPENDENT = [
-    (0.0, -0.2), (0.0, -13.5), (0.035, -18.8), (0.612, -21.0), (1.363, -22.8), (1.405, -17.9),
-    (1.804, -20.1), (2.596, -21.9), (1.775, -22.9), (4.042, -27.8), (7.937, -23.6),
-    (9.424, -24.8), (9.708, -30.0), (12.525, -27.7),
+    (0.0, -0.2),
+    (0.0, -13.5),
+    (0.035, -18.8),
+    (0.612, -21.0),
+    (1.363, -22.8),
+    (1.405, -17.9),
+    (1.804, -20.1),
+    (2.596, -21.9),
+    (1.775, -22.9),
+    (4.042, -27.8),
+    (7.937, -23.6),
+    (9.424, -24.8),
+    (9.708, -30.0),
+    (12.525, -27.7),
 ]
-KS_ALPHA = 1e-3          # statistical tests reject a correct model 0.1 % of the time
-POWER_REL_TOL = 0.05     # tap power within 5 % (M sinusoids x many independent draws)
+KS_ALPHA = 1e-3  # statistical tests reject a correct model 0.1 % of the time
+POWER_REL_TOL = 0.05  # tap power within 5 % (M sinusoids x many independent draws)
 
 
 def test_tdl_d_matches_independent_transcription():

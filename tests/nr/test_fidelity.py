@@ -1,12 +1,12 @@
 """The exact reference and the fidelity measurement (railradio.nr.reference, .resample,
 .motion, .fidelity): each piece against an independent computation."""
+
 import dataclasses
 import json
 from pathlib import Path
 
 import numpy as np
 import pytest
-import scipy.fft as sfft
 
 from railradio.nr import kernels
 from railradio.nr.channel import TdlProfile
@@ -50,8 +50,9 @@ def test_finer_lag_grid_is_the_front_ends_correlation_interpolated():
     cfg2 = ReceiverConfig(decimation=2, n_blocks=4)
     z8 = _crandn(rng, 8000)
     c8 = Correlator(cfg8).correlate(z8, -4, np.array([5]), np.array([1]), keep_corr=True)
-    c2 = Correlator(cfg2, template_decimation=8).correlate(upsample(z8, 4), -4, np.array([5]), np.array([1]),
-                                                           keep_corr=True)
+    c2 = Correlator(cfg2, template_decimation=8).correlate(
+        upsample(z8, 4), -4, np.array([5]), np.array([1]), keep_corr=True
+    )
     k = cfg8.lags
     np.testing.assert_allclose(c2.corr[0][:, ::4][:, :k], c8.corr[0], rtol=2e-4, atol=2e-4 * c8.corr.max())
     with pytest.raises(ValueError, match="template_decimation"):
@@ -59,9 +60,18 @@ def test_finer_lag_grid_is_the_front_ends_correlation_interpolated():
 
 
 def _links(tau_samples, f_los=0.0, doppler=0.0):
-    return Links(n_id1=np.array([5]), n_id2=np.array([1]), tau_s=np.array([tau_samples]) / SAMPLE_RATE_HZ,
-                 amp=np.array([1.0]), beam_amp=np.ones((1, 8)), data_amp=np.ones(1), f_los_hz=np.array([f_los]),
-                 phase0=np.array([0.3]), doppler_hz=doppler, noise_psd_w_hz=0.0)
+    return Links(
+        n_id1=np.array([5]),
+        n_id2=np.array([1]),
+        tau_s=np.array([tau_samples]) / SAMPLE_RATE_HZ,
+        amp=np.array([1.0]),
+        beam_amp=np.ones((1, 8)),
+        data_amp=np.ones(1),
+        f_los_hz=np.array([f_los]),
+        phase0=np.array([0.3]),
+        doppler_hz=doppler,
+        noise_psd_w_hz=0.0,
+    )
 
 
 @pytest.mark.parametrize("delay", [1200.0, 1200.37, 3001.81])
@@ -98,18 +108,26 @@ def test_exact_reference_keeps_the_taps_spill_that_the_fast_path_omits():
     first = 1000 + sp["starts"]  # each symbol's extent begins: 40 samples of the previous one's late copy
     spill = np.zeros(z.size, bool)
     for f in first:
-        spill[f:f + 40] = True
+        spill[f : f + 40] = True
     scale = np.max(np.abs(z))
     assert np.max(np.abs(ref - z)[~spill]) < 1e-4 * scale
     assert np.max(np.abs(ref - z)[spill]) > 0.05 * scale
-    z_exact, _ = Synthesizer(cfg, prof, pool, data_beam="train", exact_spill=True)(links, None, noise=False,
-                                                                                    draws=draws)
+    z_exact, _ = Synthesizer(cfg, prof, pool, data_beam="train", exact_spill=True)(
+        links, None, noise=False, draws=draws
+    )
     assert np.max(np.abs(ref - z_exact)) < 1e-5 * scale
 
 
-@pytest.mark.parametrize("decimation, tdl, delays, data_beam", [
-    (1, "TDL-D", [1000.37], "train"), (4, "TDL-D", [1000.37, 2222.8], "train"), (8, "TDL-D", [1000.37], "train"),
-    (4, "TDL-D", [1000.37], "none"), (4, "TDL-A", [1500.6], "train")])
+@pytest.mark.parametrize(
+    "decimation, tdl, delays, data_beam",
+    [
+        (1, "TDL-D", [1000.37], "train"),
+        (4, "TDL-D", [1000.37, 2222.8], "train"),
+        (8, "TDL-D", [1000.37], "train"),
+        (4, "TDL-D", [1000.37], "none"),
+        (4, "TDL-A", [1500.6], "train"),
+    ],
+)
 def test_the_exact_spill_equals_the_exact_reference(decimation, tdl, delays, data_beam):
     """With ``exact_spill`` the fast path's symbol-held taps equal the exact reference's
     (every tap's copy of a symbol in its own delayed extent) to float32 rounding: TDL-D at
@@ -123,15 +141,31 @@ def test_the_exact_spill_equals_the_exact_reference(decimation, tdl, delays, dat
     pool = qpsk_pool(rng, 8)
     prof = tdl_profile(tdl, 20e-9 if tdl == "TDL-D" else 300e-9)
     n = len(delays)
-    links = Links(n_id1=np.full(n, 5), n_id2=np.full(n, 1), tau_s=np.array(delays) / SAMPLE_RATE_HZ,
-                  amp=np.ones(n), beam_amp=np.ones((n, 8)), data_amp=np.ones(n), f_los_hz=np.full(n, 9e3),
-                  phase0=np.full(n, 0.3), doppler_hz=1e3, noise_psd_w_hz=0.0)
+    links = Links(
+        n_id1=np.full(n, 5),
+        n_id2=np.full(n, 1),
+        tau_s=np.array(delays) / SAMPLE_RATE_HZ,
+        amp=np.ones(n),
+        beam_amp=np.ones((n, 8)),
+        data_amp=np.ones(n),
+        f_los_hz=np.full(n, 9e3),
+        phase0=np.full(n, 0.3),
+        doppler_hz=1e3,
+        noise_psd_w_hz=0.0,
+    )
     exact = Synthesizer(cfg, prof, pool, data_beam=data_beam, exact_spill=True)
     draws = exact.draws(links, np.random.default_rng(3))
     z, _ = exact(links, None, noise=False, draws=draws)
     wrapped, _ = Synthesizer(cfg, prof, pool, data_beam=data_beam)(links, None, noise=False, draws=draws)
-    ref = reference_received(cfg, links, prof, np.zeros_like(pool) if data_beam == "none" else pool, draws,
-                             exact._span["symbols"], symbol_taps=True)
+    ref = reference_received(
+        cfg,
+        links,
+        prof,
+        np.zeros_like(pool) if data_beam == "none" else pool,
+        draws,
+        exact._span["symbols"],
+        symbol_taps=True,
+    )
     scale = np.max(np.abs(z))
     assert np.max(np.abs(ref - z)) < 1e-5 * scale
     assert np.max(np.abs(ref - wrapped)) > 0.1 * scale
@@ -167,15 +201,21 @@ def test_a_standing_train_moves_nothing():
 def test_mix_taps_matches_numpy_form():
     rng = np.random.default_rng(6)
     n_t, n_l, step = 200, 3, 16
-    delayed = (rng.standard_normal((1 + n_l, n_t)) + 1j * rng.standard_normal((1 + n_l, n_t)))
+    delayed = rng.standard_normal((1 + n_l, n_t)) + 1j * rng.standard_normal((1 + n_l, n_t))
     coarse = rng.standard_normal((n_t // step + 2, n_l)) + 1j * rng.standard_normal((n_t // step + 2, n_l))
     mult = np.exp(1j * rng.uniform(0, 6, n_t))
     los = np.exp(1j * rng.uniform(0, 6, n_t))
     z = np.zeros(n_t, complex)
     kernels.mix_taps(z, delayed, coarse, step, np.zeros(1, np.int64), False, mult, los, 0.7)
     m = np.arange(n_t)
-    g = np.stack([np.interp(m, step * np.arange(coarse.shape[0]), coarse[:, l].real)
-                  + 1j * np.interp(m, step * np.arange(coarse.shape[0]), coarse[:, l].imag) for l in range(n_l)], axis=1)
+    g = np.stack(
+        [
+            np.interp(m, step * np.arange(coarse.shape[0]), coarse[:, l].real)
+            + 1j * np.interp(m, step * np.arange(coarse.shape[0]), coarse[:, l].imag)
+            for l in range(n_l)
+        ],
+        axis=1,
+    )
     want = 0.7 * los * delayed[0] + mult * (g * delayed[1:].T).sum(axis=1)
     np.testing.assert_allclose(z, want, rtol=1e-12, atol=1e-12)
     sym_of = m // 50
@@ -195,10 +235,18 @@ def test_sample_holds_the_changes_and_the_top_speed():
 
 
 def test_changed_counts_each_decision_kind():
-    a = {"detected": np.array([[[1, 0], [1, 1]]], bool), "selected": np.array([[True, False]]),
-         "toa": np.array([[100.0, np.nan]]), "aod": np.array([[0.5, np.nan]])}
-    b = {"detected": np.array([[[1, 1], [1, 1]]], bool), "selected": np.array([[True, False]]),
-         "toa": np.array([[101.0, np.nan]]), "aod": np.array([[0.5 + np.radians(0.2), np.nan]])}
+    a = {
+        "detected": np.array([[[1, 0], [1, 1]]], bool),
+        "selected": np.array([[True, False]]),
+        "toa": np.array([[100.0, np.nan]]),
+        "aod": np.array([[0.5, np.nan]]),
+    }
+    b = {
+        "detected": np.array([[[1, 1], [1, 1]]], bool),
+        "selected": np.array([[True, False]]),
+        "toa": np.array([[101.0, np.nan]]),
+        "aod": np.array([[0.5 + np.radians(0.2), np.nan]]),
+    }
     np.testing.assert_array_equal(changed("detection", a, b), [[0, 1, 0, 0]])
     np.testing.assert_array_equal(changed("selection", a, b), [[0, 0]])
     np.testing.assert_array_equal(changed("toa", a, b), [[0, np.nan]])  # one sample: the quantization
@@ -215,8 +263,9 @@ def test_a_production_path_that_is_not_the_main_runs_is_refused():
     res = {"epoch": 3, "decisions": {"own_noise": {"seed": D()}}}
     import xarray as xr
 
-    row = xr.Dataset({"toa_hat": (("receiver", "cand"), [[10.0 / SAMPLE_RATE_HZ]]),
-                      "aod_hat": (("receiver", "cand"), [[0.1]])})
+    row = xr.Dataset(
+        {"toa_hat": (("receiver", "cand"), [[10.0 / SAMPLE_RATE_HZ]]), "aod_hat": (("receiver", "cand"), [[0.1]])}
+    )
     check_production(res, row, ["seed"])
     row["aod_hat"] = (("receiver", "cand"), [[0.2]])
     with pytest.raises(ValueError, match="differs from the main run"):

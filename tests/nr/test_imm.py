@@ -8,15 +8,7 @@ import xarray as xr
 from filterpy.kalman import KalmanFilter
 
 from railradio.constants import SPEED_OF_LIGHT_M_S
-from railradio.nr.imm import (
-    ImmConfig,
-    markov_matrix,
-    position_nees,
-    q_for_jump,
-    run_imm,
-    stationary,
-    track_filters,
-)
+from railradio.nr.imm import ImmConfig, markov_matrix, position_nees, q_for_jump, run_imm, stationary, track_filters
 from railradio.nr.imm_report import change_windows, key_numbers
 from railradio.nr.smoother import rts_smooth
 from railradio.nr.tracking import TrackerConfig, process_noise, run_ekf, track, transition
@@ -85,13 +77,16 @@ def test_q_for_jump_rule():
     assert process_noise(0.1, q)[4, 4] == pytest.approx(0.85**2)
 
 
-@pytest.mark.parametrize("kwargs, word", [
-    ({"q": (), "sojourn_s": ()}, "q"),
-    ({"q": (0.01, -1.0), "sojourn_s": (100.0, 1.0)}, "q"),
-    ({"q": (0.01, 10.0), "sojourn_s": (100.0,)}, "sojourn_s"),
-    ({"q": (0.01, 10.0), "sojourn_s": (100.0, 0.0)}, "sojourn_s"),
-    ({"q": (0.01, 10.0), "sojourn_s": (100.0, 1.0), "mu0": (0.5, 0.6)}, "mu0"),
-])
+@pytest.mark.parametrize(
+    "kwargs, word",
+    [
+        ({"q": (), "sojourn_s": ()}, "q"),
+        ({"q": (0.01, -1.0), "sojourn_s": (100.0, 1.0)}, "q"),
+        ({"q": (0.01, 10.0), "sojourn_s": (100.0,)}, "sojourn_s"),
+        ({"q": (0.01, 10.0), "sojourn_s": (100.0, 0.0)}, "sojourn_s"),
+        ({"q": (0.01, 10.0), "sojourn_s": (100.0, 1.0), "mu0": (0.5, 0.6)}, "mu0"),
+    ],
+)
 def test_imm_config_rejects_bad_values(kwargs, word):
     with pytest.raises(ValueError, match=word):
         ImmConfig(**kwargs)
@@ -110,8 +105,17 @@ def test_bad_parameters_raise():
         rts_smooth(np.zeros((5, 6)), np.zeros((5, 6, 6)), np.eye(5), np.eye(6))
     s0, p0 = _s0([0.0])
     with pytest.raises(ValueError, match="reacquire_after"):
-        run_imm(lambda k, s: (np.zeros((0, 2)), [], []), DT, DH, _cfg(1.0), ImmConfig((1.0,), (1.0,)), s0, p0, 3,
-                reacquire_after=0)
+        run_imm(
+            lambda k, s: (np.zeros((0, 2)), [], []),
+            DT,
+            DH,
+            _cfg(1.0),
+            ImmConfig((1.0,), (1.0,)),
+            s0,
+            p0,
+            3,
+            reacquire_after=0,
+        )
     with pytest.raises(ValueError, match="window_s"):
         change_windows(_report_ds(), 0.0)
 
@@ -163,8 +167,16 @@ def _lag_case(seed: int, gate: bool):
     s0[4] = 1.0
     q_low = 0.01
     ekf = run_ekf(xy, aod, toa, DT, DH, _cfg(q_low, gate), s0, p0)
-    imm = run_imm(_select(xy, aod, toa), DT, DH, _cfg(q_low, gate),
-                  ImmConfig((q_low, q_for_jump(2.5, DT)), (100.0, 1.0)), s0, p0, len(xy))
+    imm = run_imm(
+        _select(xy, aod, toa),
+        DT,
+        DH,
+        _cfg(q_low, gate),
+        ImmConfig((q_low, q_for_jump(2.5, DT)), (100.0, 1.0)),
+        s0,
+        p0,
+        len(xy),
+    )
     return x, 300, ekf, imm
 
 
@@ -194,7 +206,7 @@ def test_imm_keeps_the_track_the_gated_low_q_ekf_loses():
     model see the measurements, so it keeps updating."""
     for seed in range(3):
         x, c, ekf, imm = _lag_case(seed, gate=True)
-        assert np.all(ekf["n_used"][c + 30:] == 0)
+        assert np.all(ekf["n_used"][c + 30 :] == 0)
         assert np.all(imm["n_used"][c:] > 0)
         assert np.mean(np.abs(imm["state"][c:, 0] - x[c:])) < 0.5
 
@@ -213,8 +225,14 @@ def test_track_filters_ekf_is_tracks_ekf():
     toa[60:90] += 50.0 / SPEED_OF_LIGHT_M_S  # all measurements far off: gated, track lost, re-acquired
     aod[:2] = np.nan  # the first epochs without detections
     peak = -np.abs(dx) + rng.standard_normal((n, n_cand))
-    ds = xr.Dataset({"rrh": (("epoch", "cand"), rrh), "aod_hat": (("epoch", "cand"), aod),
-                     "toa_hat": (("epoch", "cand"), toa), "peak": (("epoch", "cand"), peak)})
+    ds = xr.Dataset(
+        {
+            "rrh": (("epoch", "cand"), rrh),
+            "aod_hat": (("epoch", "cand"), aod),
+            "toa_hat": (("epoch", "cand"), toa),
+            "peak": (("epoch", "cand"), peak),
+        }
+    )
     cfg = _cfg(0.1)
     ref = track(ds, rrh_x, RRH_Y, DH, DT, cfg, strength="peak", snapshot=False)
     got = track_filters(ds, rrh_x, RRH_Y, DH, DT, cfg, ImmConfig((0.1, 10.0), (100.0, 1.0)), strength="peak")
@@ -304,13 +322,20 @@ def _report_ds(lag: float = 0.4, after_err: float = 1.0) -> xr.Dataset:
     mu = np.full((2, n), 0.0)
     mu[0], mu[1] = 0.99, 0.01
     mu[1, 200:300] = 0.3
-    return xr.Dataset({"pos_err": (("filter", "epoch"), pos), "along_err": (("filter", "epoch"), along),
-                       "pos_nees": (("filter", "epoch"), np.full((3, n), 2.0)),
-                       "mode_prob": (("mode", "epoch"), mu), "t": (("epoch",), t),
-                       "q": (("mode",), [0.01, 10.0]),
-                       "change_epoch": (("change",), [200]), "delta_a": (("change",), [-0.85])},
-                      coords={"filter": ["ekf", "imm", "rts"], "mode": ["quiet", "manoeuvre"]},
-                      attrs={"config_json": json.dumps({"sim": {"deployment": {"spacing_m": 500.0}}})})
+    return xr.Dataset(
+        {
+            "pos_err": (("filter", "epoch"), pos),
+            "along_err": (("filter", "epoch"), along),
+            "pos_nees": (("filter", "epoch"), np.full((3, n), 2.0)),
+            "mode_prob": (("mode", "epoch"), mu),
+            "t": (("epoch",), t),
+            "q": (("mode",), [0.01, 10.0]),
+            "change_epoch": (("change",), [200]),
+            "delta_a": (("change",), [-0.85]),
+        },
+        coords={"filter": ["ekf", "imm", "rts"], "mode": ["quiet", "manoeuvre"]},
+        attrs={"config_json": json.dumps({"sim": {"deployment": {"spacing_m": 500.0}}})},
+    )
 
 
 def test_key_numbers_measure_the_lag():
@@ -326,9 +351,14 @@ def test_key_numbers_measure_the_lag():
     skip = np.arange(400) * DT >= 5.0
     expect = np.mean(np.where(np.arange(400) >= 200, np.where(np.arange(400) < 300, 1.0, 0.2), 0.2)[skip])
     assert k["nr.track.ekf.err_m.mean"]["value"] == pytest.approx(expect)
-    for name in ("nr.track.imm.err_m.mean", "nr.track.imm.err_m.p95", "nr.track.rts.err_m.mean",
-                 "nr.track.ekf.err_m.after_change_mean", "nr.track.imm.err_m.after_change_mean",
-                 "nr.track.rts.err_m.after_change_mean"):
+    for name in (
+        "nr.track.imm.err_m.mean",
+        "nr.track.imm.err_m.p95",
+        "nr.track.rts.err_m.mean",
+        "nr.track.ekf.err_m.after_change_mean",
+        "nr.track.imm.err_m.after_change_mean",
+        "nr.track.rts.err_m.after_change_mean",
+    ):
         assert k[name]["value"] is not None
 
 

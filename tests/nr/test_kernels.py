@@ -1,4 +1,5 @@
 """The compiled kernels (railradio.nr.kernels) against the NumPy formulations they replace."""
+
 from __future__ import annotations
 
 import numpy as np
@@ -95,8 +96,9 @@ def test_add_spill_matches_numpy_form():
                 for j in range(b[l]):
                     m = n_c + starts[s] + j
                     if m < total:
-                        want[m] += gains[s, l] * at[s, col_of[l, j]] * np.exp(1j * (w * (t_first + (m - n_c) * dt)
-                                                                                   + phase0))
+                        want[m] += (
+                            gains[s, l] * at[s, col_of[l, j]] * np.exp(1j * (w * (t_first + (m - n_c) * dt) + phase0))
+                        )
         z = np.zeros(total, dtype=np.complex64)
         kernels.add_spill(z, at, col_of, b, gains, starts, n_c, w, t_first, phase0, dt)
         np.testing.assert_allclose(z, want, atol=1e-5)
@@ -122,8 +124,9 @@ def test_local_mean_argmax_matches_a_direct_loop(window, guard, k):
     k = r.shape[1]
     floor = np.empty_like(r, dtype=float)
     for j in range(k):
-        idx = [i for i in range(j - guard - window, j - guard) if 0 <= i < k] + \
-              [i for i in range(j + guard + 1, j + guard + 1 + window) if 0 <= i < k]
+        idx = [i for i in range(j - guard - window, j - guard) if 0 <= i < k] + [
+            i for i in range(j + guard + 1, j + guard + 1 + window) if 0 <= i < k
+        ]
         floor[:, j] = r[:, idx].mean(axis=1)
     want = (r / floor).argmax(axis=1)
     np.testing.assert_array_equal(k_best, want)
@@ -141,8 +144,9 @@ def test_at_offsets_is_the_band_limited_interpolant():
     rows = np.array([2, 0, 1])  # rows of p, in any order
     theta = 2 * np.pi * np.outer(offsets[d:], freqs) / n  # the non-negative offsets
     cs_t = np.concatenate([np.cos(theta), np.sin(theta)]).T.astype(np.float32)
-    got = kernels.at_offsets(p, k0, np.exp(2j * np.pi * np.arange(n) / n).astype(np.complex64),
-                             np.ascontiguousarray(cs_t), rows)
+    got = kernels.at_offsets(
+        p, k0, np.exp(2j * np.pi * np.arange(n) / n).astype(np.complex64), np.ascontiguousarray(cs_t), rows
+    )
     lam = k0[:, None] + offsets[None, :]  # [3, J]
     want = np.abs(np.einsum("rf,rjf->rj", p[rows], np.exp(2j * np.pi * lam[:, :, None] * freqs / n))) / n
     np.testing.assert_allclose(got, want, rtol=1e-4)

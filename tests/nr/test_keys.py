@@ -1,4 +1,5 @@
 """nr key numbers from synthetic track datasets: pooling, percentiles, spread, lost tracks."""
+
 import json
 
 import numpy as np
@@ -14,13 +15,16 @@ def _track(err_value: float | np.ndarray, n: int = 200, spacing_m: float = 500.0
     rx, var = ["seed", "robust"], ["aod", "toa", "aod_toa"]
     pos = np.broadcast_to(np.asarray(err_value, dtype=float), (2, 3, 2, n)).copy()
     ds = xr.Dataset(
-        {"pos_err": (("receiver", "variant", "gate", "epoch"), pos),
-         "snap_err": (("receiver", "variant", "epoch"), pos[:, :, 0]),
-         "aod_err": (("receiver", "epoch", "slot"), np.full((2, n, 3), np.radians(0.5))),
-         "range_err": (("receiver", "epoch", "slot"), np.where(np.arange(3) == 2, np.nan, 0.4) * np.ones((2, n, 3))),
-         "t": (("epoch",), np.arange(n) * 0.1),
-         "sir_best": (("epoch",), np.full(n, 3.0))},
-        coords={"receiver": rx, "variant": var, "gate": [0, 1]})
+        {
+            "pos_err": (("receiver", "variant", "gate", "epoch"), pos),
+            "snap_err": (("receiver", "variant", "epoch"), pos[:, :, 0]),
+            "aod_err": (("receiver", "epoch", "slot"), np.full((2, n, 3), np.radians(0.5))),
+            "range_err": (("receiver", "epoch", "slot"), np.where(np.arange(3) == 2, np.nan, 0.4) * np.ones((2, n, 3))),
+            "t": (("epoch",), np.arange(n) * 0.1),
+            "sir_best": (("epoch",), np.full(n, 3.0)),
+        },
+        coords={"receiver": rx, "variant": var, "gate": [0, 1]},
+    )
     ds.attrs["config_json"] = json.dumps({"sim": {"deployment": {"spacing_m": spacing_m}}})
     return ds
 

@@ -7,10 +7,9 @@ import xarray as xr
 import yaml
 
 from railradio.constants import SPEED_OF_LIGHT_M_S
-from railradio.nr.antenna import TrainArray, facing_panel
+from railradio.nr.antenna import RrhArray, TrainArray, facing_panel
 from railradio.nr.geometry import Deployment
 from railradio.nr.link import RadioParams, ShadowingMap, link_budget
-from railradio.nr.antenna import RrhArray
 from railradio.nr.simulate import scenario_from_config, simulate_epochs
 from railradio.nr.tracking import TrackerConfig, track_setup
 from railradio.rng import spawn_key
@@ -86,12 +85,15 @@ def _noiseless_panel_dataset(x_ref: float) -> xr.Dataset:
     d3 = dep.distance_3d_m(xp, cand)
     aod = dep.aod_rad(xp, cand)
     one = lambda a: a[None, :]  # noqa: E731
-    return xr.Dataset({
-        "rrh": (("epoch", "cand"), one(cand)), "aod_hat": (("epoch", "cand"), one(aod)),
-        "toa_hat": (("epoch", "cand"), one(d3 / SPEED_OF_LIGHT_M_S)),
-        "peak": (("epoch", "cand"), one(-np.abs(dep.x_m[cand] - x_ref))),
-        "train_panel_x": (("panel_id",), np.asarray(PANELS)),
-    })
+    return xr.Dataset(
+        {
+            "rrh": (("epoch", "cand"), one(cand)),
+            "aod_hat": (("epoch", "cand"), one(aod)),
+            "toa_hat": (("epoch", "cand"), one(d3 / SPEED_OF_LIGHT_M_S)),
+            "peak": (("epoch", "cand"), one(-np.abs(dep.x_m[cand] - x_ref))),
+            "train_panel_x": (("panel_id",), np.asarray(PANELS)),
+        }
+    )
 
 
 @pytest.mark.parametrize("x_ref", [5_180.0, 5_430.0])

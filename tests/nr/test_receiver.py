@@ -1,5 +1,6 @@
 """The receiver: noiseless TOA/AOD, the fast receiver against the brute-force reference,
 detection on noise only against theory."""
+
 import numpy as np
 import pytest
 
@@ -17,11 +18,17 @@ def _links(tau_samples, amps, beam_amp=None, f_los=(0.0,), doppler=0.0, ids=((5,
     n = len(tau_samples)
     ids = ids[:n]
     return Links(
-        n_id1=np.array([a for a, _ in ids]), n_id2=np.array([b for _, b in ids]),
-        tau_s=np.asarray(tau_samples, float) / SAMPLE_RATE_HZ, amp=np.asarray(amps, float),
+        n_id1=np.array([a for a, _ in ids]),
+        n_id2=np.array([b for _, b in ids]),
+        tau_s=np.asarray(tau_samples, float) / SAMPLE_RATE_HZ,
+        amp=np.asarray(amps, float),
         beam_amp=np.ones((n, 64)) if beam_amp is None else np.asarray(beam_amp),
-        data_amp=np.ones(n), f_los_hz=np.resize(np.asarray(f_los, float), n), phase0=np.zeros(n),
-        doppler_hz=doppler, noise_psd_w_hz=0.0)
+        data_amp=np.ones(n),
+        f_los_hz=np.resize(np.asarray(f_los, float), n),
+        phase0=np.zeros(n),
+        doppler_hz=doppler,
+        noise_psd_w_hz=0.0,
+    )
 
 
 @pytest.mark.parametrize("decimation", [1, 4])
@@ -43,6 +50,7 @@ def test_noiseless_aod_within_the_beam_grid():
     rng = np.random.default_rng(2)
     cfg = ReceiverConfig(decimation=4)
     from railradio.nr.antenna import RrhArray
+
     arr = RrhArray()
     syn = Synthesizer(cfg, LOS_ONLY, qpsk_pool(rng, 16), data_beam="train")
     cor = Correlator(cfg)
@@ -67,8 +75,9 @@ def test_fast_receiver_matches_the_brute_force_reference(DEC):
     beams = np.full((2, 64), 0.1)
     beams[0, 1] = beams[1, 2] = 1.0
     f_d = 130.0 / 0.01
-    links = _links([400.3, 1700.8], [1.0, 0.5], beam_amp=beams, f_los=(0.99 * f_d, 0.98 * f_d),
-                   doppler=f_d, ids=((5, 1), (6, 2)))
+    links = _links(
+        [400.3, 1700.8], [1.0, 0.5], beam_amp=beams, f_los=(0.99 * f_d, 0.98 * f_d), doppler=f_d, ids=((5, 1), (6, 2))
+    )
     syn = Synthesizer(cfg4, prof, pool, data_beam="train")
     draws = syn.draws(links, rng)
     z4, s_min = syn(links, rng, noise=False, draws=draws)

@@ -1,4 +1,5 @@
 """The reproduction map: its cells, the block bootstrap and the claim rule."""
+
 import numpy as np
 import pytest
 import yaml
@@ -92,8 +93,15 @@ def test_claim_rule():
 def _errors(n, rng, scale_toa=0.3, scale_aod=2.0, fused=0.2):
     aod = np.radians(rng.normal(0, 0.5, (n, 3)))
     rngm = rng.normal(0, 0.5, (n, 3))
-    return aod, rngm, {"aod": np.abs(rng.normal(0, scale_aod, n)), "toa": np.abs(rng.normal(0, scale_toa, n)),
-                       "aod_toa": np.abs(rng.normal(0, fused, n))}
+    return (
+        aod,
+        rngm,
+        {
+            "aod": np.abs(rng.normal(0, scale_aod, n)),
+            "toa": np.abs(rng.normal(0, scale_toa, n)),
+            "aod_toa": np.abs(rng.normal(0, fused, n)),
+        },
+    )
 
 
 def test_cell_key_numbers_mark_what_holds_and_what_is_lost():
@@ -134,8 +142,10 @@ def test_summary_counts_cells(nr_and_schema):
     assert s["nr.map.seed.n_cells"]["value"] == 2 and s["nr.map.robust.n_cells"]["value"] == 1
     for rx in ("seed", "robust"):
         for c in rm.CLAIMS:
-            assert sum(s[f"nr.map.{rx}.{c}.n_{w}"]["value"] for w in ("holds", "fails", "unresolved")) == \
-                s[f"nr.map.{rx}.n_cells"]["value"]
+            assert (
+                sum(s[f"nr.map.{rx}.{c}.n_{w}"]["value"] for w in ("holds", "fails", "unresolved"))
+                == s[f"nr.map.{rx}.n_cells"]["value"]
+            )
 
 
 def test_config_checks_name_the_map_keys():
@@ -170,6 +180,8 @@ def test_shard_paths_reuse_the_main_run_and_other_cells(nr_and_schema):
     # segment 1500..2499 lies in the main run's second of four shards
     assert rm.shard_paths("mt32_others_random", "r0", cells, nr, n_main) == ["results/nr/estimates/r0/s1.nc"]
     assert rm.shard_paths("tpl_sss_sel_ss_rsrp", "r0", cells, nr, n_main) == [
-        f"results/nr/map/tpl_sss_sel_peak/estimates/r0/s{k}.nc" for k in range(nr["map"]["n_shards"])]
+        f"results/nr/map/tpl_sss_sel_peak/estimates/r0/s{k}.nc" for k in range(nr["map"]["n_shards"])
+    ]
     assert rm.shard_paths("tpl_pss_sss_sel_peak", "cal", cells, nr, n_main) == [
-        "results/nr/map/mt32_others_random/estimates/cal/s0.nc"]
+        "results/nr/map/mt32_others_random/estimates/cal/s0.nc"
+    ]

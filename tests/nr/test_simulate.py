@@ -1,4 +1,5 @@
 """Per-epoch simulation: an epoch's result does not depend on the shard it falls in."""
+
 import numpy as np
 import xarray as xr
 import yaml
@@ -41,8 +42,9 @@ def test_data_beam_policies_and_geometry_bounded_window():
 
     scn = _scenario()
     dep = scn.deployment
-    lb = link_budget(5100.0, 80.0, dep, scn.radio, scn.rrh_array, scn.train_array,
-                     ShadowingMap(1, (0,), dep, scn.radio))
+    lb = link_budget(
+        5100.0, 80.0, dep, scn.radio, scn.rrh_array, scn.train_array, ShadowingMap(1, (0,), dep, scn.radio)
+    )
     pool = qpsk_pool(np.random.default_rng(0), 16)
     out = {}
     for policy in ("train", "random", "none"):  # (the serving policy: tests/nr/test_traffic.py)
@@ -52,8 +54,11 @@ def test_data_beam_policies_and_geometry_bounded_window():
         sp = syn.span(float(lb.links.tau_s.max()))
     # sample ranges of symbols without an SS block, well after the largest delay
     n = scn.receiver.num.n_fft
-    quiet = [(s0, s0 + n) for s0, b in zip(sp["starts"][sp["n_pre"] + 20:], sp["block_of"][sp["n_pre"] + 20:])
-             if b < 0][:5]
+    quiet = [
+        (s0, s0 + n)
+        for s0, b in zip(sp["starts"][sp["n_pre"] + 20 :], sp["block_of"][sp["n_pre"] + 20 :], strict=True)
+        if b < 0
+    ][:5]
     p = {k: sum(np.sum(np.abs(z[a:b]) ** 2) for a, b in quiet) for k, z in out.items()}
     # data toward the train are the strongest; with data beamed elsewhere they fall; with no
     # data only other symbols' delayed spill remains
@@ -81,8 +86,9 @@ def test_no_data_synthesizes_only_ss_symbols_without_changing_the_burst():
 
     scn = _scenario()
     dep = scn.deployment
-    lb = link_budget(5100.0, 80.0, dep, scn.radio, scn.rrh_array, scn.train_array,
-                     ShadowingMap(1, (0,), dep, scn.radio))
+    lb = link_budget(
+        5100.0, 80.0, dep, scn.radio, scn.rrh_array, scn.train_array, ShadowingMap(1, (0,), dep, scn.radio)
+    )
     zero_pool = np.zeros_like(qpsk_pool(np.random.default_rng(0), 16))
     z = {}
     for policy in ("none", "train"):

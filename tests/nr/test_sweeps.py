@@ -1,6 +1,7 @@
 """The nr sensitivity sweeps (docs/model/nr.md §9): clock-synchronization errors on the measured TOAs,
 their TOA floor, per-case epochs in the sensitivity key numbers, sparse RRHs at the track's
 start, fewer SS beams."""
+
 import json
 
 import numpy as np
@@ -8,8 +9,7 @@ import pytest
 import xarray as xr
 
 from railradio.constants import SPEED_OF_LIGHT_M_S
-from railradio.nr.keys import sensitivity_floor_numbers, toa_floor_m
-from railradio.nr.keys import sensitivity_key_numbers
+from railradio.nr.keys import sensitivity_floor_numbers, sensitivity_key_numbers, toa_floor_m
 from railradio.nr.numerology import SAMPLE_RATE_HZ
 from railradio.nr.tracking import apply_clock_errors, clock_offsets_s
 from railradio.rng import spawn_key
@@ -18,9 +18,16 @@ from railradio.rng import spawn_key
 def _estimates(rrh: np.ndarray, n_rx: int = 2) -> xr.Dataset:
     n_e, n_c = rrh.shape
     toa = np.arange(n_e * n_c, dtype=float).reshape(n_e, n_c) * 1e-7
-    return xr.Dataset({"toa_hat": (("receiver", "epoch", "cand"), np.broadcast_to(toa, (n_rx, n_e, n_c)).copy(),
-                                   {"units": "s", "long_name": "TOA"}),
-                       "rrh": (("epoch", "cand"), rrh)})
+    return xr.Dataset(
+        {
+            "toa_hat": (
+                ("receiver", "epoch", "cand"),
+                np.broadcast_to(toa, (n_rx, n_e, n_c)).copy(),
+                {"units": "s", "long_name": "TOA"},
+            ),
+            "rrh": (("epoch", "cand"), rrh),
+        }
+    )
 
 
 def test_clock_offsets_are_per_rrh_and_realization():
@@ -80,14 +87,17 @@ def test_toa_floor_against_monte_carlo():
 def _track(n: int, err: float) -> xr.Dataset:
     rx, var = ["seed", "robust"], ["aod", "toa", "aod_toa"]
     pos = np.full((2, 3, 2, n), err)
-    pos[..., n // 2:] = 10 * err  # the later half is worse: the epoch cut shows
+    pos[..., n // 2 :] = 10 * err  # the later half is worse: the epoch cut shows
     return xr.Dataset(
-        {"pos_err": (("receiver", "variant", "gate", "epoch"), pos),
-         "aod_err": (("receiver", "epoch", "slot"), np.full((2, n, 3), 0.01)),
-         "range_err": (("receiver", "epoch", "slot"), np.full((2, n, 3), 0.4)),
-         "t": (("epoch",), np.arange(n) * 0.1)},
+        {
+            "pos_err": (("receiver", "variant", "gate", "epoch"), pos),
+            "aod_err": (("receiver", "epoch", "slot"), np.full((2, n, 3), 0.01)),
+            "range_err": (("receiver", "epoch", "slot"), np.full((2, n, 3), 0.4)),
+            "t": (("epoch",), np.arange(n) * 0.1),
+        },
         coords={"receiver": rx, "variant": var, "gate": [0, 1]},
-        attrs={"config_json": json.dumps({"sim": {"deployment": {"spacing_m": 500.0}}})})
+        attrs={"config_json": json.dumps({"sim": {"deployment": {"spacing_m": 500.0}}})},
+    )
 
 
 def test_sensitivity_key_numbers_cut_each_case_to_its_epochs():
@@ -119,8 +129,9 @@ def test_sparse_rrhs_at_the_track_start_give_geometric_truth():
     far = np.hypot(scn.deployment.x_m[rrh], scn.deployment.offset_m) > scn.radio.range_m
     assert far.sum() == 1  # the RRH at 5000 m is 5000.02 m away
     assert np.isnan(ds["rx_power"].values[0, far]).all() and np.isfinite(ds["rx_power"].values[0, ~far]).all()
-    expect = np.sqrt(scn.deployment.x_m[rrh] ** 2 + scn.deployment.offset_m**2
-                     + (scn.deployment.h_bs_m - scn.deployment.h_ut_m) ** 2)
+    expect = np.sqrt(
+        scn.deployment.x_m[rrh] ** 2 + scn.deployment.offset_m**2 + (scn.deployment.h_bs_m - scn.deployment.h_ut_m) ** 2
+    )
     np.testing.assert_allclose(ds["d3d"].values[0], expect, rtol=1e-9)
 
 
@@ -151,26 +162,32 @@ def test_case_scheduling_reuses_bursts_and_cuts_epochs():
     assert nc.case_inputs("sweep_ref", cases, nr, sens, "r0", n_main, 2) == ["results/nr/estimates/r0/s0.nc"]
     longer = dict(cases["sweep_ref"], max_epochs=s0 + 1)
     assert nc.case_inputs("x", {"x": longer}, nr, sens, "r0", n_main, 2) == [
-        "results/nr/estimates/r0/s0.nc", "results/nr/estimates/r0/s1.nc"]
+        "results/nr/estimates/r0/s0.nc",
+        "results/nr/estimates/r0/s1.nc",
+    ]
     assert nc.case_inputs("sweep_ref", cases, nr, sens, "cal", n_main, 2) == ["results/nr/estimates/cal/s0.nc"]
     # a clock-error case changes no burst: it reads the same shards
-    assert nc.case_inputs("sync_3ns", cases, nr, sens, "r0", n_main, 2) == \
-        nc.case_inputs("sweep_ref", cases, nr, sens, "r0", n_main, 2)
+    assert nc.case_inputs("sync_3ns", cases, nr, sens, "r0", n_main, 2) == nc.case_inputs(
+        "sweep_ref", cases, nr, sens, "r0", n_main, 2
+    )
     # a full-length tracker-only case: the main shards covering 2500 epochs
-    assert len(nc.case_inputs("w_distance", cases, nr, sens, "r0", n_main, 2)) == \
-        int(np.searchsorted(np.linspace(0, n_main, nr["n_shards"] + 1).round(), 2500))
+    assert len(nc.case_inputs("w_distance", cases, nr, sens, "r0", n_main, 2)) == int(
+        np.searchsorted(np.linspace(0, n_main, nr["n_shards"] + 1).round(), 2500)
+    )
     # a simulated sweep point: its own shards, fewer for fewer epochs
     assert nc.case_inputs("tdl_a", cases, nr, sens, "r0", n_main, 2) == ["results/nr/cases/tdl_a/estimates/r0/s0.nc"]
     assert nc.case_inputs("tdl_a", cases, nr, sens, "cal", n_main, 2) == ["results/nr/cases/tdl_a/estimates/cal/s0.nc"]
     assert nc.case_epochs(cases["speed_500"], sens) == 1150
     # as many shards per epoch as a full-length case (rounded), at least one
-    assert nc.case_n_shards(cases["speed_500"], nr, sens, "r0", 2) == \
-        max(1, round(sens["n_shards"] * 1150 / sens["epochs"]))
+    assert nc.case_n_shards(cases["speed_500"], nr, sens, "r0", 2) == max(
+        1, round(sens["n_shards"] * 1150 / sens["epochs"])
+    )
     assert nc.case_n_shards(cases["speed_500"], nr, dict(sens, n_shards=10), "r0", 2) == 5
     assert nc.case_n_shards(cases["load_half"], nr, sens, "r0", 2) == sens["n_shards"]
     # a case with an earlier case's bursts reads that case's shards
     assert nc.case_inputs("panels_200m_point", cases, nr, sens, "r0", n_main, 2)[0].startswith(
-        "results/nr/cases/panels_200m/")
+        "results/nr/cases/panels_200m/"
+    )
     # the speed case reaches 500 km/h within its epochs
     from railradio.nr.simulate import scenario_from_config
 
@@ -210,9 +227,18 @@ def test_clock_offset_on_the_toa_equals_a_shifted_burst_up_to_one_sample(delay, 
     cor = Correlator(cfg)
 
     def toa_samples(tau_samples):
-        links = Links(n_id1=np.array([5]), n_id2=np.array([1]), tau_s=np.array([tau_samples]) / SAMPLE_RATE_HZ,
-                      amp=np.ones(1), beam_amp=np.ones((1, 64)), data_amp=np.ones(1), f_los_hz=np.zeros(1),
-                      phase0=np.zeros(1), doppler_hz=0.0, noise_psd_w_hz=0.0)
+        links = Links(
+            n_id1=np.array([5]),
+            n_id2=np.array([1]),
+            tau_s=np.array([tau_samples]) / SAMPLE_RATE_HZ,
+            amp=np.ones(1),
+            beam_amp=np.ones((1, 64)),
+            data_amp=np.ones(1),
+            f_los_hz=np.zeros(1),
+            phase0=np.zeros(1),
+            doppler_hz=0.0,
+            noise_psd_w_hz=0.0,
+        )
         z, s_min = syn(links, np.random.default_rng(3), noise=False)
         return cor.correlate(z, s_min, np.array([5]), np.array([1])).toa_samples[0]
 

@@ -1,19 +1,12 @@
 """Tracker: analytic Jacobians against finite differences, EKF consistency (NEES) on a
 simulated case, no NaN when every measurement of an epoch is missing."""
+
 import numpy as np
 import pytest
 from scipy.stats import chi2
 
 from railradio.nr.geometry import Trajectory
-from railradio.nr.tracking import (
-    TrackerConfig,
-    hx,
-    jacobian,
-    process_noise,
-    run_ekf,
-    snapshot_ls,
-    transition,
-)
+from railradio.nr.tracking import TrackerConfig, hx, jacobian, process_noise, run_ekf, snapshot_ls, transition
 
 RRH = np.array([[0.0, 15.0], [500.0, 15.0], [-500.0, 15.0]])
 DH = 7.5
@@ -40,7 +33,10 @@ def test_transition_and_process_noise():
     assert q[4, 4] == pytest.approx(2.0 * 0.1)  # acceleration variance grows q·T
 
 
-def _simulate(rng, n=600, dt=0.1, q=0.5, sig_aod=np.radians(0.5), sig_toa=2e-9):
+_SIG_AOD_RAD = np.radians(0.5)
+
+
+def _simulate(rng, n=600, dt=0.1, q=0.5, sig_aod=_SIG_AOD_RAD, sig_toa=2e-9):
     """A constant-acceleration truth driven by white jerk along x (y = 0), noisy measurements."""
     f = transition(dt)
     qm = process_noise(dt, q)
@@ -162,9 +158,19 @@ def test_toa_crb_counts_the_detected_blocks_against_the_other_ss_blocks():
     assert 10 * np.log10(DETECT_E_OVER_N0) == pytest.approx(8.75, abs=0.01)
     n0 = 1e-20
     beams = np.array([[1.0, 0.1, 1e-3], [0.5, 1.0, 1e-3]])
-    links = Links(n_id1=np.zeros(2, int), n_id2=np.array([0, 1]), tau_s=np.zeros(2), amp=np.array([1e-6, 1e-6]),
-                  beam_amp=beams, data_amp=np.array([1e3, 1e3]), f_los_hz=np.zeros(2), phase0=np.zeros(2),
-                  doppler_hz=0.0, noise_psd_w_hz=n0, n_chains=2)
+    links = Links(
+        n_id1=np.zeros(2, int),
+        n_id2=np.array([0, 1]),
+        tau_s=np.zeros(2),
+        amp=np.array([1e-6, 1e-6]),
+        beam_amp=beams,
+        data_amp=np.array([1e3, 1e3]),
+        f_los_hz=np.zeros(2),
+        phase0=np.zeros(2),
+        doppler_hz=0.0,
+        noise_psd_w_hz=n0,
+        n_chains=2,
+    )
     e = block_e_over_n0(links)
     t_u = 1 / SUBCARRIER_SPACING_HZ
     p = (1e-6 * beams) ** 2
@@ -199,9 +205,15 @@ def test_pcrb_true_motion_bound_orders_and_resets():
 def test_distance_dependent_measurement_noise():
     from railradio.nr.tracking import TrackerConfig
 
-    cfg = TrackerConfig(variant="aod_toa", q=1.0, sigma_aod_rad=0.02, sigma_toa_s=1e-9,
-                        distance_edges_m=(300.0, 800.0), sigma_aod_bins_rad=(0.05, 0.02, 0.01),
-                        sigma_toa_bins_s=(1e-9, 2e-9, 4e-9))
+    cfg = TrackerConfig(
+        variant="aod_toa",
+        q=1.0,
+        sigma_aod_rad=0.02,
+        sigma_toa_s=1e-9,
+        distance_edges_m=(300.0, 800.0),
+        sigma_aod_bins_rad=(0.05, 0.02, 0.01),
+        sigma_toa_bins_s=(1e-9, 2e-9, 4e-9),
+    )
     w = np.diag(cfg.noise(3, np.array([10.0, 500.0, 2000.0])))
     np.testing.assert_allclose(w, [0.05**2, 1e-18, 0.02**2, 4e-18, 0.01**2, 16e-18])
     # without distances (or bins) the constant W
@@ -240,16 +252,23 @@ def test_select_measurements_equals_nearest_by_full_sort():
 
     rrh_x = np.arange(87) * 500.0
     rng = np.random.default_rng(7)
-    xs = np.concatenate([rng.uniform(-3000, 46000, 300), np.arange(87) * 500.0 + 250.0,
-                         np.arange(87) * 500.0, [np.nan, 1e20, -1e20, 5e8, -7e8, -0.0]])
+    xs = np.concatenate(
+        [
+            rng.uniform(-3000, 46000, 300),
+            np.arange(87) * 500.0 + 250.0,
+            np.arange(87) * 500.0,
+            [np.nan, 1e20, -1e20, 5e8, -7e8, -0.0],
+        ]
+    )
     for x in xs:
         cand = rng.choice(87, 6, replace=False)
         ok = rng.random(6) < 0.8
         strength = rng.random(6)
         near = set(np.argsort(np.abs(rrh_x - x), kind="stable")[:6].tolist())
         cols = sorted((c for c in range(6) if ok[c] and int(cand[c]) in near), key=lambda c: -strength[c])
-        np.testing.assert_array_equal(select_measurements(cand, ok, strength, rrh_x, x, 6, 3),
-                                      np.array(cols[:3], dtype=np.int64))
+        np.testing.assert_array_equal(
+            select_measurements(cand, ok, strength, rrh_x, x, 6, 3), np.array(cols[:3], dtype=np.int64)
+        )
 
 
 def test_snapshot_batch_equals_one_epoch_at_a_time():
@@ -349,8 +368,11 @@ def test_q_search_widens_past_a_winning_edge_and_reports_monotone_costs(monkeypa
     falling to the search limit is reported as monotone and on the edge."""
     from railradio.nr import tracking as tr
 
-    monkeypatch.setattr(tr, "measurement_errors", lambda ds, strength, with_distance: (
-        np.full(100, 0.01), np.full(100, 1.0), np.full(100, 100.0)))
+    monkeypatch.setattr(
+        tr,
+        "measurement_errors",
+        lambda ds, strength, with_distance: (np.full(100, 0.01), np.full(100, 1.0), np.full(100, 100.0)),
+    )
     monkeypatch.setattr(tr, "track", lambda ds, *a, cfg=None, **k: {"q": a[4].q} if cfg is None else {"q": cfg.q})
     args = (None, "aod_toa", np.arange(3) * 500.0, 15.0, 7.5, 0.1)
     for optimum, edge in ((1e3, False), (1e9, True)):
@@ -368,8 +390,11 @@ def test_q_search_monotone_means_falling_to_the_limit_from_the_grid_edge(monkeyp
     tie-break walks to the lower limit, is on the edge but not monotone."""
     from railradio.nr import tracking as tr
 
-    monkeypatch.setattr(tr, "measurement_errors", lambda ds, strength, with_distance: (
-        np.full(100, 0.01), np.full(100, 1.0), np.full(100, 100.0)))
+    monkeypatch.setattr(
+        tr,
+        "measurement_errors",
+        lambda ds, strength, with_distance: (np.full(100, 0.01), np.full(100, 1.0), np.full(100, 100.0)),
+    )
     monkeypatch.setattr(tr, "track", lambda ds, *a, cfg=None, **k: {"q": a[4].q} if cfg is None else {"q": cfg.q})
     args = (None, "aod_toa", np.arange(3) * 500.0, 15.0, 7.5, 0.1)
     wobble = {0.01: 12.0, 1.0: 12.5, 100.0: 7.0}

@@ -47,21 +47,29 @@ def test_data_policies_set_the_interference_on_the_train():
     > the serving cell alone (load 0) > the others only (no serving cell) > no data."""
     scn = _scenario()
     dep = scn.deployment
-    lb = link_budget(5100.0, 80.0, dep, scn.radio, scn.rrh_array, scn.train_array,
-                     ShadowingMap(1, (0,), dep, scn.radio))
+    lb = link_budget(
+        5100.0, 80.0, dep, scn.radio, scn.rrh_array, scn.train_array, ShadowingMap(1, (0,), dep, scn.radio)
+    )
     serving = lb.rrh == lb.rrh[int(np.argmax(lb.rx_power_dbm))]
     pool = qpsk_pool(np.random.default_rng(0), 16)
     out = {}
-    for name, policy, load, mask in (("train", "train", 1.0, None), ("serving", "serving", 1.0, serving),
-                                     ("others", "random", 1.0, None), ("alone", "serving", 0.0, serving),
-                                     ("none", "none", 1.0, None)):
+    for name, policy, load, mask in (
+        ("train", "train", 1.0, None),
+        ("serving", "serving", 1.0, serving),
+        ("others", "random", 1.0, None),
+        ("alone", "serving", 0.0, serving),
+        ("none", "none", 1.0, None),
+    ):
         syn = Synthesizer(scn.receiver, scn.profile, pool, scn.n_sinusoids, scn.full_channel_range_m, policy, load)
         draws = syn.draws(lb.links, np.random.default_rng(1))
         out[name] = syn(lb.links, None, 10.0, noise=False, draws=draws, serving=mask)[0]
         sp = syn.span(float(lb.links.tau_s.max()))
     n = scn.receiver.num.n_fft
-    quiet = [(s0, s0 + n) for s0, b in zip(sp["starts"][sp["n_pre"] + 20:], sp["block_of"][sp["n_pre"] + 20:])
-             if b < 0][:8]
+    quiet = [
+        (s0, s0 + n)
+        for s0, b in zip(sp["starts"][sp["n_pre"] + 20 :], sp["block_of"][sp["n_pre"] + 20 :], strict=True)
+        if b < 0
+    ][:8]
     p = {k: sum(np.sum(np.abs(z[a:b]) ** 2) for a, b in quiet) for k, z in out.items()}
     assert p["train"] > 1.05 * p["serving"]  # the neighbours' data beamed at the train
     assert p["serving"] > p["alone"] > 10 * p["others"]  # the serving cell's data dominate
@@ -80,9 +88,18 @@ def test_serving_policy_matches_the_reference():
     pool = qpsk_pool(rng, 16)
     los = TdlProfile("LOS", 1.0, 0.0, np.zeros(0), np.zeros(0))
     beams = np.geomspace(1.0, 0.05, 64)[None, :] * np.ones((2, 1))
-    links = Links(n_id1=np.array([5, 9]), n_id2=np.array([1, 2]), tau_s=np.array([300.0, 900.4]) / SAMPLE_RATE_HZ,
-                  amp=np.array([1.0, 0.6]), beam_amp=beams, data_amp=np.array([1.0, 0.8]),
-                  f_los_hz=np.zeros(2), phase0=np.zeros(2), doppler_hz=0.0, noise_psd_w_hz=0.0)
+    links = Links(
+        n_id1=np.array([5, 9]),
+        n_id2=np.array([1, 2]),
+        tau_s=np.array([300.0, 900.4]) / SAMPLE_RATE_HZ,
+        amp=np.array([1.0, 0.6]),
+        beam_amp=beams,
+        data_amp=np.array([1.0, 0.8]),
+        f_los_hz=np.zeros(2),
+        phase0=np.zeros(2),
+        doppler_hz=0.0,
+        noise_psd_w_hz=0.0,
+    )
     syn = Synthesizer(cfg, los, pool, data_beam="serving", load=0.5)
     draws = syn.draws(links, rng)
     mask = np.array([True, False])

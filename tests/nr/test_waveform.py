@@ -1,5 +1,6 @@
 """Numerology, PSS/SSS (against hand transcriptions and m-sequence theory), SS-block grid,
 OFDM round trip."""
+
 import numpy as np
 import pytest
 
@@ -19,8 +20,9 @@ def test_samples_per_subframe_and_cp_lengths():
     num = Numerology()
     assert num.symbol_start(224) - num.symbol_start(0) == 245_760
     assert 16 * 14 * 1096 + 2 * 128 == 245_760
-    np.testing.assert_array_equal(num.cp_length(np.array([0, 1, 111, 112, 113, 223, 224])),
-                                  [200, 72, 72, 200, 72, 72, 200])
+    np.testing.assert_array_equal(
+        num.cp_length(np.array([0, 1, 111, 112, 113, 223, 224])), [200, 72, 72, 200, 72, 72, 200]
+    )
     assert num.symbol_start(112) == 122_880  # every 0.5 ms
     d4 = Numerology(4)
     assert d4.n_fft == 256 and d4.cp_length(0) == 50 and d4.cp_length(1) == 18
@@ -83,7 +85,7 @@ def test_grid_layout_and_reference():
     assert np.all(np.abs(grid[0]) == pytest.approx(1.0))  # data on every subcarrier of the band
     b = reference_waveform(num, 17, 2, 2)
     assert b.size == 3 * (256 + 18)
-    assert np.allclose(b[274:2 * 274], 0)  # symbol 1 empty in the reference
+    assert np.allclose(b[274 : 2 * 274], 0)  # symbol 1 empty in the reference
     # equal EPRE: the PSS symbol carries 127 unit subcarriers
     assert np.sum(np.abs(b[18:274]) ** 2) == pytest.approx(127 * 256, rel=1e-5)
 

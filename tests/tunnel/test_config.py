@@ -1,4 +1,5 @@
 """The schema rejects bad tunnel config values, naming the key and the range."""
+
 import copy
 
 import pytest
@@ -16,13 +17,16 @@ def _paper():
         return yaml.safe_load(fh)
 
 
-@pytest.mark.parametrize(("path", "value", "must_mention"), [
-    (("tunnel", "cable", "velocity_factor"), 1.5, ["tunnel.cable.velocity_factor", "<= 1"]),
-    (("tunnel", "rays", "sbr_polarization"), "circular", ["tunnel.rays.sbr_polarization", "vector"]),
-    (("tunnel", "trains", "hst", "length_m"), -200.0, ["tunnel.trains.hst.length_m", ">= 10"]),
-    (("tunnel", "measurement", "n_slots"), 2, ["tunnel.measurement.n_slots", ">= 3"]),
-    (("tunnel", "sensitivity", "side_wall_slot_z_m"), 12.0, ["tunnel.sensitivity.side_wall_slot_z_m", "<= 10"]),
-])
+@pytest.mark.parametrize(
+    ("path", "value", "must_mention"),
+    [
+        (("tunnel", "cable", "velocity_factor"), 1.5, ["tunnel.cable.velocity_factor", "<= 1"]),
+        (("tunnel", "rays", "sbr_polarization"), "circular", ["tunnel.rays.sbr_polarization", "vector"]),
+        (("tunnel", "trains", "hst", "length_m"), -200.0, ["tunnel.trains.hst.length_m", ">= 10"]),
+        (("tunnel", "measurement", "n_slots"), 2, ["tunnel.measurement.n_slots", ">= 3"]),
+        (("tunnel", "sensitivity", "side_wall_slot_z_m"), 12.0, ["tunnel.sensitivity.side_wall_slot_z_m", "<= 10"]),
+    ],
+)
 def test_bad_tunnel_values_rejected(path, value, must_mention):
     cfg = copy.deepcopy(_paper())
     node = cfg
@@ -55,8 +59,9 @@ def test_side_wall_variant_moves_only_the_slot_line():
     assert channel_config(cfg, "image", keys)["geometry"] == cfg["geometry"]
     sw = channel_config(cfg, "image_side_wall", keys)
     assert sw["geometry"]["slot_z_m"] == cfg["sensitivity"]["side_wall_slot_z_m"]
-    assert {k: v for k, v in sw["geometry"].items() if k != "slot_z_m"} == \
-        {k: v for k, v in cfg["geometry"].items() if k != "slot_z_m"}
+    assert {k: v for k, v in sw["geometry"].items() if k != "slot_z_m"} == {
+        k: v for k, v in cfg["geometry"].items() if k != "slot_z_m"
+    }
     centre, side = tunnel_from_config(cfg, "rect"), tunnel_from_config(side_wall_config(cfg), "rect")
     assert 0.05 <= side.wall_distance_m(*side.slot_yz) < 0.5
     assert side.cross_distance_m > centre.cross_distance_m

@@ -1,4 +1,5 @@
 """Tunnel geometry, cable and the slot-chain calibration to the coupling loss."""
+
 import math
 
 import numpy as np
@@ -32,7 +33,8 @@ def test_slot_chain_reproduces_coupling_loss_at_2m(g_ref_dbi):
     mean_db = 10 * np.log10(p.mean())  # isotropic receiver
     assert mean_db + g_ref_dbi == pytest.approx(-(85 + 10 * math.log10(2)), abs=0.01)
     assert cab.slot_eirp_offset_db(s) == pytest.approx(
-        Cable(loss_db_per_m=0.0, coupling_ref_gain_dbi=0.0).slot_eirp_offset_db(s) - g_ref_dbi, abs=1e-12)
+        Cable(loss_db_per_m=0.0, coupling_ref_gain_dbi=0.0).slot_eirp_offset_db(s) - g_ref_dbi, abs=1e-12
+    )
     ripple = 10 * np.log10(p / p.mean())
     assert 4.0 < ripple.max() < 6.5 and -6.5 < ripple.min() < -4.0
 
@@ -46,10 +48,15 @@ def test_cable_feeds_loss_and_delay():
     assert cab.cable_delay_s(1000.0, 5000.0) == pytest.approx(500 / (0.88 * 299_792_458.0))
 
 
-@pytest.mark.parametrize(("kwargs", "match"), [({"shape": "oval"}, "shape"),
-                                               ({"rx_y_m": 9.0}, "outside"),
-                                               ({"slot_height_frac": 1.5}, "slot_height_frac"),
-                                               ({"length_m": -1.0}, "length_m")])
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        ({"shape": "oval"}, "shape"),
+        ({"rx_y_m": 9.0}, "outside"),
+        ({"slot_height_frac": 1.5}, "slot_height_frac"),
+        ({"length_m": -1.0}, "length_m"),
+    ],
+)
 def test_bad_geometry_raises(kwargs, match):
     with pytest.raises(ValueError, match=match):
         Tunnel(**kwargs)

@@ -1,4 +1,5 @@
 """Fresnel coefficients of the concrete lining against hand values and limits."""
+
 import numpy as np
 import pytest
 
@@ -46,8 +47,10 @@ def test_passive_walls_never_amplify():
         assert np.all(np.abs(fresnel_tm(c, eps)) <= 1 + 1e-12)
 
 
-@pytest.mark.parametrize(("cos_i", "eps"), [(1.2, CONCRETE_900MHZ), (-0.1, CONCRETE_900MHZ),
-                                            (0.5, complex(0.5, 0)), (0.5, complex(5.0, 0.3))])
+@pytest.mark.parametrize(
+    ("cos_i", "eps"),
+    [(1.2, CONCRETE_900MHZ), (-0.1, CONCRETE_900MHZ), (0.5, complex(0.5, 0)), (0.5, complex(5.0, 0.3))],
+)
 def test_bad_input_raises(cos_i, eps):
     with pytest.raises(ValueError):
         fresnel_te(cos_i, eps)
@@ -67,6 +70,7 @@ def test_circular_guide_attenuation_marcatili_schmeltzer():
     assert 2.7 < eh11 < 2.9
     assert te01 < eh11 < eh11_attenuation_db_per_m(lam, side, side) * 1e3 < tm01
     assert circular_attenuation_db_per_m(2 * lam, 8.5, "EH11") == pytest.approx(
-        circular_attenuation_db_per_m(lam, 4.25, "EH11") * 4 / 8)
+        circular_attenuation_db_per_m(lam, 4.25, "EH11") * 4 / 8
+    )
     with pytest.raises(ValueError, match="mode"):
         circular_attenuation_db_per_m(lam, 4.25, "HE99")

@@ -1,12 +1,12 @@
 """Positioning with noiseless measurements recovers the truth; GDOP, CEP."""
+
 import numpy as np
 import pytest
 
 from railradio.constants import SPEED_OF_LIGHT_M_S
-from railradio.tunnel.positioning import (cep, gain_to_offset_m, gdop_seed, gdop_tdoa_along,
-                                          rssi_ls, tdoa_gauss_newton)
-from railradio.tunnel.simulate import MeasurementModel, Train, wideband_candidates
 from railradio.tunnel.geometry import Cable, Tunnel
+from railradio.tunnel.positioning import cep, gain_to_offset_m, gdop_seed, gdop_tdoa_along, rssi_ls, tdoa_gauss_newton
+from railradio.tunnel.simulate import MeasurementModel, Train, wideband_candidates
 
 H = 3.15
 
@@ -84,6 +84,7 @@ def test_ambiguity_resolved_from_the_measurements_alone():
     receivers' delay pattern and continuity from the first section give the true side and
     feed at every epoch, without the truth; a flipped fix is counted as wrong."""
     from railradio.tunnel.simulate import ambiguity_wrong, resolve_ambiguity
+
     tun, cab, tr, head, x_rx, cand = _crossing()
     h, fix = resolve_ambiguity(cand, tr.receiver_offsets_m, cab.feed_spacing_m, (0.0, cab.feed_spacing_m), 20.0)
     np.testing.assert_allclose(h, head, atol=1e-6)
@@ -99,6 +100,7 @@ def test_ambiguity_resolved_from_the_measurements_alone():
 
 def test_ambiguity_robust_to_one_wrong_peak_and_bad_input():
     from railradio.tunnel.simulate import resolve_ambiguity
+
     tun, cab, tr, head, x_rx, cand = _crossing(step=5.0)
     bad = cand.copy()
     bad[:, 1, :] = np.clip(bad[:, 1, :] + 60.0, 0, tun.length_m)  # one receiver's peak 60 m off

@@ -1,4 +1,5 @@
 """Ray engines: free space with absorbing walls, image vs SBR, energy, tabulation."""
+
 import math
 
 import numpy as np
@@ -32,11 +33,15 @@ def test_image_method_geometry_against_hand_images():
     fam = image_families(RECT, 1)
     (ys, zs), (yr, zr) = RECT.slot_yz, RECT.rx_yz
     h, w = RECT.height_m, RECT.width_m
-    expected = sorted([math.hypot(yr - ys, zr - zs),  # line of sight
-                       math.hypot(yr + ys, zr - zs),  # floor image at -ys
-                       math.hypot(2 * h - ys - yr, zr - zs),  # ceiling image at 2H - ys
-                       math.hypot(yr - ys, zr - (w - zs)),  # wall z = +W/2: image at W - zs
-                       math.hypot(yr - ys, zr - (-w - zs))])  # wall z = -W/2
+    expected = sorted(
+        [
+            math.hypot(yr - ys, zr - zs),  # line of sight
+            math.hypot(yr + ys, zr - zs),  # floor image at -ys
+            math.hypot(2 * h - ys - yr, zr - zs),  # ceiling image at 2H - ys
+            math.hypot(yr - ys, zr - (w - zs)),  # wall z = +W/2: image at W - zs
+            math.hypot(yr - ys, zr - (-w - zs)),
+        ]
+    )  # wall z = -W/2
     np.testing.assert_allclose(np.sort(fam.ell_m), expected, rtol=1e-12)
 
 
@@ -171,8 +176,15 @@ def test_the_table_covers_every_slot_and_a_short_table_fails_the_cutoff_check():
     # the check can fail: a 300 m table in a 1200 m tunnel leaves power and delay spread out
     cfg["geometry"]["length_m"] = 1200.0
     tun = tunnel_from_config(cfg, "rect")
-    table = tabulate(image_families(tun, 20), tun, cable_from_config(cfg), offset_grid_m(0.2, 300.0, tun.slot_spacing_m),
-                     eps=CONCRETE_900MHZ, polarization="paraxial", local_mean_window_m=local_mean_window(cfg))
+    table = tabulate(
+        image_families(tun, 20),
+        tun,
+        cable_from_config(cfg),
+        offset_grid_m(0.2, 300.0, tun.slot_spacing_m),
+        eps=CONCRETE_900MHZ,
+        polarization="paraxial",
+        local_mean_window_m=local_mean_window(cfg),
+    )
     table.attrs.update(reflection_order=20)
     cut = cutoff_check(cfg, table, x_step_m=10.0)
     assert np.percentile(cut["power_beyond_cutoff_frac"].values, 95) > cfg["rays"]["cutoff_power_frac"]
@@ -191,9 +203,17 @@ def test_the_seed_models_table_leaves_nothing_beyond_its_extent():
     extent = cfg["seed_model"]["max_offset_m"]
     sm = cfg["seed_model"]
     offs = np.arange(0.0, 2.0 * extent + 1e-9, RECT.slot_spacing_m)  # one receiver at a slot
-    tab = tabulate(image_families(RECT, 5), RECT, Cable(), offs, eps=CONCRETE_900MHZ, polarization="paraxial",
-                   propagation="seed", rng=np.random.default_rng(1),
-                   seed_model=SeedModel(sm["reflection_loss_db"], sm["tunnel_att_db_per_m"], sm["multipath_max_db"]))
+    tab = tabulate(
+        image_families(RECT, 5),
+        RECT,
+        Cable(),
+        offs,
+        eps=CONCRETE_900MHZ,
+        polarization="paraxial",
+        propagation="seed",
+        rng=np.random.default_rng(1),
+        seed_model=SeedModel(sm["reflection_loss_db"], sm["tunnel_att_db_per_m"], sm["multipath_max_db"]),
+    )
     p = tab["power_mean"].values
     assert p[offs > extent].sum() < 1e-6 * p.sum()
 
@@ -216,8 +236,9 @@ def test_table_equals_direct_tracing():
     direct = lift(fam, grid[sel], LAM, CONCRETE_900MHZ, "paraxial").amplitude
     eirp = 10 ** (cab.slot_eirp_offset_db(RECT.slot_spacing_m) / 20)
     np.testing.assert_allclose(tab["taps"].values[sel].sum(axis=1), eirp * direct.sum(axis=0), rtol=2e-3)
-    np.testing.assert_allclose(tab["power_incoherent"].values[sel], eirp**2 * np.sum(np.abs(direct) ** 2, axis=0),
-                               rtol=2e-3)
+    np.testing.assert_allclose(
+        tab["power_incoherent"].values[sel], eirp**2 * np.sum(np.abs(direct) ** 2, axis=0), rtol=2e-3
+    )
     # the local mean: the coherent power averaged over the window (3 samples of 0.5 m)
     coh = np.abs(tab["taps"].values.sum(axis=1)) ** 2
     np.testing.assert_allclose(tab["power_mean"].values[1:-1], (coh[:-2] + coh[1:-1] + coh[2:]) / 3, rtol=1e-8)

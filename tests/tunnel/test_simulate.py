@@ -1,13 +1,26 @@
 """Monte Carlo realizations and delay-error models of a train crossing (small CI tunnel)."""
+
 import numpy as np
 import pytest
 import yaml
 
 from railradio.config import deep_merge
-from railradio.tunnel.simulate import (MeasurementModel, calibrate_separable, delay_error_field,
-                                       kf_realizations, run_train)
-from railradio.tunnel.study import (cable_from_config, make_order, make_table, measurement_from_config,
-                                    sensitivity_cases, train_from_config, tunnel_from_config)
+from railradio.tunnel.simulate import (
+    MeasurementModel,
+    calibrate_separable,
+    delay_error_field,
+    kf_realizations,
+    run_train,
+)
+from railradio.tunnel.study import (
+    cable_from_config,
+    make_order,
+    make_table,
+    measurement_from_config,
+    sensitivity_cases,
+    train_from_config,
+    tunnel_from_config,
+)
 
 
 @pytest.fixture(scope="module")
@@ -27,7 +40,9 @@ def test_delay_error_fields():
     bias = delay_error_field(rng, 4000, 100.0, MeasurementModel(delay_sigma_s=20e-9, delay_error="slot_bias"))
     assert np.all(bias == bias[:, :1])  # constant along the track
     assert np.std(bias[:, 0]) == pytest.approx(20e-9, rel=0.05)
-    ar = delay_error_field(rng, 2000, 200.0, MeasurementModel(delay_sigma_s=20e-9, delay_error="ar1", delay_corr_m=20.0))
+    ar = delay_error_field(
+        rng, 2000, 200.0, MeasurementModel(delay_sigma_s=20e-9, delay_error="ar1", delay_corr_m=20.0)
+    )
     assert np.std(ar) == pytest.approx(20e-9, rel=0.05)
     rho = np.mean(ar[:, 100] * ar[:, 120]) / np.mean(ar[:, 100] ** 2)
     assert rho == pytest.approx(np.exp(-1.0), abs=0.06)  # exp(-20 m / 20 m)
@@ -82,8 +97,16 @@ def test_wideband_peak_recovers_a_single_path_delay():
 
     tun, cab = Tunnel(length_m=2000.0, shape="rect"), Cable()
     step = 0.04
-    los = tabulate(image_families(tun, 0), tun, cab, offset_grid_m(step, 20.0, tun.slot_spacing_m),
-                   eps=None, polarization="paraxial", n_delay_bins=4, local_mean_window_m=13.3)
+    los = tabulate(
+        image_families(tun, 0),
+        tun,
+        cab,
+        offset_grid_m(step, 20.0, tun.slot_spacing_m),
+        eps=None,
+        polarization="paraxial",
+        n_delay_bins=4,
+        local_mean_window_m=13.3,
+    )
     mm = MeasurementModel(window_m=9.99, bandwidth_hz=5e6, n_tones=64)
     rng = np.random.default_rng(5)
     slot = 20.0 * rng.integers(5, 95, 400)

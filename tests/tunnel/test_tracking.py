@@ -1,4 +1,5 @@
 """The filters stay consistent: NEES/NIS against chi-square bounds, PF close to KF."""
+
 import numpy as np
 import pytest
 from scipy import stats
@@ -92,6 +93,7 @@ def test_systematic_resampler_matches_filterpy_and_uses_the_generator():
     """Our systematic resampler equals filterpy's for the same random offset, leaves numpy's
     global state alone, and is reproducible from the Generator."""
     from filterpy.monte_carlo import resampling
+
     from railradio.tunnel.tracking import systematic_resample_with
 
     w = np.random.default_rng(3).random(500) ** 4
@@ -117,6 +119,7 @@ def test_filters_started_from_the_first_fix_do_not_count_it_twice():
     locks on when that fix is not used again; re-using it as a measurement makes the filter
     overconfident in a wrong speed and the gate then locks some tracks out."""
     from railradio.tunnel.tracking import kf_track, kf_track_batch
+
     rng = np.random.default_rng(11)
     dt, q, r, b = 0.1, 0.5, 1.0, 400
     t = np.arange(300) * dt

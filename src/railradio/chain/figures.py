@@ -35,10 +35,23 @@ def plot_success_vs_sigma(summ: xr.Dataset, pdf_path, png_path=None, figure_max_
                 if xs == "log":
                     continue
                 yy = float(summ["success"].sel(input=lab, policy=p))
-                e = np.array([[yy - float(summ["success_lo"].sel(input=lab, policy=p))],
-                              [float(summ["success_hi"].sel(input=lab, policy=p)) - yy]])
-                ax.errorbar([x], [yy], yerr=e, marker="*", ms=11, color=color, ls="none",
-                            markeredgecolor="black", label=f"{label}, 5G NR {lab[3:].upper()} position")
+                e = np.array(
+                    [
+                        [yy - float(summ["success_lo"].sel(input=lab, policy=p))],
+                        [float(summ["success_hi"].sel(input=lab, policy=p)) - yy],
+                    ]
+                )
+                ax.errorbar(
+                    [x],
+                    [yy],
+                    yerr=e,
+                    marker="*",
+                    ms=11,
+                    color=color,
+                    ls="none",
+                    markeredgecolor="black",
+                    label=f"{label}, 5G NR {lab[3:].upper()} position",
+                )
         ax.set_xscale(xs)
         ax.set_xlabel(r"along-track position error $\sigma$ [m]")
     axes[0].set_ylabel(f"handover success at {float(summ['speed_kmh']):g} km/h")

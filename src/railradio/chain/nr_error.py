@@ -62,7 +62,6 @@ class ErrorSeries:
         return int(self.err_m.size)
 
 
-
 def _segments(mask: np.ndarray) -> list[tuple[int, int]]:
     """(start, stop) of the runs of True in ``mask``."""
     m = np.concatenate([[False], mask.astype(bool), [False]])
@@ -84,8 +83,9 @@ def hold_and_drift(err_m: np.ndarray, period_s: float, drift_m_s: float) -> tupl
     return e[last] + drift_m_s * age, age
 
 
-def series_from_runs(runs: Sequence[xr.Dataset], filt: str, speed_kmh: float, halfwidth_kmh: float,
-                     drift_m_s: float) -> ErrorSeries:
+def series_from_runs(
+    runs: Sequence[xr.Dataset], filt: str, speed_kmh: float, halfwidth_kmh: float, drift_m_s: float
+) -> ErrorSeries:
     """Pool the along-track error of tracker ``filt`` over realizations ``runs`` (nr IMM
     datasets with ``along_err(filter, epoch)``, ``t``, ``x_true``), keeping the epochs whose
     true speed is within ``halfwidth_kmh`` of ``speed_kmh``."""
@@ -116,7 +116,7 @@ def series_from_runs(runs: Sequence[xr.Dataset], filt: str, speed_kmh: float, ha
                 continue
             n_used += seg.size
             n_out += int(np.sum(~np.isfinite(seg)))
-            seg = seg[ok[0]:]  # a segment starts at its first fix
+            seg = seg[ok[0] :]  # a segment starts at its first fix
             f, age = hold_and_drift(seg, dt, drift_m_s)
             starts.append(sum(lengths))
             lengths.append(seg.size)
@@ -124,25 +124,34 @@ def series_from_runs(runs: Sequence[xr.Dataset], filt: str, speed_kmh: float, ha
             ages.append(age)
     if not lengths:
         raise ValueError(f"no nr epoch within ±{halfwidth_kmh} km/h of speed_kmh={speed_kmh}")
-    return ErrorSeries(np.concatenate(errs), np.concatenate(ages), np.array(starts), np.array(lengths),
-                       float(period), n_out / n_used, float(drift_m_s))
+    return ErrorSeries(
+        np.concatenate(errs),
+        np.concatenate(ages),
+        np.array(starts),
+        np.array(lengths),
+        float(period),
+        n_out / n_used,
+        float(drift_m_s),
+    )
 
 
-def bootstrap(series: ErrorSeries, n_runs: int, n_samples: int, sample_period_s: float,
-              rng: np.random.Generator) -> np.ndarray:
+def bootstrap(
+    series: ErrorSeries, n_runs: int, n_samples: int, sample_period_s: float, rng: np.random.Generator
+) -> np.ndarray:
     """Along-track error [m] of ``n_runs`` crossings at ``n_samples`` handover samples,
     [n_runs, n_samples]: one circular block per crossing, zero-order hold (module doc)."""
     if n_runs < 1 or n_samples < 1:
         raise ValueError(f"n_runs and n_samples must be >= 1, got {n_runs!r}, {n_samples!r}")
     if not sample_period_s > 0:
         raise ValueError(f"sample_period_s must be > 0, got {sample_period_s!r}")
-    u = rng.integers(0, series.n_epochs, size=n_runs)          # uniform over pooled epochs
-    phase = rng.random(n_runs)                                 # position within the first epoch
-    sign = np.where(rng.random(n_runs) < 0.5, -1.0, 1.0)       # drift sign during outages
+    u = rng.integers(0, series.n_epochs, size=n_runs)  # uniform over pooled epochs
+    phase = rng.random(n_runs)  # position within the first epoch
+    sign = np.where(rng.random(n_runs) < 0.5, -1.0, 1.0)  # drift sign during outages
     seg = np.searchsorted(series.starts, u, side="right") - 1
     start, length = series.starts[seg], series.lengths[seg]
-    j = np.floor(phase[:, None] + np.arange(n_samples)[None, :] * (sample_period_s / series.period_s)
-                 + 1e-9).astype(np.int64)                      # epochs elapsed (zero-order hold)
+    j = np.floor(phase[:, None] + np.arange(n_samples)[None, :] * (sample_period_s / series.period_s) + 1e-9).astype(
+        np.int64
+    )  # epochs elapsed (zero-order hold)
     idx = start[:, None] + ((u - start)[:, None] + j) % length[:, None]  # circular within the segment
     hold = series.err_m - series.drift_m_s * series.drift_age_s
     return hold[idx] + sign[:, None] * series.drift_m_s * series.drift_age_s[idx]
@@ -154,8 +163,12 @@ def error_stats(err_m: np.ndarray) -> dict[str, float]:
     e = e[np.isfinite(e)]
     if e.size == 0:
         raise ValueError("err_m must hold finite values")
-    return {"mean": float(e.mean()), "std": float(e.std()), "rms": float(np.sqrt(np.mean(e * e))),
-            "p95": float(np.percentile(np.abs(e), 95))}
+    return {
+        "mean": float(e.mean()),
+        "std": float(e.std()),
+        "rms": float(np.sqrt(np.mean(e * e))),
+        "p95": float(np.percentile(np.abs(e), 95)),
+    }
 
 
 def speed_mask(ds: xr.Dataset, speed_kmh: float, halfwidth_kmh: float) -> np.ndarray:
@@ -185,6 +198,7 @@ def nofix_share(tracks: Sequence[xr.Dataset], receiver: str, speed_kmh: float, h
 def nr_statistics(series: ErrorSeries, nofix: float) -> dict[str, float]:
     """Key statistics of the pooled nr error series (outages filled with drift sign +1)."""
     st = error_stats(series.err_m)
-    st.update({"outage_share": float(series.outage_share), "nofix_share": float(nofix),
-               "epochs": float(series.n_epochs)})
+    st.update(
+        {"outage_share": float(series.outage_share), "nofix_share": float(nofix), "epochs": float(series.n_epochs)}
+    )
     return st

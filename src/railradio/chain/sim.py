@@ -33,9 +33,11 @@ from railradio.handover.train import kinematics
 from railradio.rng import make_rng, spawn_key, stable_id
 
 POLICIES = ("joint", "distance", "a3")
-OUTCOMES = {"success": ("1", "1 if the handover succeeded"),
-            "pingpong": ("1", "1 if commanded back to the previous cell within the ping-pong window"),
-            "delay_s": ("s", "first command to completion incl. retries (NaN: failed)")}
+OUTCOMES = {
+    "success": ("1", "1 if the handover succeeded"),
+    "pingpong": ("1", "1 if commanded back to the previous cell within the ping-pong window"),
+    "delay_s": ("s", "first command to completion incl. retries (NaN: failed)"),
+}
 
 
 def gm_label(sigma_m: float) -> str:
@@ -54,20 +56,30 @@ def gm_error_m(white: np.ndarray, sigma_m: float, corr_s: float, period_s: float
 
 def nr_rng(seed: int, speed_kmh: float, filt: str, block: int) -> np.random.Generator:
     """Generator of the nr bootstrap of one block (its own stream beside the handover's)."""
-    return make_rng(seed, spawn_key("handover", stable_id("chain"), stable_id(float(speed_kmh)),
-                                    stable_id(filt), int(block)))
+    return make_rng(
+        seed, spawn_key("handover", stable_id("chain"), stable_id(float(speed_kmh)), stable_id(filt), int(block))
+    )
 
 
-def simulate_block(scn: Scenario, speed_kmh: float, seed: int, block: int, n_runs: int,
-                   sigmas_m, gm_corr_s: float, nr: dict[str, ErrorSeries]) -> dict[str, dict]:
+def simulate_block(
+    scn: Scenario,
+    speed_kmh: float,
+    seed: int,
+    block: int,
+    n_runs: int,
+    sigmas_m,
+    gm_corr_s: float,
+    nr: dict[str, ErrorSeries],
+) -> dict[str, dict]:
     """Outcomes per input label -> policy -> name -> [B, N] array, plus ``err`` -> [B, K] error."""
     kin = kinematics(scn, speed_kmh)
     draws = draw_block(seed, speed_kmh, block, n_runs, kin, scn.train.n_nodes)
     ctx = build_context(scn, kin, draws)
     inputs = {gm_label(s): gm_error_m(draws.gnss_white, float(s), gm_corr_s, kin.period_s) for s in sigmas_m}
     for filt, series in nr.items():
-        inputs[f"nr_{filt}"] = bootstrap(series, n_runs, kin.n_samples, kin.period_s,
-                                         nr_rng(seed, speed_kmh, filt, block))
+        inputs[f"nr_{filt}"] = bootstrap(
+            series, n_runs, kin.n_samples, kin.period_s, nr_rng(seed, speed_kmh, filt, block)
+        )
     out = {}
     for label, err in inputs.items():
         c = dataclasses.replace(ctx, gnss_err_m=err, _cache={})
@@ -77,8 +89,16 @@ def simulate_block(scn: Scenario, speed_kmh: float, seed: int, block: int, n_run
     return out
 
 
-def simulate_blocks(scn: Scenario, speed_kmh: float, seed: int, blocks: range, n_runs: int,
-                    sigmas_m, gm_corr_s: float, nr: dict[str, ErrorSeries]) -> xr.Dataset:
+def simulate_blocks(
+    scn: Scenario,
+    speed_kmh: float,
+    seed: int,
+    blocks: range,
+    n_runs: int,
+    sigmas_m,
+    gm_corr_s: float,
+    nr: dict[str, ErrorSeries],
+) -> xr.Dataset:
     """Per-handover outcomes over (input, policy, run, node) and the per-run error moments."""
     if len(blocks) == 0:
         raise ValueError("blocks must not be empty")
@@ -86,19 +106,33 @@ def simulate_blocks(scn: Scenario, speed_kmh: float, seed: int, blocks: range, n
     labels = list(parts[0])
     data = {}
     for name, (units, long_name) in OUTCOMES.items():
-        arr = np.stack([np.stack([np.concatenate([pt[lab][p][name] for pt in parts]) for p in POLICIES])
-                        for lab in labels])
-        data[name] = (("input", "policy", "run", "node"),
-                      arr.astype(np.int8) if name != "delay_s" else arr, {"units": units, "long_name": long_name})
+        arr = np.stack(
+            [np.stack([np.concatenate([pt[lab][p][name] for pt in parts]) for p in POLICIES]) for lab in labels]
+        )
+        data[name] = (
+            ("input", "policy", "run", "node"),
+            arr.astype(np.int8) if name != "delay_s" else arr,
+            {"units": units, "long_name": long_name},
+        )
     err = [np.concatenate([pt[lab]["err"] for pt in parts]) for lab in labels]
-    data["err_mean_m"] = (("input", "run"), np.stack([e.mean(axis=1) for e in err]),
-                          {"units": "m", "long_name": "per-crossing mean along-track position error"})
-    data["err_ms_m2"] = (("input", "run"), np.stack([np.mean(e * e, axis=1) for e in err]),
-                         {"units": "m2", "long_name": "per-crossing mean square along-track position error"})
+    data["err_mean_m"] = (
+        ("input", "run"),
+        np.stack([e.mean(axis=1) for e in err]),
+        {"units": "m", "long_name": "per-crossing mean along-track position error"},
+    )
+    data["err_ms_m2"] = (
+        ("input", "run"),
+        np.stack([np.mean(e * e, axis=1) for e in err]),
+        {"units": "m2", "long_name": "per-crossing mean square along-track position error"},
+    )
     sig = [float(lab[3:]) if lab.startswith("gm_") else math.nan for lab in labels]
     runs = np.arange(blocks[0] * n_runs, blocks[-1] * n_runs + n_runs)
     coords = {
-        "input": ("input", labels, {"units": "1", "long_name": "position input (gm_<sigma>: Gauss-Markov; nr_<filter>)"}),
+        "input": (
+            "input",
+            labels,
+            {"units": "1", "long_name": "position input (gm_<sigma>: Gauss-Markov; nr_<filter>)"},
+        ),
         "sigma_m": ("input", np.array(sig), {"units": "m", "long_name": "Gauss-Markov error std (NaN: nr input)"}),
         "policy": ("policy", list(POLICIES), {"units": "1", "long_name": "handover policy"}),
         "run": ("run", runs, {"units": "1", "long_name": "global crossing index (block*runs_per_block + j)"}),

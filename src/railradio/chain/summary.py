@@ -19,20 +19,37 @@ def summarize(shards: Sequence[xr.Dataset]) -> xr.Dataset:
     ds = xr.concat(list(shards), dim="run", data_vars="minimal", coords="minimal", compat="override")
     labels, policies = list(ds["input"].values), list(ds["policy"].values)
     out: dict[str, np.ndarray] = {}
-    names = ["success", "success_lo", "success_hi", "success_se",
-             "pingpong", "pingpong_lo", "pingpong_hi", "pingpong_se", "delay_ms", "delay_ms_se"]
+    names = [
+        "success",
+        "success_lo",
+        "success_hi",
+        "success_se",
+        "pingpong",
+        "pingpong_lo",
+        "pingpong_hi",
+        "pingpong_se",
+        "delay_ms",
+        "delay_ms_se",
+    ]
     for n in names:
         out[n] = np.full((len(labels), len(policies)), np.nan)
     for i, lab in enumerate(labels):
         for j, p in enumerate(policies):
             for rate in ("success", "pingpong"):
                 r = clustered_rate(ds[rate].sel(input=lab, policy=p).values.astype(float))
-                out[rate][i, j], out[f"{rate}_lo"][i, j], out[f"{rate}_hi"][i, j], out[f"{rate}_se"][i, j] = \
-                    r["p"], r["lo"], r["hi"], r["se"]
+                out[rate][i, j], out[f"{rate}_lo"][i, j], out[f"{rate}_hi"][i, j], out[f"{rate}_se"][i, j] = (
+                    r["p"],
+                    r["lo"],
+                    r["hi"],
+                    r["se"],
+                )
             m = clustered_mean(1e3 * ds["delay_s"].sel(input=lab, policy=p).values)
             out["delay_ms"][i, j], out["delay_ms_se"][i, j] = m["mean"], m["se"]
-    attrs = {"success": ("1", "handover success rate"), "pingpong": ("1", "ping-pong rate"),
-             "delay_ms": ("ms", "mean handover delay (successful)")}
+    attrs = {
+        "success": ("1", "handover success rate"),
+        "pingpong": ("1", "ping-pong rate"),
+        "delay_ms": ("ms", "mean handover delay (successful)"),
+    }
     data = {}
     for n, arr in out.items():
         base = n.split("_")[0] if not n.startswith("delay") else "delay_ms"
@@ -43,12 +60,18 @@ def summarize(shards: Sequence[xr.Dataset]) -> xr.Dataset:
     ems = ds["err_ms_m2"].mean("run").values
     data["err_mean_m"] = (("input",), em, {"units": "m", "long_name": "mean along-track position error fed"})
     data["err_rms_m"] = (("input",), np.sqrt(ems), {"units": "m", "long_name": "RMS along-track position error fed"})
-    data["err_std_m"] = (("input",), np.sqrt(np.maximum(ems - em * em, 0.0)),
-                         {"units": "m", "long_name": "std of the along-track position error fed"})
+    data["err_std_m"] = (
+        ("input",),
+        np.sqrt(np.maximum(ems - em * em, 0.0)),
+        {"units": "m", "long_name": "std of the along-track position error fed"},
+    )
     res = xr.Dataset(data, coords={"input": ds["input"], "sigma_m": ds["sigma_m"], "policy": ds["policy"]})
     res["speed_kmh"] = ds["speed_kmh"]
-    res["n_handovers"] = xr.Variable((), float(ds["success"].sel(input=labels[0], policy=policies[0]).size),
-                                     {"units": "1", "long_name": "node handovers per (input, policy)"})
+    res["n_handovers"] = xr.Variable(
+        (),
+        float(ds["success"].sel(input=labels[0], policy=policies[0]).size),
+        {"units": "1", "long_name": "node handovers per (input, policy)"},
+    )
     return res
 
 
@@ -88,73 +111,170 @@ def key_numbers(summ: xr.Dataset, nr_stats: dict[str, dict[str, float]], figure_
     def put(name, unit, desc, value, se=None, digits=3):
         out[name] = KeySpec(name, unit, desc, digits=digits).entry(
             None if value is None or not math.isfinite(value) else float(value),
-            None if se is None or not math.isfinite(se) else float(se))
+            None if se is None or not math.isfinite(se) else float(se),
+        )
 
     v = float(summ["speed_kmh"])
     gm = summ.where(np.isfinite(summ["sigma_m"]), drop=True).sortby("sigma_m")
     sig = gm["sigma_m"].values
     a3 = summ["success"].sel(policy="a3")
     a3_ref = float(a3.sel(input=gm["input"].values[0]))
-    put(f"chain.a3.success.v{v:g}", "1", f"A3 success at {v:g} km/h (position-free reference)", a3_ref,
-        float(summ["success_se"].sel(policy="a3", input=gm["input"].values[0])), 4)
-    put("chain.a3.success_spread", "1", "max − min of A3 success over all position inputs (0: A3 ignores position)",
-        float(a3.max() - a3.min()))
-    put(f"chain.a3.pingpong.v{v:g}", "1", f"A3 ping-pong at {v:g} km/h", float(summ["pingpong"].sel(policy="a3", input=gm["input"].values[0])), None, 4)
+    put(
+        f"chain.a3.success.v{v:g}",
+        "1",
+        f"A3 success at {v:g} km/h (position-free reference)",
+        a3_ref,
+        float(summ["success_se"].sel(policy="a3", input=gm["input"].values[0])),
+        4,
+    )
+    put(
+        "chain.a3.success_spread",
+        "1",
+        "max − min of A3 success over all position inputs (0: A3 ignores position)",
+        float(a3.max() - a3.min()),
+    )
+    put(
+        f"chain.a3.pingpong.v{v:g}",
+        "1",
+        f"A3 ping-pong at {v:g} km/h",
+        float(summ["pingpong"].sel(policy="a3", input=gm["input"].values[0])),
+        None,
+        4,
+    )
     for filt in [str(i)[3:] for i in summ["input"].values if str(i).startswith("nr_")]:
         lab = f"nr_{filt}"
         for p in ("joint", "distance"):
             for rate in ("success", "pingpong"):
-                put(f"chain.nr_{filt}.{p}.{rate}.v{v:g}", "1",
-                    f"{p} {rate} at {v:g} km/h with the nr {filt.upper()} position", float(summ[rate].sel(input=lab, policy=p)),
-                    float(summ[f"{rate}_se"].sel(input=lab, policy=p)), 4)
-            put(f"chain.nr_{filt}.{p}.success_minus_a3", "1", f"{p} success with nr {filt.upper()} position minus A3's",
-                float(summ["success"].sel(input=lab, policy=p)) - a3_ref)
-        put(f"chain.nr_{filt}.sigma_eff_m", "m", f"RMS along-track error of the nr {filt.upper()} input as fed (bootstrap)",
-            float(summ["err_rms_m"].sel(input=lab)))
+                put(
+                    f"chain.nr_{filt}.{p}.{rate}.v{v:g}",
+                    "1",
+                    f"{p} {rate} at {v:g} km/h with the nr {filt.upper()} position",
+                    float(summ[rate].sel(input=lab, policy=p)),
+                    float(summ[f"{rate}_se"].sel(input=lab, policy=p)),
+                    4,
+                )
+            put(
+                f"chain.nr_{filt}.{p}.success_minus_a3",
+                "1",
+                f"{p} success with nr {filt.upper()} position minus A3's",
+                float(summ["success"].sel(input=lab, policy=p)) - a3_ref,
+            )
+        put(
+            f"chain.nr_{filt}.sigma_eff_m",
+            "m",
+            f"RMS along-track error of the nr {filt.upper()} input as fed (bootstrap)",
+            float(summ["err_rms_m"].sel(input=lab)),
+        )
         st = nr_stats[filt]
-        put(f"chain.nr_{filt}.err_m.mean", "m", f"mean signed along-track error of the nr {filt.upper()} (source epochs)", st["mean"])
-        put(f"chain.nr_{filt}.err_m.p95", "m", f"95th percentile of |along-track error| of the nr {filt.upper()}", st["p95"])
-        put(f"chain.nr_{filt}.err_m.rms", "m", f"RMS along-track error of the nr {filt.upper()} (source epochs)", st["rms"])
-        put(f"chain.nr_{filt}.outage_share", "1", "share of used nr epochs with no tracker output (filled: hold + drift)",
-            st["outage_share"])
-        put(f"chain.nr_{filt}.nofix_share", "1", "share of used nr epochs without any detected RRH (EKF coasts)",
-            st["nofix_share"])
+        put(
+            f"chain.nr_{filt}.err_m.mean",
+            "m",
+            f"mean signed along-track error of the nr {filt.upper()} (source epochs)",
+            st["mean"],
+        )
+        put(
+            f"chain.nr_{filt}.err_m.p95",
+            "m",
+            f"95th percentile of |along-track error| of the nr {filt.upper()}",
+            st["p95"],
+        )
+        put(
+            f"chain.nr_{filt}.err_m.rms",
+            "m",
+            f"RMS along-track error of the nr {filt.upper()} (source epochs)",
+            st["rms"],
+        )
+        put(
+            f"chain.nr_{filt}.outage_share",
+            "1",
+            "share of used nr epochs with no tracker output (filled: hold + drift)",
+            st["outage_share"],
+        )
+        put(
+            f"chain.nr_{filt}.nofix_share",
+            "1",
+            "share of used nr epochs without any detected RRH (EKF coasts)",
+            st["nofix_share"],
+        )
         put(f"chain.nr_{filt}.epochs", "1", "nr epochs within the speed window, pooled over realizations", st["epochs"])
     for p in ("joint", "distance"):
         ps = gm["success"].sel(policy=p).values
         s_star, status = crossover(sig, ps, a3_ref)
-        lo, _ = crossover(sig, gm["success_lo"].sel(policy=p).values,
-                          float(summ["success_hi"].sel(policy="a3", input=gm["input"].values[0])))
-        hi, _ = crossover(sig, gm["success_hi"].sel(policy=p).values,
-                          float(summ["success_lo"].sel(policy="a3", input=gm["input"].values[0])))
+        lo, _ = crossover(
+            sig,
+            gm["success_lo"].sel(policy=p).values,
+            float(summ["success_hi"].sel(policy="a3", input=gm["input"].values[0])),
+        )
+        hi, _ = crossover(
+            sig,
+            gm["success_hi"].sel(policy=p).values,
+            float(summ["success_lo"].sel(policy="a3", input=gm["input"].values[0])),
+        )
         pre = "chain" if p == "joint" else "chain.distance"
-        put(f"{pre}.sigma_crossover_m", "m",
-            f"Gauss–Markov σ at which {p} success falls to A3's (interpolated; null: status ≠ 0)", s_star)
+        put(
+            f"{pre}.sigma_crossover_m",
+            "m",
+            f"Gauss–Markov σ at which {p} success falls to A3's (interpolated; null: status ≠ 0)",
+            s_star,
+        )
         put(f"{pre}.sigma_crossover_m_lo", "m", f"crossover of {p}'s lower 95% bound with A3's upper bound", lo)
         put(f"{pre}.sigma_crossover_m_hi", "m", f"crossover of {p}'s upper 95% bound with A3's lower bound", hi)
-        put(f"{pre}.sigma_crossover_status", "1",
-            "0: crossover found; 1: beats A3 at every σ swept; −1: never beats A3", STATUS_CODE[status])
+        put(
+            f"{pre}.sigma_crossover_status",
+            "1",
+            "0: crossover found; 1: beats A3 at every σ swept; −1: never beats A3",
+            STATUS_CODE[status],
+        )
         in_fig = sig <= figure_max_sigma_m
-        put(f"chain.{p}.beats_a3_all_sigma_fig", "1",
+        put(
+            f"chain.{p}.beats_a3_all_sigma_fig",
+            "1",
             f"1 if {p}'s lower 95% bound exceeds A3's upper bound at every σ ≤ {figure_max_sigma_m:g} m",
-            float(np.all(gm["success_lo"].sel(policy=p).values[in_fig] >
-                         float(summ["success_hi"].sel(policy="a3", input=gm["input"].values[0])))))
+            float(
+                np.all(
+                    gm["success_lo"].sel(policy=p).values[in_fig]
+                    > float(summ["success_hi"].sel(policy="a3", input=gm["input"].values[0]))
+                )
+            ),
+        )
         for s in (0.0, 2.0, figure_max_sigma_m):
             if s in sig:
                 lab = gm["input"].values[list(sig).index(s)]
-                put(f"chain.{p}.success.sigma{s:g}", "1", f"{p} success at Gauss–Markov σ = {s:g} m",
-                    float(summ["success"].sel(input=lab, policy=p)), float(summ["success_se"].sel(input=lab, policy=p)), 4)
-        put(f"chain.{p}.success_drop_fig", "1", f"{p} success at σ = 0 minus at σ = {figure_max_sigma_m:g} m",
-            float(ps[0] - ps[in_fig][-1]))
+                put(
+                    f"chain.{p}.success.sigma{s:g}",
+                    "1",
+                    f"{p} success at Gauss–Markov σ = {s:g} m",
+                    float(summ["success"].sel(input=lab, policy=p)),
+                    float(summ["success_se"].sel(input=lab, policy=p)),
+                    4,
+                )
+        put(
+            f"chain.{p}.success_drop_fig",
+            "1",
+            f"{p} success at σ = 0 minus at σ = {figure_max_sigma_m:g} m",
+            float(ps[0] - ps[in_fig][-1]),
+        )
     in_fig = sig <= figure_max_sigma_m
-    put("chain.distance_minus_joint_min_fig", "1",
-        f"smallest distance-minus-joint success difference over σ ≤ {figure_max_sigma_m:g} m (> 0: distance better everywhere)",
-        float(np.min(gm["success"].sel(policy="distance").values[in_fig] - gm["success"].sel(policy="joint").values[in_fig])))
+    put(
+        "chain.distance_minus_joint_min_fig",
+        "1",
+        f"smallest distance-minus-joint success difference over σ ≤ {figure_max_sigma_m:g} m (> 0: distance better "
+        f"everywhere)",
+        float(
+            np.min(
+                gm["success"].sel(policy="distance").values[in_fig] - gm["success"].sel(policy="joint").values[in_fig]
+            )
+        ),
+    )
     s_star = out["chain.sigma_crossover_m"]["value"]
     for filt in [str(i)[3:] for i in summ["input"].values if str(i).startswith("nr_")]:
         eff = float(summ["err_rms_m"].sel(input=f"nr_{filt}"))
-        put(f"chain.nr_{filt}.sigma_margin", "1", f"joint crossover σ over the RMS error of the nr {filt.upper()} input",
-            None if s_star is None or eff <= 0 else s_star / eff)
+        put(
+            f"chain.nr_{filt}.sigma_margin",
+            "1",
+            f"joint crossover σ over the RMS error of the nr {filt.upper()} input",
+            None if s_star is None or eff <= 0 else s_star / eff,
+        )
     put("chain.sigma_max_m", "m", "largest Gauss–Markov σ swept", float(sig[-1]))
     put("chain.n_handovers", "1", "node handovers per (input, policy)", float(summ["n_handovers"]))
     return out

@@ -11,17 +11,22 @@ from railradio.fusion.estimators import (
     tdoa_variance_propagated,
 )
 from railradio.fusion.geometry import CellGeometry
-from railradio.fusion.montecarlo import (
-    ESTIMATORS,
-    PointParams,
-    simulate_point,
-    summarize,
-    sweep_dataset,
-)
+from railradio.fusion.montecarlo import ESTIMATORS, PointParams, simulate_point, summarize, sweep_dataset
 
 __all__ = [
-    "ESTIMATORS", "CellGeometry", "PointParams", "aoa_on_track", "aoa_variance_propagated",
-    "clip_to_segment", "crlb_rmse_m", "fisher_information", "fuse", "simulate_point",
-    "summarize", "sweep_dataset", "tdoa_on_track", "tdoa_on_track_rootfind",
+    "ESTIMATORS",
+    "CellGeometry",
+    "PointParams",
+    "aoa_on_track",
+    "aoa_variance_propagated",
+    "clip_to_segment",
+    "crlb_rmse_m",
+    "fisher_information",
+    "fuse",
+    "simulate_point",
+    "summarize",
+    "sweep_dataset",
+    "tdoa_on_track",
+    "tdoa_on_track_rootfind",
     "tdoa_variance_propagated",
 ]

@@ -74,11 +74,14 @@ class ArcGeometry:
             raise ValueError(f"radius_m must be > 0 [m] or inf, got {self.radius_m!r}")
         if math.isfinite(self.radius_m):
             if self.radius_m <= self.d_m:
-                raise ValueError(f"radius_m must exceed d_m = {self.d_m} m (BSs inside the "
-                                 f"curve), got {self.radius_m!r}")
+                raise ValueError(
+                    f"radius_m must exceed d_m = {self.d_m} m (BSs inside the curve), got {self.radius_m!r}"
+                )
             if cell.baseline_m / self.radius_m >= math.pi:
-                raise ValueError(f"radius_m must exceed D/pi = {cell.baseline_m / math.pi:.1f} m "
-                                 f"(the baseline D may subtend at most pi), got {self.radius_m!r}")
+                raise ValueError(
+                    f"radius_m must exceed D/pi = {cell.baseline_m / math.pi:.1f} m "
+                    f"(the baseline D may subtend at most pi), got {self.radius_m!r}"
+                )
 
     # --- layout -----------------------------------------------------------------------
     @cached_property
@@ -190,25 +193,25 @@ class ArcGeometry:
             return (-math.inf, math.inf)
         half = 0.5 * self.baseline_m
         lo = half - math.pi * self.radius_m + 1e-9 * self.radius_m
-        s_a = brentq(lambda s: float(self.range_difference_slope(s)), lo, 0.0,
-                     xtol=1e-9, rtol=1e-14, maxiter=500)
+        s_a = brentq(lambda s: float(self.range_difference_slope(s)), lo, 0.0, xtol=1e-9, rtol=1e-14, maxiter=500)
         return (s_a, self.baseline_m - s_a)
 
 
-def fisher_information_arc(s_m: ArrayLike, sigma_delta_m: float, sigma_theta_rad: float,
-                           geom: ArcGeometry) -> NDArray[np.float64]:
+def fisher_information_arc(
+    s_m: ArrayLike, sigma_delta_m: float, sigma_theta_rad: float, geom: ArcGeometry
+) -> NDArray[np.float64]:
     """Fisher information J(s) about the along-track coordinate s [1/m²] (module docstring)."""
     if not (sigma_delta_m > 0 and math.isfinite(sigma_delta_m)):
         raise ValueError(f"sigma_delta_m must be a finite number > 0, got {sigma_delta_m!r}")
     if not (sigma_theta_rad > 0 and math.isfinite(sigma_theta_rad)):
         raise ValueError(f"sigma_theta_rad must be a finite number > 0, got {sigma_theta_rad!r}")
-    return (geom.range_difference_slope(s_m) ** 2 / sigma_delta_m**2
-            + geom.aoa_slope(s_m) ** 2 / sigma_theta_rad**2)
+    return geom.range_difference_slope(s_m) ** 2 / sigma_delta_m**2 + geom.aoa_slope(s_m) ** 2 / sigma_theta_rad**2
 
 
 # --- estimators with the arc as the constraint ---------------------------------------
-def tdoa_on_arc(delta_m: ArrayLike, geom: ArcGeometry, tol_m: float = 1e-9,
-                max_iter: int = 200) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+def tdoa_on_arc(
+    delta_m: ArrayLike, geom: ArcGeometry, tol_m: float = 1e-9, max_iter: int = 200
+) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
     """Arc length s with Δ(s) = Δ̂ on the branch (s_a, s_b) where Δ decreases strictly.
 
     A vectorized safeguarded Newton iteration: the bracket [lo, hi] around the root shrinks
@@ -293,8 +296,9 @@ def aoa_variance_arc(s_m: ArrayLike, sigma_theta_rad: float, geom: ArcGeometry) 
 
 
 # --- the source's straight-line estimator with general BS coordinates (mismatch) -----
-def tdoa_on_line(delta_m: ArrayLike, d_m: float, bs2_xy_m: tuple[float, float]
-                 ) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+def tdoa_on_line(
+    delta_m: ArrayLike, d_m: float, bs2_xy_m: tuple[float, float]
+) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
     """TDOA ∩ the line y = 0 with BS1 at (0, d) and BS2 at (x2, y2), x2 > 0, in closed form.
 
     r2 = Δ + r1 squared gives A - 2x·x2 = 2Δ·r1 with A = x2² + y2² - d² - Δ²; squared again,
@@ -323,21 +327,18 @@ def tdoa_on_line(delta_m: ArrayLike, d_m: float, bs2_xy_m: tuple[float, float]
     with np.errstate(divide="ignore", invalid="ignore"):
         root = np.sqrt(disc)
         roots = [(a * x2 - delta * root) / (2.0 * den), (a * x2 + delta * root) / (2.0 * den)]
-        valid = [(disc >= 0) & np.isfinite(r) & (np.sign(a - 2.0 * r * x2) == np.sign(delta))
-                 for r in roots]
+        valid = [(disc >= 0) & np.isfinite(r) & (np.sign(a - 2.0 * r * x2) == np.sign(delta)) for r in roots]
     # unique (x-) when |Δ| < x2; otherwise the valid root nearer the cell's branch
     prefer_larger = y2 > d_m
     both = valid[0] & valid[1]
     pick = np.where(prefer_larger, np.maximum(roots[0], roots[1]), np.minimum(roots[0], roots[1]))
-    x = np.where(den > 0, roots[0],
-                 np.where(both, pick, np.where(valid[0], roots[0], roots[1])))
+    x = np.where(den > 0, roots[0], np.where(both, pick, np.where(valid[0], roots[0], roots[1])))
     no_solution = (den <= 0) & ~(valid[0] | valid[1])
     x = np.where(no_solution, np.where(delta > 0, -np.inf, np.inf), x)
     return x, no_solution
 
 
-def line_range_difference_slope(x_m: ArrayLike, d_m: float, bs2_xy_m: tuple[float, float]
-                                ) -> NDArray[np.float64]:
+def line_range_difference_slope(x_m: ArrayLike, d_m: float, bs2_xy_m: tuple[float, float]) -> NDArray[np.float64]:
     """d(r2 - r1)/dx on the line y = 0 with BS1 at (0, d), BS2 at (x2, y2) [m/m]."""
     x = np.asarray(x_m, dtype=float)
     x2, y2 = bs2_xy_m

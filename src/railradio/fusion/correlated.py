@@ -87,8 +87,9 @@ def tdoa0_on_track(delta0_m: ArrayLike, geom: CellGeometry) -> tuple[NDArray[np.
 
 
 # --- fusion --------------------------------------------------------------------------
-def fuse_two_tdoa_aoa(x_t2: ArrayLike, sd_t2: ArrayLike, x_t0: ArrayLike, sd_t0: ArrayLike,
-                      x_a: ArrayLike, var_a: ArrayLike, rho: float) -> NDArray[np.float64]:
+def fuse_two_tdoa_aoa(
+    x_t2: ArrayLike, sd_t2: ArrayLike, x_t0: ArrayLike, sd_t0: ArrayLike, x_a: ArrayLike, var_a: ArrayLike, rho: float
+) -> NDArray[np.float64]:
     """BLUE of x from two TDOA positions and one AOA position.
 
     ``sd_t2``, ``sd_t0`` are the TDOA positions' *signed* standard deviations σ_Δ/g_i [m]
@@ -117,12 +118,14 @@ def fuse_two_tdoa_aoa(x_t2: ArrayLike, sd_t2: ArrayLike, x_t0: ArrayLike, sd_t0:
     u2 = scale * (a2 * a2 - rho * a2 * a0)
     u0 = scale * (a0 * a0 - rho * a2 * a0)
     ua = 1.0 / var_a
-    return (u2 * np.asarray(x_t2) + u0 * np.where(np.isinf(sd_t0), 0.0, np.asarray(x_t0))
-            + ua * np.asarray(x_a)) / (u2 + u0 + ua)
+    return (u2 * np.asarray(x_t2) + u0 * np.where(np.isinf(sd_t0), 0.0, np.asarray(x_t0)) + ua * np.asarray(x_a)) / (
+        u2 + u0 + ua
+    )
 
 
-def fisher_information_correlated(x_m: ArrayLike, sigma_delta_m: float, sigma_theta_rad: float,
-                                  rho: float, geom: CellGeometry) -> NDArray[np.float64]:
+def fisher_information_correlated(
+    x_m: ArrayLike, sigma_delta_m: float, sigma_theta_rad: float, rho: float, geom: CellGeometry
+) -> NDArray[np.float64]:
     """J(x) [1/m²] of (Δ2, Δ0, θ) with TDOA correlation ρ (module docstring)."""
     rho = _check_rho(rho)
     if not (sigma_delta_m > 0 and math.isfinite(sigma_delta_m)):

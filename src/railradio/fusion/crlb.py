@@ -17,8 +17,9 @@ from numpy.typing import ArrayLike, NDArray
 from railradio.fusion.geometry import CellGeometry
 
 
-def fisher_information(x_m: ArrayLike, sigma_delta_m: float, sigma_theta_rad: float,
-                       geom: CellGeometry) -> NDArray[np.float64]:
+def fisher_information(
+    x_m: ArrayLike, sigma_delta_m: float, sigma_theta_rad: float, geom: CellGeometry
+) -> NDArray[np.float64]:
     """Fisher information J(x) about the track position [1/m²]."""
     if not sigma_delta_m > 0 or not sigma_theta_rad > 0:
         raise ValueError("sigma_delta_m and sigma_theta_rad must be > 0")
@@ -26,7 +27,6 @@ def fisher_information(x_m: ArrayLike, sigma_delta_m: float, sigma_theta_rad: fl
     return g**2 / sigma_delta_m**2 + geom.aoa_slope(x_m) ** 2 / sigma_theta_rad**2
 
 
-def crlb_rmse_m(x_m: ArrayLike, sigma_delta_m: float, sigma_theta_rad: float,
-                geom: CellGeometry) -> float:
+def crlb_rmse_m(x_m: ArrayLike, sigma_delta_m: float, sigma_theta_rad: float, geom: CellGeometry) -> float:
     """The bound aggregated over positions, sqrt(mean 1/J(x)) [m]."""
     return float(np.sqrt(np.mean(1.0 / fisher_information(x_m, sigma_delta_m, sigma_theta_rad, geom))))

@@ -18,8 +18,7 @@ SWEEP_AXES = {
 MARKERS = {"tdoa": "o", "aoa": "s", "fused_genie": "^", "fused_propagated": "v"}
 
 
-def plot_sweep(ds: xr.Dataset, parameter: str, pdf_path: str, png_path: str | None = None,
-               log_y: bool = True) -> None:
+def plot_sweep(ds: xr.Dataset, parameter: str, pdf_path: str, png_path: str | None = None, log_y: bool = True) -> None:
     """Plot one sweep dataset (:func:`railradio.fusion.sweep_dataset`) to PDF and PNG.
 
     Error bars are ±2 Monte Carlo standard errors (mostly smaller than the markers).
@@ -32,8 +31,15 @@ def plot_sweep(ds: xr.Dataset, parameter: str, pdf_path: str, png_path: str | No
     for est in ds["estimator"].values:
         y = ds["rmse"].sel(estimator=est).values
         se = ds["rmse_se"].sel(estimator=est).values
-        ax.errorbar(x, y, yerr=2 * se, marker=MARKERS[str(est)], label=ESTIMATOR_LABELS[str(est)],
-                    capsize=2, markerfacecolor="none")
+        ax.errorbar(
+            x,
+            y,
+            yerr=2 * se,
+            marker=MARKERS[str(est)],
+            label=ESTIMATOR_LABELS[str(est)],
+            capsize=2,
+            markerfacecolor="none",
+        )
     ax.plot(x, ds["crlb_m"].values, label="CRLB", **plotting.BOUND_STYLE)
     ax.set_xlabel(label)
     ax.set_ylabel("position RMSE [m]")

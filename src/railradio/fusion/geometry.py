@@ -35,8 +35,7 @@ class CellGeometry:
         if not (math.isfinite(self.d_m) and self.d_m > 0):
             raise ValueError(f"d_m must be a finite number > 0 [m], got {self.d_m!r}")
         if not (math.isfinite(self.cell_radius_factor) and self.cell_radius_factor > 1):
-            raise ValueError("cell_radius_factor must be a finite number > 1, "
-                             f"got {self.cell_radius_factor!r}")
+            raise ValueError(f"cell_radius_factor must be a finite number > 1, got {self.cell_radius_factor!r}")
 
     @property
     def cell_radius_m(self) -> float:

@@ -11,31 +11,30 @@ from railradio.fusion.montecarlo import summarize
 from railradio.keynumbers import KeySpec
 
 SPECS = {
-    "fusion.d1500.rmse_tdoa_m": KeySpec("fusion.d1500.rmse_tdoa_m", "m",
-                                        "TDOA-on-track RMSE, d = 1500 m"),
-    "fusion.d1500.rmse_aoa_m": KeySpec("fusion.d1500.rmse_aoa_m", "m",
-                                       "AOA-on-track RMSE, d = 1500 m"),
-    "fusion.d1500.rmse_fused_m": KeySpec("fusion.d1500.rmse_fused_m", "m",
-                                         "fused RMSE (MC variances, the seed's reading), d = 1500 m"),
+    "fusion.d1500.rmse_tdoa_m": KeySpec("fusion.d1500.rmse_tdoa_m", "m", "TDOA-on-track RMSE, d = 1500 m"),
+    "fusion.d1500.rmse_aoa_m": KeySpec("fusion.d1500.rmse_aoa_m", "m", "AOA-on-track RMSE, d = 1500 m"),
+    "fusion.d1500.rmse_fused_m": KeySpec(
+        "fusion.d1500.rmse_fused_m", "m", "fused RMSE (MC variances, the seed's reading), d = 1500 m"
+    ),
     "fusion.d1500.rmse_fused_propagated_m": KeySpec(
-        "fusion.d1500.rmse_fused_propagated_m", "m",
-        "fused RMSE (propagated variances), d = 1500 m"),
+        "fusion.d1500.rmse_fused_propagated_m", "m", "fused RMSE (propagated variances), d = 1500 m"
+    ),
     "fusion.d1500.crlb_m": KeySpec("fusion.d1500.crlb_m", "m", "CRLB on the track, d = 1500 m"),
     "fusion.claim.fused_below_both_frac": KeySpec(
-        "fusion.claim.fused_below_both_frac", "1",
-        "share of sweep points where fusion beats TDOA and AOA", 1.0, "="),
+        "fusion.claim.fused_below_both_frac", "1", "share of sweep points where fusion beats TDOA and AOA", 1.0, "="
+    ),
     "fusion.claim.tdoa_d_ratio": KeySpec(
-        "fusion.claim.tdoa_d_ratio", "1",
-        "TDOA RMSE max/min over the d sweep (flat: near 1)"),
+        "fusion.claim.tdoa_d_ratio", "1", "TDOA RMSE max/min over the d sweep (flat: near 1)"
+    ),
     "fusion.claim.aoa_d_ratio": KeySpec(
-        "fusion.claim.aoa_d_ratio", "1",
-        "AOA RMSE at the largest over the smallest d (grows with d)"),
+        "fusion.claim.aoa_d_ratio", "1", "AOA RMSE at the largest over the smallest d (grows with d)"
+    ),
     "fusion.claim.tdoa_no_solution_frac_dmin": KeySpec(
-        "fusion.claim.tdoa_no_solution_frac_dmin", "1",
-        "share of TDOA trials without solution at the smallest d swept"),
+        "fusion.claim.tdoa_no_solution_frac_dmin", "1", "share of TDOA trials without solution at the smallest d swept"
+    ),
     "fusion.claim.fused_over_crlb_max": KeySpec(
-        "fusion.claim.fused_over_crlb_max", "1",
-        "largest fused-RMSE/CRLB ratio over all sweep points", digits=4),
+        "fusion.claim.fused_over_crlb_max", "1", "largest fused-RMSE/CRLB ratio over all sweep points", digits=4
+    ),
 }
 
 
@@ -43,14 +42,14 @@ def key_numbers(reference: xr.Dataset, sweeps: dict[str, xr.Dataset]) -> dict[st
     """Key numbers from the reference point and the three sweep datasets."""
     s = summarize(reference)
     out = {
-        "fusion.d1500.rmse_tdoa_m": SPECS["fusion.d1500.rmse_tdoa_m"].entry(
-            s["rmse_tdoa_m"], s["rmse_tdoa_se_m"]),
-        "fusion.d1500.rmse_aoa_m": SPECS["fusion.d1500.rmse_aoa_m"].entry(
-            s["rmse_aoa_m"], s["rmse_aoa_se_m"]),
+        "fusion.d1500.rmse_tdoa_m": SPECS["fusion.d1500.rmse_tdoa_m"].entry(s["rmse_tdoa_m"], s["rmse_tdoa_se_m"]),
+        "fusion.d1500.rmse_aoa_m": SPECS["fusion.d1500.rmse_aoa_m"].entry(s["rmse_aoa_m"], s["rmse_aoa_se_m"]),
         "fusion.d1500.rmse_fused_m": SPECS["fusion.d1500.rmse_fused_m"].entry(
-            s["rmse_fused_genie_m"], s["rmse_fused_genie_se_m"]),
+            s["rmse_fused_genie_m"], s["rmse_fused_genie_se_m"]
+        ),
         "fusion.d1500.rmse_fused_propagated_m": SPECS["fusion.d1500.rmse_fused_propagated_m"].entry(
-            s["rmse_fused_propagated_m"], s["rmse_fused_propagated_se_m"]),
+            s["rmse_fused_propagated_m"], s["rmse_fused_propagated_se_m"]
+        ),
         "fusion.d1500.crlb_m": SPECS["fusion.d1500.crlb_m"].entry(s["crlb_m"], 0.0),
     }
     below, total, ratio_max = 0, 0, 0.0
@@ -68,6 +67,7 @@ def key_numbers(reference: xr.Dataset, sweeps: dict[str, xr.Dataset]) -> dict[st
     out["fusion.claim.tdoa_d_ratio"] = SPECS["fusion.claim.tdoa_d_ratio"].entry(float(tdoa_d.max() / tdoa_d.min()))
     out["fusion.claim.aoa_d_ratio"] = SPECS["fusion.claim.aoa_d_ratio"].entry(float(aoa_d[-1] / aoa_d[0]))
     out["fusion.claim.tdoa_no_solution_frac_dmin"] = SPECS["fusion.claim.tdoa_no_solution_frac_dmin"].entry(
-        float(d["frac_tdoa_no_solution"].values[0]))
+        float(d["frac_tdoa_no_solution"].values[0])
+    )
     out["fusion.claim.fused_over_crlb_max"] = SPECS["fusion.claim.fused_over_crlb_max"].entry(ratio_max)
     return out

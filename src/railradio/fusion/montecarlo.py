@@ -45,8 +45,7 @@ ESTIMATOR_LABELS = {
     "fused_propagated": "fusion (propagated variances)",
 }
 
-SWEEP_PARAMETER = {"reference": "d_m", "d_m": "d_m", "sigma_tdoa_us": "sigma_tdoa_s",
-                   "sigma_aoa_rad": "sigma_aoa_rad"}
+SWEEP_PARAMETER = {"reference": "d_m", "d_m": "d_m", "sigma_tdoa_us": "sigma_tdoa_s", "sigma_aoa_rad": "sigma_aoa_rad"}
 """Config sweep name -> the SI coordinate of the sweep dataset."""
 
 
@@ -90,8 +89,7 @@ class PointParams:
         if self.n_trials < 2:
             raise ValueError(f"n_trials must be >= 2, got {self.n_trials!r}")
         if self.position_sampling not in ("grid", "random"):
-            raise ValueError("position_sampling must be 'grid' or 'random', "
-                             f"got {self.position_sampling!r}")
+            raise ValueError(f"position_sampling must be 'grid' or 'random', got {self.position_sampling!r}")
         if self.clip not in ("no_solution", "segment"):
             raise ValueError(f"clip must be 'no_solution' or 'segment', got {self.clip!r}")
 
@@ -116,8 +114,7 @@ def sweep_points(study_cfg: dict, sweep: str) -> list[dict]:
     key-sorted (what Snakemake fingerprints and what seeds the point).
     """
     if sweep != "reference" and sweep not in study_cfg["sweeps"]:
-        raise ValueError(f"sweep must be 'reference' or one of {sorted(study_cfg['sweeps'])}, "
-                         f"got {sweep!r}")
+        raise ValueError(f"sweep must be 'reference' or one of {sorted(study_cfg['sweeps'])}, got {sweep!r}")
     values = [None] if sweep == "reference" else study_cfg["sweeps"][sweep]
     points = []
     for v in values:
@@ -152,8 +149,9 @@ def train_positions(params: PointParams, rng: np.random.Generator) -> np.ndarray
     return np.sort(rng.uniform(lo, hi, size=n))
 
 
-def _chunk_stats(params: PointParams, x_true: np.ndarray, n_delta: np.ndarray,
-                 n_theta: np.ndarray) -> dict[str, np.ndarray]:
+def _chunk_stats(
+    params: PointParams, x_true: np.ndarray, n_delta: np.ndarray, n_theta: np.ndarray
+) -> dict[str, np.ndarray]:
     """Per-position statistics of one chunk. x_true [P]; n_delta, n_theta [P, T] ~ N(0, 1)."""
     geom = params.geometry
     x = x_true[:, None]  # [P, 1]
@@ -174,8 +172,12 @@ def _chunk_stats(params: PointParams, x_true: np.ndarray, n_delta: np.ndarray,
     var_t = np.maximum(x_t.var(axis=1, ddof=1), tiny)[:, None]
     var_a = np.maximum(x_a.var(axis=1, ddof=1), tiny)[:, None]
     x_fg = fuse(x_t, var_t, x_a, var_a)
-    x_fp = fuse(x_t, tdoa_variance_propagated(x_t, params.sigma_delta_m, geom),
-                x_a, aoa_variance_propagated(x_a, params.sigma_aoa_rad, geom))
+    x_fp = fuse(
+        x_t,
+        tdoa_variance_propagated(x_t, params.sigma_delta_m, geom),
+        x_a,
+        aoa_variance_propagated(x_a, params.sigma_aoa_rad, geom),
+    )
 
     out: dict[str, list[np.ndarray]] = {"mse": [], "bias": [], "sq_err_var": []}
     for est in (x_t, x_a, x_fg, x_fp):
@@ -191,8 +193,7 @@ def _chunk_stats(params: PointParams, x_true: np.ndarray, n_delta: np.ndarray,
     return stats
 
 
-def trial_normals(seed: int, key: tuple[int, ...], positions: range, n_rows: int,
-                  n_trials: int) -> np.ndarray:
+def trial_normals(seed: int, key: tuple[int, ...], positions: range, n_rows: int, n_trials: int) -> np.ndarray:
     """Standard normals of the trials at ``positions``: [n_rows, len(positions), n_trials];
     position j draws its rows in order from its own generator ``key + (1, j)``, so a
     position's draws do not depend on the chunk it falls in."""
@@ -204,8 +205,7 @@ def trial_normals(seed: int, key: tuple[int, ...], positions: range, n_rows: int
     return z
 
 
-def simulate_point(params: PointParams, seed: int, key: tuple[int, ...],
-                   chunk_positions: int = 50) -> xr.Dataset:
+def simulate_point(params: PointParams, seed: int, key: tuple[int, ...], chunk_positions: int = 50) -> xr.Dataset:
     """Run one sweep point and return per-position statistics.
 
     Parameters
@@ -233,7 +233,7 @@ def simulate_point(params: PointParams, seed: int, key: tuple[int, ...],
     for start in range(0, n, chunk_positions):
         idx = range(start, min(start + chunk_positions, n))
         n_delta, n_theta = trial_normals(seed, key, idx, 2, t)
-        parts.append(_chunk_stats(params, x_true[idx.start:idx.stop], n_delta, n_theta))
+        parts.append(_chunk_stats(params, x_true[idx.start : idx.stop], n_delta, n_theta))
     cat = {k: np.concatenate([p[k] for p in parts], axis=-1) for k in parts[0]}
 
     geom = params.geometry
@@ -241,20 +241,41 @@ def simulate_point(params: PointParams, seed: int, key: tuple[int, ...],
     pos_dims = ("position",)
     ds = xr.Dataset(
         {
-            "mse": (("estimator", "position"), cat["mse"],
-                    {"units": "m2", "long_name": "mean squared position error over trials"}),
-            "bias": (("estimator", "position"), cat["bias"],
-                     {"units": "m", "long_name": "mean position error over trials"}),
-            "sq_err_var": (("estimator", "position"), cat["sq_err_var"],
-                           {"units": "m4", "long_name": "sample variance of the squared error over trials"}),
-            "n_tdoa_no_solution": (pos_dims, cat["n_tdoa_no_solution"].astype(np.int64),
-                                   {"units": "1", "long_name": "trials with |range difference| >= baseline (no TDOA solution)"}),
-            "n_tdoa_clipped": (pos_dims, cat["n_tdoa_clipped"].astype(np.int64),
-                               {"units": "1", "long_name": "trials whose TDOA position was clipped to the cell segment"}),
-            "n_aoa_clipped": (pos_dims, cat["n_aoa_clipped"].astype(np.int64),
-                              {"units": "1", "long_name": "trials whose AOA position was clipped to the cell segment"}),
-            "crlb_var": (pos_dims, crlb_var,
-                         {"units": "m2", "long_name": "Cramer-Rao bound on the position variance, 1/J(x)"}),
+            "mse": (
+                ("estimator", "position"),
+                cat["mse"],
+                {"units": "m2", "long_name": "mean squared position error over trials"},
+            ),
+            "bias": (
+                ("estimator", "position"),
+                cat["bias"],
+                {"units": "m", "long_name": "mean position error over trials"},
+            ),
+            "sq_err_var": (
+                ("estimator", "position"),
+                cat["sq_err_var"],
+                {"units": "m4", "long_name": "sample variance of the squared error over trials"},
+            ),
+            "n_tdoa_no_solution": (
+                pos_dims,
+                cat["n_tdoa_no_solution"].astype(np.int64),
+                {"units": "1", "long_name": "trials with |range difference| >= baseline (no TDOA solution)"},
+            ),
+            "n_tdoa_clipped": (
+                pos_dims,
+                cat["n_tdoa_clipped"].astype(np.int64),
+                {"units": "1", "long_name": "trials whose TDOA position was clipped to the cell segment"},
+            ),
+            "n_aoa_clipped": (
+                pos_dims,
+                cat["n_aoa_clipped"].astype(np.int64),
+                {"units": "1", "long_name": "trials whose AOA position was clipped to the cell segment"},
+            ),
+            "crlb_var": (
+                pos_dims,
+                crlb_var,
+                {"units": "m2", "long_name": "Cramer-Rao bound on the position variance, 1/J(x)"},
+            ),
         },
         coords={
             "estimator": ("estimator", list(ESTIMATORS), {"units": "1", "long_name": "position estimator"}),
@@ -306,21 +327,25 @@ def sweep_dataset(points: list[xr.Dataset], parameter: str) -> xr.Dataset:
     """Collect sweep points into ``rmse`` [estimator, point] etc. along ``parameter``."""
     summaries = [summarize(p) for p in points]
     values = [float(p[parameter]) for p in points]
-    ds = xr.Dataset(coords={
-        parameter: (parameter, values, dict(points[0][parameter].attrs)),
-        "estimator": ("estimator", list(ESTIMATORS), {"units": "1", "long_name": "position estimator"}),
-    })
-    ds["rmse"] = (("estimator", parameter),
-                  np.array([[s[f"rmse_{e}_m"] for s in summaries] for e in ESTIMATORS]),
-                  {"units": "m", "long_name": "position RMSE over trials and positions (seed eq. 11)"})
-    ds["rmse_se"] = (("estimator", parameter),
-                     np.array([[s[f"rmse_{e}_se_m"] for s in summaries] for e in ESTIMATORS]),
-                     {"units": "m", "long_name": "Monte Carlo standard error of the RMSE"})
+    ds = xr.Dataset(
+        coords={
+            parameter: (parameter, values, dict(points[0][parameter].attrs)),
+            "estimator": ("estimator", list(ESTIMATORS), {"units": "1", "long_name": "position estimator"}),
+        }
+    )
+    ds["rmse"] = (
+        ("estimator", parameter),
+        np.array([[s[f"rmse_{e}_m"] for s in summaries] for e in ESTIMATORS]),
+        {"units": "m", "long_name": "position RMSE over trials and positions (seed eq. 11)"},
+    )
+    ds["rmse_se"] = (
+        ("estimator", parameter),
+        np.array([[s[f"rmse_{e}_se_m"] for s in summaries] for e in ESTIMATORS]),
+        {"units": "m", "long_name": "Monte Carlo standard error of the RMSE"},
+    )
     for name, (units, long_name) in SUMMARY_ATTRS.items():
-        ds[name] = ((parameter,), np.array([s[name] for s in summaries]),
-                    {"units": units, "long_name": long_name})
+        ds[name] = ((parameter,), np.array([s[name] for s in summaries]), {"units": units, "long_name": long_name})
     for other in ("d_m", "sigma_tdoa_s", "sigma_aoa_rad"):
         if other != parameter:
-            ds[other] = ((parameter,), np.array([float(p[other]) for p in points]),
-                         dict(points[0][other].attrs))
+            ds[other] = ((parameter,), np.array([float(p[other]) for p in points]), dict(points[0][other].attrs))
     return ds.sortby(parameter)

@@ -45,13 +45,7 @@ from railradio.fusion.correlated import (
     range_difference0_slope,
     tdoa0_on_track,
 )
-from railradio.fusion.estimators import (
-    aoa_on_track,
-    aoa_variance_propagated,
-    clip_to_segment,
-    fuse,
-    tdoa_on_track,
-)
+from railradio.fusion.estimators import aoa_on_track, aoa_variance_propagated, clip_to_segment, fuse, tdoa_on_track
 from railradio.fusion.geometry import CellGeometry
 from railradio.fusion.montecarlo import PointParams, train_positions, trial_normals
 from railradio.rng import make_rng, spawn_key, stable_id
@@ -156,8 +150,9 @@ def point_key(point: dict) -> tuple[int, ...]:
 
 
 # --- Monte Carlo ---------------------------------------------------------------------
-def _clip(x: np.ndarray, no_solution: np.ndarray, segment_geom: CellGeometry,
-          rule: str) -> tuple[np.ndarray, np.ndarray]:
+def _clip(
+    x: np.ndarray, no_solution: np.ndarray, segment_geom: CellGeometry, rule: str
+) -> tuple[np.ndarray, np.ndarray]:
     """The main study's clip rule (``fusion.clip``): ``no_solution`` clips only the trials
     without solution (and non-finite estimates), ``segment`` every estimate off the segment."""
     x_clipped, off = clip_to_segment(x, segment_geom)
@@ -188,10 +183,15 @@ def _curve_chunk(p: SensPoint, s_true: np.ndarray, z: np.ndarray) -> dict[str, n
     s_t, clip_at = _clip(s_t, nosol_a, cell, b.clip)
     s_a, clip_aa = _clip(aoa_on_arc(theta_hat, arc), np.zeros_like(nosol_a), cell, b.clip)
     out["arc_tdoa"], out["arc_aoa"] = s_t, s_a
-    out["arc_fused"] = fuse(s_t, tdoa_variance_arc(s_t, b.sigma_delta_m, arc),
-                            s_a, aoa_variance_arc(s_a, b.sigma_aoa_rad, arc))
-    counts = {"n_mismatch_tdoa_no_solution": nosol_m, "n_mismatch_clipped": clip_mt | clip_ma,
-              "n_arc_tdoa_no_solution": nosol_a, "n_arc_clipped": clip_at | clip_aa}
+    out["arc_fused"] = fuse(
+        s_t, tdoa_variance_arc(s_t, b.sigma_delta_m, arc), s_a, aoa_variance_arc(s_a, b.sigma_aoa_rad, arc)
+    )
+    counts = {
+        "n_mismatch_tdoa_no_solution": nosol_m,
+        "n_mismatch_clipped": clip_mt | clip_ma,
+        "n_arc_tdoa_no_solution": nosol_a,
+        "n_arc_clipped": clip_at | clip_aa,
+    }
     return {**out, **{k: v.sum(axis=1) for k, v in counts.items()}}
 
 
@@ -231,8 +231,7 @@ _COUNT_LONG_NAMES = {
 }
 
 
-def simulate_sens_point(p: SensPoint, seed: int, key: tuple[int, ...],
-                        chunk_positions: int = 50) -> xr.Dataset:
+def simulate_sens_point(p: SensPoint, seed: int, key: tuple[int, ...], chunk_positions: int = 50) -> xr.Dataset:
     """Run one sensitivity point; per-position error statistics like
     :func:`railradio.fusion.simulate_point` (``mse``, ``bias``, ``sq_err_var`` over
     estimator × position, ``crlb_var``), errors along the track.
@@ -252,7 +251,7 @@ def simulate_sens_point(p: SensPoint, seed: int, key: tuple[int, ...],
     for start in range(0, n, chunk_positions):
         idx = range(start, min(start + chunk_positions, n))
         z = trial_normals(seed, key, idx, n_rows, t)
-        xs = x_true[idx.start:idx.stop]
+        xs = x_true[idx.start : idx.stop]
         est = (_curve_chunk if p.kind == "curve" else _rho_chunk)(p, xs, z)
         stats: dict[str, np.ndarray] = {}
         err = np.stack([est[e] for e in estimators]) - xs[None, :, None]  # [E, P, T]
@@ -269,18 +268,26 @@ def simulate_sens_point(p: SensPoint, seed: int, key: tuple[int, ...],
         crlb_var = 1.0 / fisher_information_arc(x_true, b.sigma_delta_m, b.sigma_aoa_rad, arc)
         crlb_name = "Cramer-Rao bound on the along-track variance (arc model), 1/J(s)"
     else:
-        crlb_var = 1.0 / fisher_information_correlated(x_true, b.sigma_delta_m, b.sigma_aoa_rad,
-                                                       p.rho, b.geometry)
+        crlb_var = 1.0 / fisher_information_correlated(x_true, b.sigma_delta_m, b.sigma_aoa_rad, p.rho, b.geometry)
         crlb_name = "Cramer-Rao bound on the position variance (two correlated TDOAs + AOA), 1/J(x)"
     pos = ("position",)
     ds = xr.Dataset(
         {
-            "mse": (("estimator", "position"), cat["mse"],
-                    {"units": "m2", "long_name": "mean squared along-track error over trials"}),
-            "bias": (("estimator", "position"), cat["bias"],
-                     {"units": "m", "long_name": "mean along-track error over trials"}),
-            "sq_err_var": (("estimator", "position"), cat["sq_err_var"],
-                           {"units": "m4", "long_name": "sample variance of the squared error over trials"}),
+            "mse": (
+                ("estimator", "position"),
+                cat["mse"],
+                {"units": "m2", "long_name": "mean squared along-track error over trials"},
+            ),
+            "bias": (
+                ("estimator", "position"),
+                cat["bias"],
+                {"units": "m", "long_name": "mean along-track error over trials"},
+            ),
+            "sq_err_var": (
+                ("estimator", "position"),
+                cat["sq_err_var"],
+                {"units": "m4", "long_name": "sample variance of the squared error over trials"},
+            ),
             "crlb_var": (pos, crlb_var, {"units": "m2", "long_name": crlb_name}),
         },
         coords={
@@ -299,17 +306,18 @@ def simulate_sens_point(p: SensPoint, seed: int, key: tuple[int, ...],
         "sigma_aoa_rad": (b.sigma_aoa_rad, "rad", "AOA error standard deviation"),
         "n_trials": (b.n_trials, "1", "trials per position"),
         "radius_m": (p.radius_m, "m", "track radius of curvature (inf: straight)"),
-        "curvature_per_m": (0.0 if arc is None else arc.curvature_per_m, "1/m",
-                            "track curvature 1/R"),
+        "curvature_per_m": (0.0 if arc is None else arc.curvature_per_m, "1/m", "track curvature 1/R"),
         "rho": (p.rho, "1", "correlation coefficient of the two TDOA errors"),
     }
     if arc is not None:
-        scalars["sagitta_m"] = (float(arc.sagitta_m(arc.half_segment_m)), "m",
-                                "offset of the arc from its tangent at the cell's far train position s = L")
+        scalars["sagitta_m"] = (
+            float(arc.sagitta_m(arc.half_segment_m)),
+            "m",
+            "offset of the arc from its tangent at the cell's far train position s = L",
+        )
     for name, (val, units, long_name) in scalars.items():
         ds[name] = ((), val, {"units": units, "long_name": long_name})
-    ds.attrs["sens_point_json"] = repr({"kind": p.kind, "radius_m": p.radius_m, "rho": p.rho,
-                                        **asdict(p.base)})
+    ds.attrs["sens_point_json"] = repr({"kind": p.kind, "radius_m": p.radius_m, "rho": p.rho, **asdict(p.base)})
     return ds
 
 
@@ -342,25 +350,37 @@ def sens_sweep_dataset(points: list[xr.Dataset], kind: str) -> xr.Dataset:
     coord = SWEEP_COORD[kind]
     estimators = list(ESTIMATORS[kind])
     summaries = [summarize_sens(p) for p in points]
-    ds = xr.Dataset(coords={
-        coord: (coord, [float(p[coord]) for p in points], dict(points[0][coord].attrs)),
-        "estimator": ("estimator", estimators, {"units": "1", "long_name": "position estimator"}),
-    })
-    for var, long_name in (("rmse", "along-track RMSE over trials and positions"),
-                           ("rmse_se", "Monte Carlo standard error of the RMSE"),
-                           ("bias_rms", "RMS over positions of the mean error (bias)")):
+    ds = xr.Dataset(
+        coords={
+            coord: (coord, [float(p[coord]) for p in points], dict(points[0][coord].attrs)),
+            "estimator": ("estimator", estimators, {"units": "1", "long_name": "position estimator"}),
+        }
+    )
+    for var, long_name in (
+        ("rmse", "along-track RMSE over trials and positions"),
+        ("rmse_se", "Monte Carlo standard error of the RMSE"),
+        ("bias_rms", "RMS over positions of the mean error (bias)"),
+    ):
         prefix = {"rmse": "rmse", "rmse_se": "rmse", "bias_rms": "bias_rms"}[var]
         suffix = "_se_m" if var == "rmse_se" else "_m"
-        ds[var] = (("estimator", coord),
-                   np.array([[s[f"{prefix}_{e}{suffix}"] for s in summaries] for e in estimators]),
-                   {"units": "m", "long_name": long_name})
-    ds["crlb_m"] = ((coord,), np.array([s["crlb_m"] for s in summaries]),
-                    {"units": "m", "long_name": "Cramer-Rao bound, sqrt(mean over positions of 1/J)"})
+        ds[var] = (
+            ("estimator", coord),
+            np.array([[s[f"{prefix}_{e}{suffix}"] for s in summaries] for e in estimators]),
+            {"units": "m", "long_name": long_name},
+        )
+    ds["crlb_m"] = (
+        (coord,),
+        np.array([s["crlb_m"] for s in summaries]),
+        {"units": "m", "long_name": "Cramer-Rao bound, sqrt(mean over positions of 1/J)"},
+    )
     for name, long_name in _COUNT_LONG_NAMES.items():
         frac = name.replace("n_", "frac_", 1)
         if frac in summaries[0]:
-            ds[frac] = ((coord,), np.array([s[frac] for s in summaries]),
-                        {"units": "1", "long_name": "share of " + long_name})
+            ds[frac] = (
+                (coord,),
+                np.array([s[frac] for s in summaries]),
+                {"units": "1", "long_name": "share of " + long_name},
+            )
     others = ("radius_m", "sagitta_m") if kind == "curve" else ()
     for other in others + ("d_m", "sigma_delta_m", "sigma_aoa_rad"):
         if other in points[0]:

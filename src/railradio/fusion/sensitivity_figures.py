@@ -30,9 +30,14 @@ def plot_sensitivity(curve: xr.Dataset, rho: xr.Dataset, pdf_path: str, png_path
     fig, (ax_c, ax_r) = plotting.figure(ncols=2, figsize=(9.0, 3.6))
     k_per_km = np.asarray(curve["curvature_per_m"].values) * 1e3
     for est, style in CURVE_STYLE.items():
-        ax_c.errorbar(k_per_km, curve["rmse"].sel(estimator=est).values,
-                      yerr=2 * curve["rmse_se"].sel(estimator=est).values, capsize=2,
-                      markerfacecolor="none", **style)
+        ax_c.errorbar(
+            k_per_km,
+            curve["rmse"].sel(estimator=est).values,
+            yerr=2 * curve["rmse_se"].sel(estimator=est).values,
+            capsize=2,
+            markerfacecolor="none",
+            **style,
+        )
     ax_c.plot(k_per_km, curve["crlb_m"].values, label="CRLB (on the arc)", **plotting.BOUND_STYLE)
     plotting.log_axis(ax_c, "y")
     ax_c.set_xlabel(r"track curvature $1/R_\mathrm{arc}$ [km$^{-1}$]")
@@ -46,9 +51,14 @@ def plot_sensitivity(curve: xr.Dataset, rho: xr.Dataset, pdf_path: str, png_path
 
     r = np.asarray(rho["rho"].values)
     for est, style in RHO_STYLE.items():
-        ax_r.errorbar(r, rho["rmse"].sel(estimator=est).values,
-                      yerr=2 * rho["rmse_se"].sel(estimator=est).values, capsize=2,
-                      markerfacecolor="none", **style)
+        ax_r.errorbar(
+            r,
+            rho["rmse"].sel(estimator=est).values,
+            yerr=2 * rho["rmse_se"].sel(estimator=est).values,
+            capsize=2,
+            markerfacecolor="none",
+            **style,
+        )
     ax_r.plot(r, rho["crlb_m"].values, label="CRLB (correlated)", **plotting.BOUND_STYLE)
     ax_r.set_xlabel(r"TDOA error correlation $\rho$")
     ax_r.set_ylabel("position RMSE [m]")

@@ -62,14 +62,29 @@ def key_numbers(curve: xr.Dataset, rho: xr.Dataset) -> dict[str, Any]:
         rm, ra = c["rmse"].sel(estimator="mismatch_fused"), c["rmse"].sel(estimator="arc_fused")
         se_m, se_a = c["rmse_se"].sel(estimator="mismatch_fused"), c["rmse_se"].sel(estimator="arc_fused")
         items = [
-            (f"{pre}.mismatch.rmse_m", "m", f"fused RMSE, straight-line constraint on a curved track, {r_text}, d = {d:g} m",
-             float(rm), float(se_m)),
-            (f"{pre}.mismatch.bias_m", "m", f"RMS bias of the fused straight-line estimate, {r_text}",
-             float(c["bias_rms"].sel(estimator="mismatch_fused")), None),
+            (
+                f"{pre}.mismatch.rmse_m",
+                "m",
+                f"fused RMSE, straight-line constraint on a curved track, {r_text}, d = {d:g} m",
+                float(rm),
+                float(se_m),
+            ),
+            (
+                f"{pre}.mismatch.bias_m",
+                "m",
+                f"RMS bias of the fused straight-line estimate, {r_text}",
+                float(c["bias_rms"].sel(estimator="mismatch_fused")),
+                None,
+            ),
             (f"{pre}.arc.rmse_m", "m", f"fused RMSE, arc constraint, {r_text}", float(ra), float(se_a)),
             (f"{pre}.crlb_m", "m", f"CRLB on the along-track coordinate, {r_text}", float(c["crlb_m"]), 0.0),
-            (f"{pre}.sagitta_m", "m", f"offset of the arc from its tangent at the cell's far train position, {r_text}",
-             float(c["sagitta_m"]), None),
+            (
+                f"{pre}.sagitta_m",
+                "m",
+                f"offset of the arc from its tangent at the cell's far train position, {r_text}",
+                float(c["sagitta_m"]),
+                None,
+            ),
         ]
         for name, unit, desc, value, se in items:
             out[name] = _spec(name, unit, desc).entry(value, se)
@@ -77,14 +92,18 @@ def key_numbers(curve: xr.Dataset, rho: xr.Dataset) -> dict[str, Any]:
         c = rho.isel(rho=i)
         v = float(c["rho"])
         pre = f"sens.fusion.{rho_tag(v)}"
-        for est, desc in (("naive", "two TDOAs weighted as independent"),
-                          ("whitened", "two TDOAs weighted with their correlation (BLUE)")):
+        for est, desc in (
+            ("naive", "two TDOAs weighted as independent"),
+            ("whitened", "two TDOAs weighted with their correlation (BLUE)"),
+        ):
             name = f"{pre}.{est}.rmse_m"
             out[name] = _spec(name, "m", f"fused RMSE, {desc}, TDOA error correlation {v:g}").entry(
-                float(c["rmse"].sel(estimator=est)), float(c["rmse_se"].sel(estimator=est)))
+                float(c["rmse"].sel(estimator=est)), float(c["rmse_se"].sel(estimator=est))
+            )
         name = f"{pre}.crlb_m"
         out[name] = _spec(name, "m", f"CRLB with two TDOAs of error correlation {v:g} and the AOA").entry(
-            float(c["crlb_m"]), 0.0)
+            float(c["crlb_m"]), 0.0
+        )
     one = rho["rmse"].sel(estimator="one_tdoa").values
     one_se = rho["rmse_se"].sel(estimator="one_tdoa").values
     # common random numbers: the source's one-TDOA estimator sees the same errors at every ρ
@@ -92,5 +111,6 @@ def key_numbers(curve: xr.Dataset, rho: xr.Dataset) -> dict[str, Any]:
         raise ValueError("the one-TDOA RMSE differs along the rho sweep: common random numbers broken")
     name = "sens.fusion.one_tdoa.rmse_m"
     out[name] = _spec(name, "m", "fused RMSE of the source's estimator (one TDOA) on the rho sweep's trials").entry(
-        float(one[0]), float(one_se[0]))
+        float(one[0]), float(one_se[0])
+    )
     return out

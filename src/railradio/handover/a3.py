@@ -14,14 +14,30 @@ import math
 import numpy as np
 
 
-def a3_entering(mn, mp, hys_db: float, off_db: float = 0.0, ofn_db: float = 0.0, ocn_db: float = 0.0,
-                ofp_db: float = 0.0, ocp_db: float = 0.0) -> np.ndarray:
+def a3_entering(
+    mn,
+    mp,
+    hys_db: float,
+    off_db: float = 0.0,
+    ofn_db: float = 0.0,
+    ocn_db: float = 0.0,
+    ofp_db: float = 0.0,
+    ocp_db: float = 0.0,
+) -> np.ndarray:
     """Entering condition A3-1 (TS 36.331 §5.5.4.4), elementwise."""
     return np.asarray(mn) + ofn_db + ocn_db - hys_db > np.asarray(mp) + ofp_db + ocp_db + off_db
 
 
-def a3_leaving(mn, mp, hys_db: float, off_db: float = 0.0, ofn_db: float = 0.0, ocn_db: float = 0.0,
-               ofp_db: float = 0.0, ocp_db: float = 0.0) -> np.ndarray:
+def a3_leaving(
+    mn,
+    mp,
+    hys_db: float,
+    off_db: float = 0.0,
+    ofn_db: float = 0.0,
+    ocn_db: float = 0.0,
+    ofp_db: float = 0.0,
+    ocp_db: float = 0.0,
+) -> np.ndarray:
     """Leaving condition A3-2 (TS 36.331 §5.5.4.4), elementwise."""
     return np.asarray(mn) + ofn_db + ocn_db + hys_db < np.asarray(mp) + ofp_db + ocp_db + off_db
 

@@ -84,6 +84,7 @@ def fit_from_sums(s1, sr, srr, sg, srg, joint: Joint, n_known: float):
 
 # --- WSLR (reconstruction eq. 10–11) ----------------------------------------------------
 
+
 def geometric_weights(m: int, alpha: float) -> np.ndarray:
     """α_k = α(1 − α)^(k−1), k = 1…m (k = 1 the nearest predecessor), normalized to 1."""
     if not isinstance(m, (int, np.integer)) or m < 1:
@@ -132,8 +133,9 @@ def wslr_predict(dev: np.ndarray, weights: np.ndarray, method: str) -> np.ndarra
     return mean + slope * (0.0 - j_bar)
 
 
-def position_correction_m(c_db, xm_m, pl_m, pr_retry_m, gaph_db: float, a_db, n_hat,
-                          dead_zone_db: float, radio: Radio) -> np.ndarray:
+def position_correction_m(
+    c_db, xm_m, pl_m, pr_retry_m, gaph_db: float, a_db, n_hat, dead_zone_db: float, radio: Radio
+) -> np.ndarray:
     """Piecewise power→position compensation Δx (reconstruction eq. 12).
 
     Δx = 0 for |ĉ| ≤ ε; Ĝ⁻¹(Ĝ(Xm) − ĉ) − Xm for ε < |ĉ| ≤ GapH (the point where the model

@@ -54,9 +54,15 @@ def correction_errors(ctx: BlockContext, m: int, alpha: float, method: str) -> d
     oracle = np.zeros((b_n, n_n))
     for i in range(1, n_n):
         p = min(m, i)
-        oracle[:, i] = wslr_predict(d[:, i - p:i][:, ::-1], w[None, :], method)
-    out = {"pred": pred, "true": d, "correction": pred - d, "midpoint": -d_mid, "oracle": oracle - d,
-           "measured": nodes["dev_db"][0] - d}
+        oracle[:, i] = wslr_predict(d[:, i - p : i][:, ::-1], w[None, :], method)
+    out = {
+        "pred": pred,
+        "true": d,
+        "correction": pred - d,
+        "midpoint": -d_mid,
+        "oracle": oracle - d,
+        "measured": nodes["dev_db"][0] - d,
+    }
     for v in out.values():
         v[:, 0] = np.nan
     return out
@@ -101,15 +107,30 @@ def correction_dataset(scn, speeds_kmh: list[float], seed: int, n_blocks: int, r
     n_runs = n_blocks * runs_per_block
     return xr.Dataset(
         {
-            "rms_db": (("speed", "part", "node"), rms,
-                       {"units": "dB", "long_name": "RMS over crossings of the error of the predicted deviation: the "
-                                                    "correction's, the midpoint trigger's (0 predicted), an oracle's fed "
-                                                    "the predecessors' true deviations, one measured deviation's"}),
-            "pred_db": (("speed", "run", "node"), np.stack(preds),
-                        {"units": "dB", "long_name": "deviation from the head's model predicted for the node (WSLR)"}),
-            "true_db": (("speed", "run", "node"), np.stack(trues),
-                        {"units": "dB", "long_name": "the node's true deviation at its trigger: true local-mean gap "
-                                                     "minus the model at its estimated position"}),
+            "rms_db": (
+                ("speed", "part", "node"),
+                rms,
+                {
+                    "units": "dB",
+                    "long_name": "RMS over crossings of the error of the predicted deviation: the "
+                    "correction's, the midpoint trigger's (0 predicted), an oracle's fed "
+                    "the predecessors' true deviations, one measured deviation's",
+                },
+            ),
+            "pred_db": (
+                ("speed", "run", "node"),
+                np.stack(preds),
+                {"units": "dB", "long_name": "deviation from the head's model predicted for the node (WSLR)"},
+            ),
+            "true_db": (
+                ("speed", "run", "node"),
+                np.stack(trues),
+                {
+                    "units": "dB",
+                    "long_name": "the node's true deviation at its trigger: true local-mean gap "
+                    "minus the model at its estimated position",
+                },
+            ),
             "corr": (("speed",), corr, {"units": "1", "long_name": "correlation of predicted and true deviation"}),
         },
         coords={
@@ -133,15 +154,24 @@ def correction_key_numbers(ds) -> dict:
         r = ds["rms_db"].sel(speed=v).isel(node=slice(1, None))
         for p in PARTS:
             name = f"handover.correction.{p}_rms_db.{tag}"
-            out[name] = KeySpec(name, "dB", f"RMS error of the deviation predicted by the {p} column, mean over the "
-                                            f"nodes behind the head, {float(v):g} km/h").entry(float(r.sel(part=p).mean()))
+            out[name] = KeySpec(
+                name,
+                "dB",
+                f"RMS error of the deviation predicted by the {p} column, mean over the "
+                f"nodes behind the head, {float(v):g} km/h",
+            ).entry(float(r.sel(part=p).mean()))
         helps = float((r.sel(part="correction") < r.sel(part="midpoint")).mean())
         name = f"handover.correction.helps_node_frac.{tag}"
-        out[name] = KeySpec(name, "1", f"share of the nodes behind the head whose trigger the power correction brings "
-                                       f"closer to the truth than the band midpoint, {float(v):g} km/h").entry(helps)
+        out[name] = KeySpec(
+            name,
+            "1",
+            f"share of the nodes behind the head whose trigger the power correction brings "
+            f"closer to the truth than the band midpoint, {float(v):g} km/h",
+        ).entry(helps)
         name = f"handover.correction.corr.{tag}"
         out[name] = KeySpec(name, "1", f"correlation of the predicted and the true deviation, {float(v):g} km/h").entry(
-            float(ds["corr"].sel(speed=v)))
+            float(ds["corr"].sel(speed=v))
+        )
     return out
 
 
@@ -151,15 +181,24 @@ def plot_correction(ds, pdf: str, png: str) -> None:
 
     speeds = ds["speed"].values
     fig, axes = plotting.figure(ncols=len(speeds), figsize=(3.4 * len(speeds), 3.0), squeeze=False, sharey=True)
-    style = {"correction": ("C0", "-", "power correction (WSLR of measured deviations)"),
-             "midpoint": ("C1", "--", "no correction: band midpoint"),
-             "oracle": ("C2", ":", "WSLR of the true deviations (oracle)"),
-             "measured": ("grey", "-.", "one measured deviation's noise")}
+    style = {
+        "correction": ("C0", "-", "power correction (WSLR of measured deviations)"),
+        "midpoint": ("C1", "--", "no correction: band midpoint"),
+        "oracle": ("C2", ":", "WSLR of the true deviations (oracle)"),
+        "measured": ("grey", "-.", "one measured deviation's noise"),
+    }
     for ax, v in zip(axes[0], speeds, strict=True):
         for p in PARTS:
             c, ls, lab = style[p]
-            ax.plot(ds["node"], ds["rms_db"].sel(speed=v, part=p), color=c, linestyle=ls, marker="o", markersize=3,
-                    label=lab)
+            ax.plot(
+                ds["node"],
+                ds["rms_db"].sel(speed=v, part=p),
+                color=c,
+                linestyle=ls,
+                marker="o",
+                markersize=3,
+                label=lab,
+            )
         ax.set_xlabel("node (1 = head)")
         ax.set_title(f"{float(v):g} km/h", fontsize=8)
     axes[0][0].set_ylabel("RMS error of the node's deviation [dB]")

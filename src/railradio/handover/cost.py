@@ -53,14 +53,22 @@ def _block_costs(ctx, band, weights: np.ndarray, method: str, chunk: int = 1024)
     """Per-run cost C/N + F for each weight vector: [A, B]."""
     out = []
     for s in range(0, weights.shape[0], chunk):
-        res = joint_nodes(ctx, band, weights[s:s + chunk], method)
+        res = joint_nodes(ctx, band, weights[s : s + chunk], method)
         out.append(res["conv_price"] / ctx.n_nodes + res["fluct"])
     return np.concatenate(out, axis=0)
 
 
-def cost_grid(scn: Scenario, speed_kmh: float, seed: int, n_blocks: int, runs_per_block: int,
-              m_values: list[int], alphas: np.ndarray, full_grid_max_m: int = 3,
-              full_grid_step: float = 0.05) -> xr.Dataset:
+def cost_grid(
+    scn: Scenario,
+    speed_kmh: float,
+    seed: int,
+    n_blocks: int,
+    runs_per_block: int,
+    m_values: list[int],
+    alphas: np.ndarray,
+    full_grid_max_m: int = 3,
+    full_grid_step: float = 0.05,
+) -> xr.Dataset:
     """The cost J over (method, m, α), its Monte Carlo standard error, and the full-grid check."""
     if n_blocks < 1 or runs_per_block < 1:
         raise ValueError("n_blocks and runs_per_block must be >= 1")
@@ -92,11 +100,11 @@ def cost_grid(scn: Scenario, speed_kmh: float, seed: int, n_blocks: int, runs_pe
     i_cfg = METHODS.index(scn.joint.wslr)
     for j, m in enumerate(m_values):
         if m in full_runs:
-            cf = np.concatenate(full_runs[m], axis=1)               # [A_full, R]
+            cf = np.concatenate(full_runs[m], axis=1)  # [A_full, R]
             jf = int(cf.mean(axis=1).argmin())
             full_min[j] = cf[jf].mean()
             cg = np.concatenate(per_run[METHODS[i_cfg]][j], axis=1)  # [A, R]
-            d = cg[int(cg.mean(axis=1).argmin())] - cf[jf]          # paired, per run
+            d = cg[int(cg.mean(axis=1).argmin())] - cf[jf]  # paired, per run
             full_gain[j] = d.mean()
             full_gain_se[j] = d.std(ddof=1) / np.sqrt(d.size)
     best = cost.reshape(len(METHODS), -1).argmin(axis=1)
@@ -105,29 +113,54 @@ def cost_grid(scn: Scenario, speed_kmh: float, seed: int, n_blocks: int, runs_pe
     flat_se = cost_se.reshape(len(METHODS), -1)
     threshold = cost.reshape(len(METHODS), -1).min(axis=1) + flat_se[np.arange(len(METHODS)), best]
     within = cost <= threshold[:, None, None]
-    ia = cost.argmin(axis=2)                                         # [wslr, m]
+    ia = cost.argmin(axis=2)  # [wslr, m]
     cost_min_m = np.take_along_axis(cost, ia[..., None], axis=2)[..., 0]
     cost_min_m_se = np.take_along_axis(cost_se, ia[..., None], axis=2)[..., 0]
     ds = xr.Dataset(
         {
-            "cost": (("wslr", "m", "alpha"), cost,
-                     {"units": "1", "long_name": "cost J = E[C/N] + E[F] (geometric weights)"}),
-            "cost_se": (("wslr", "m", "alpha"), cost_se,
-                        {"units": "1", "long_name": "Monte Carlo standard error of J"}),
+            "cost": (
+                ("wslr", "m", "alpha"),
+                cost,
+                {"units": "1", "long_name": "cost J = E[C/N] + E[F] (geometric weights)"},
+            ),
+            "cost_se": (
+                ("wslr", "m", "alpha"),
+                cost_se,
+                {"units": "1", "long_name": "Monte Carlo standard error of J"},
+            ),
             "cost_min_m": (("wslr", "m"), cost_min_m, {"units": "1", "long_name": "min over alpha of J"}),
-            "cost_min_m_se": (("wslr", "m"), cost_min_m_se,
-                              {"units": "1", "long_name": "Monte Carlo standard error of min over alpha of J"}),
-            "within_1se": (("wslr", "m", "alpha"), within,
-                           {"units": "1", "long_name": "J within one standard error of the minimum "
-                                                       "(J <= J_min + SE(J_min))"}),
-            "cost_min_full_grid": (("m",), full_min,
-                                   {"units": "1", "long_name": "min J over the full per-element weight grid "
-                                                               "(config WSLR method; NaN: not computed)"}),
-            "full_grid_gain": (("m",), full_gain,
-                               {"units": "1", "long_name": "min J of the geometric family minus min J of the "
-                                                           "full grid, same runs (config WSLR; NaN: not computed)"}),
-            "full_grid_gain_se": (("m",), full_gain_se,
-                                  {"units": "1", "long_name": "paired standard error of full_grid_gain"}),
+            "cost_min_m_se": (
+                ("wslr", "m"),
+                cost_min_m_se,
+                {"units": "1", "long_name": "Monte Carlo standard error of min over alpha of J"},
+            ),
+            "within_1se": (
+                ("wslr", "m", "alpha"),
+                within,
+                {"units": "1", "long_name": "J within one standard error of the minimum (J <= J_min + SE(J_min))"},
+            ),
+            "cost_min_full_grid": (
+                ("m",),
+                full_min,
+                {
+                    "units": "1",
+                    "long_name": "min J over the full per-element weight grid (config WSLR method; NaN: not computed)",
+                },
+            ),
+            "full_grid_gain": (
+                ("m",),
+                full_gain,
+                {
+                    "units": "1",
+                    "long_name": "min J of the geometric family minus min J of the "
+                    "full grid, same runs (config WSLR; NaN: not computed)",
+                },
+            ),
+            "full_grid_gain_se": (
+                ("m",),
+                full_gain_se,
+                {"units": "1", "long_name": "paired standard error of full_grid_gain"},
+            ),
             "best_m": (("wslr",), best_m, {"units": "1", "long_name": "argmin m of J"}),
             "best_alpha": (("wslr",), best_alpha, {"units": "1", "long_name": "argmin alpha of J"}),
         },
@@ -139,8 +172,7 @@ def cost_grid(scn: Scenario, speed_kmh: float, seed: int, n_blocks: int, runs_pe
     )
     ds["speed_kmh"] = xr.Variable((), float(speed_kmh), {"units": "km/h", "long_name": "train speed"})
     ds["n_runs"] = xr.Variable((), n_blocks * runs_per_block, {"units": "1", "long_name": "crossings"})
-    ds["full_grid_step"] = xr.Variable((), full_grid_step, {"units": "1",
-                                                            "long_name": "step of the full weight grid"})
+    ds["full_grid_step"] = xr.Variable((), full_grid_step, {"units": "1", "long_name": "step of the full weight grid"})
     ds.attrs["config_wslr"] = scn.joint.wslr
     return ds
 

@@ -17,8 +17,15 @@ from railradio.handover.policies import make_policy, run_policy
 from railradio.handover.train import kinematics
 
 
-def simulate_block(scn: Scenario, speed_kmh: float, seed: int, block: int, n_runs: int,
-                   policies: tuple[str, ...], stream: str = "sweep") -> dict[str, dict[str, tuple]]:
+def simulate_block(
+    scn: Scenario,
+    speed_kmh: float,
+    seed: int,
+    block: int,
+    n_runs: int,
+    policies: tuple[str, ...],
+    stream: str = "sweep",
+) -> dict[str, dict[str, tuple]]:
     """Outcomes of every policy on one block: policy -> name -> (dims, array, units, long_name)."""
     kin = kinematics(scn, speed_kmh)
     draws = draw_block(seed, speed_kmh, block, n_runs, kin, scn.train.n_nodes, stream)
@@ -33,8 +40,15 @@ def _concat(parts: list[dict[str, tuple]]) -> dict[str, tuple]:
     return out
 
 
-def simulate_blocks(scn: Scenario, speed_kmh: float, seed: int, blocks: range, runs_per_block: int,
-                    policies: tuple[str, ...], stream: str = "sweep") -> xr.Dataset:
+def simulate_blocks(
+    scn: Scenario,
+    speed_kmh: float,
+    seed: int,
+    blocks: range,
+    runs_per_block: int,
+    policies: tuple[str, ...],
+    stream: str = "sweep",
+) -> xr.Dataset:
     """Per-handover outcomes of ``blocks`` at one speed, as a dataset over (run, node)
     per policy (variables ``<policy>__<name>``)."""
     if len(blocks) == 0:
@@ -47,13 +61,11 @@ def simulate_blocks(scn: Scenario, speed_kmh: float, seed: int, blocks: range, r
     data_vars = {}
     for p in policies:
         for name, (dims, arr, units, long_name) in _concat(per_policy[p]).items():
-            data_vars[f"{p}__{name}"] = xr.Variable(dims, arr, {"units": units,
-                                                               "long_name": f"{p}: {long_name}"})
+            data_vars[f"{p}__{name}"] = xr.Variable(dims, arr, {"units": units, "long_name": f"{p}: {long_name}"})
     runs = np.arange(blocks[0] * runs_per_block, blocks[-1] * runs_per_block + runs_per_block)
     coords = {
         "run": ("run", runs, {"units": "1", "long_name": "global crossing index (block*runs_per_block + j)"}),
-        "node": ("node", np.arange(scn.train.n_nodes) + 1,
-                 {"units": "1", "long_name": "relay-AP node (1 = head)"}),
+        "node": ("node", np.arange(scn.train.n_nodes) + 1, {"units": "1", "long_name": "relay-AP node (1 = head)"}),
     }
     ds = xr.Dataset(data_vars, coords=coords)
     ds["speed_kmh"] = xr.Variable((), float(speed_kmh), {"units": "km/h", "long_name": "train speed"})

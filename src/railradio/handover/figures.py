@@ -29,18 +29,27 @@ def plot_cost_vs_m(cost: xr.Dataset, pdf_path, png_path=None) -> None:
         ia = c.argmin("alpha")
         y = c.min("alpha").values
         se = cost["cost_se"].sel(wslr=meth).isel(alpha=ia).values
-        ax.errorbar(m, y, yerr=2 * se, marker=marker, capsize=2, markerfacecolor="none",
-                    label=f"WSLR as {meth}")
+        ax.errorbar(m, y, yerr=2 * se, marker=marker, capsize=2, markerfacecolor="none", label=f"WSLR as {meth}")
     if "cost_min_full_grid" in cost and np.any(np.isfinite(cost["cost_min_full_grid"].values)):
-        ax.plot(m, cost["cost_min_full_grid"].values, "x", color="black",
-                label=f"full weight grid ({cost.attrs.get('config_wslr', '')})")
+        ax.plot(
+            m,
+            cost["cost_min_full_grid"].values,
+            "x",
+            color="black",
+            label=f"full weight grid ({cost.attrs.get('config_wslr', '')})",
+        )
     cfg = cost.attrs.get("config_wslr", "")
     if "within_1se" in cost and cfg in cost["wslr"].values:
         c = cost["cost"].sel(wslr=cfg)
         flat = int(c.values.argmin())
         se = float(cost["cost_se"].sel(wslr=cfg).values.ravel()[flat])
-        ax.axhline(float(c.min()) + se, color="grey", linestyle=":", linewidth=1,
-                   label=f"minimum + 1 SE ({cfg}): settings below are not separable")
+        ax.axhline(
+            float(c.min()) + se,
+            color="grey",
+            linestyle=":",
+            linewidth=1,
+            label=f"minimum + 1 SE ({cfg}): settings below are not separable",
+        )
     ax.axvline(SEED_BEST_M, **plotting.BOUND_STYLE, label=f"source: m = {SEED_BEST_M}")
     ax.set_xlabel("number of joint nodes $m$")
     ax.set_ylabel(r"min$_\alpha$ cost $J = E[C/N] + E[F]$")
@@ -60,11 +69,17 @@ def _rate_plot(ax, summary, name, transform=None, log=False):
             p, lo, hi = transform(p), transform(hi), transform(lo)
         err = np.maximum(np.vstack([p - lo, hi - p]), 0.0)
         shown = p > 0 if log else np.ones_like(p, dtype=bool)
-        cont = ax.errorbar(v[shown], p[shown], yerr=err[:, shown], marker=MARKERS.get(str(pol), "o"),
-                           capsize=2, markerfacecolor="none", label=LABELS.get(str(pol), str(pol)))
+        cont = ax.errorbar(
+            v[shown],
+            p[shown],
+            yerr=err[:, shown],
+            marker=MARKERS.get(str(pol), "o"),
+            capsize=2,
+            markerfacecolor="none",
+            label=LABELS.get(str(pol), str(pol)),
+        )
         if log and np.any(~shown):  # zero observed: draw the upper bound only
-            ax.plot(v[~shown] + (j - 1) * dv, hi[~shown], marker="v", linestyle="none",
-                    color=cont[0].get_color())
+            ax.plot(v[~shown] + (j - 1) * dv, hi[~shown], marker="v", linestyle="none", color=cont[0].get_color())
 
 
 def plot_pingpong_vs_speed(summary: xr.Dataset, pdf_path, png_path=None) -> None:
@@ -96,8 +111,15 @@ def _mean_plot(summary, name, ylabel, pdf_path, png_path, hline=None, hlabel=Non
     for pol in summary["policy"].values:
         y = summary[name].sel(policy=pol).values
         se = summary[f"{name}_se"].sel(policy=pol).values
-        ax.errorbar(v, y, yerr=2 * se, marker=MARKERS.get(str(pol), "o"), capsize=2, markerfacecolor="none",
-                    label=LABELS.get(str(pol), str(pol)))
+        ax.errorbar(
+            v,
+            y,
+            yerr=2 * se,
+            marker=MARKERS.get(str(pol), "o"),
+            capsize=2,
+            markerfacecolor="none",
+            label=LABELS.get(str(pol), str(pol)),
+        )
     if hline is not None:
         ax.axhline(hline, **plotting.BOUND_STYLE, label=hlabel)
     ax.set_xlabel("train speed [km/h]")
@@ -112,8 +134,10 @@ def plot_delay_vs_speed(summary: xr.Dataset, pdf_path, png_path=None) -> None:
     completion."""
     fig, axes = plotting.figure(ncols=2, figsize=(9.0, 3.4))
     v = summary["speed_kmh"].values
-    panels = ((axes[0], (("delay_all_ms", "-"), ("delay_ms", ":")), "command to completion [ms]"),
-              (axes[1], (("delay_trigger_ms", "-"),), "trigger to completion [ms]"))
+    panels = (
+        (axes[0], (("delay_all_ms", "-"), ("delay_ms", ":")), "command to completion [ms]"),
+        (axes[1], (("delay_trigger_ms", "-"),), "trigger to completion [ms]"),
+    )
     for ax, names, ylabel in panels:
         for pol in summary["policy"].values:
             color = None
@@ -123,8 +147,17 @@ def plot_delay_vs_speed(summary: xr.Dataset, pdf_path, png_path=None) -> None:
                 y = summary[name].sel(policy=pol).values
                 se = summary[f"{name}_se"].sel(policy=pol).values
                 label = LABELS.get(str(pol), str(pol)) + (" (successful only)" if name == "delay_ms" else "")
-                cont = ax.errorbar(v, y, yerr=2 * se, marker=MARKERS.get(str(pol), "o"), capsize=2,
-                                   markerfacecolor="none", linestyle=ls, color=color, label=label)
+                cont = ax.errorbar(
+                    v,
+                    y,
+                    yerr=2 * se,
+                    marker=MARKERS.get(str(pol), "o"),
+                    capsize=2,
+                    markerfacecolor="none",
+                    linestyle=ls,
+                    color=color,
+                    label=label,
+                )
                 color = cont[0].get_color()
         ax.axhline(DELAY_REQUIREMENT_MS, **plotting.BOUND_STYLE, label="requirement: 45 ms")
         ax.set_xlabel("train speed [km/h]")
@@ -152,9 +185,16 @@ def plot_sensitivity(sens: xr.Dataset, pdf_path, png_path=None) -> None:
             hi = sens[f"{name}_hi"].sel(policy=pol).values
             if tr is not None:
                 p, lo, hi = tr(p), tr(hi), tr(lo)
-            ax.errorbar(p[aff], y[aff] + dy, xerr=np.maximum(np.vstack([p - lo, hi - p]), 0.0)[:, aff], linestyle="none",
-                        marker=MARKERS.get(str(pol), "o"), markerfacecolor="none", capsize=2,
-                        label=LABELS.get(str(pol), str(pol)))
+            ax.errorbar(
+                p[aff],
+                y[aff] + dy,
+                xerr=np.maximum(np.vstack([p - lo, hi - p]), 0.0)[:, aff],
+                linestyle="none",
+                marker=MARKERS.get(str(pol), "o"),
+                markerfacecolor="none",
+                capsize=2,
+                label=LABELS.get(str(pol), str(pol)),
+            )
     axes[0].set_yticks(y, [v if v != "reference" else "reference" for v in variants], fontsize="small")
     axes[0].invert_yaxis()
     axes[0].set_xlabel("interruption rate (1 − success)")

@@ -24,84 +24,176 @@ def _spec(name, unit, desc, src=None, rel=None, digits=3):
     return KeySpec(name, unit, desc, src, rel, digits)
 
 
-SPECS = {s.name: s for s in [
-    _spec("handover.best_m", "1", "number of joint nodes m minimizing the cost (config WSLR reading; "
-          "the settings within one standard error are handover.cost.set_1se.*)", 3, "="),
-    _spec("handover.best_alpha", "1", "geometric weight parameter alpha at the cost minimum (reported only "
-          "when m* > 1: for m = 1 the weights do not depend on alpha)"),
-    _spec("handover.cost.set_1se.m_min", "1", "smallest m among the settings within one standard error of "
-          "the minimum cost (config WSLR reading)"),
-    _spec("handover.cost.set_1se.m_max", "1", "largest m among the settings within one standard error of "
-          "the minimum cost"),
-    _spec("handover.cost.set_1se.n_settings", "1", "distinct (m, alpha) settings within one standard error "
-          "of the minimum cost (m = 1 counts once)"),
-    _spec("handover.cost.set_1se.n_grid", "1", "distinct (m, alpha) settings searched (m = 1 counts once)"),
-    _spec("handover.cost.min", "1", "minimum cost J = E[C/N] + E[F]", digits=3),
-    _spec("handover.cost.m3_minus_best", "1", "cost at m = 3 (best alpha) minus the minimum cost"),
-    *[_spec(f"handover.cost.full_grid_gain.m{m}", "1",
-            f"m = {m}: min cost over the geometric family minus over the full per-element grid (same runs; "
-            f"the grid's min over thousands of noisy estimates is biased low, so this gain is biased high)")
-      for m in (2, 3, 4)],
-    _spec("handover.cost.min_se", "1", "Monte Carlo standard error of the minimum cost (the one-SE threshold)"),
-    *[_spec(f"handover.cost.full_grid_gain_se.m{m}", "1", f"paired standard error of full_grid_gain.m{m}")
-      for m in (2, 3, 4)],
-    *[_spec(f"handover.cost.min.m{m}", "1", f"min over alpha of the cost at m = {m} (config WSLR reading)")
-      for m in range(1, 7)],
-    _spec("handover.joint.success.v350", "1", "joint decision: handover success rate at 350 km/h",
-          0.9975, "≥", digits=4),
-    _spec("handover.joint.success.min_v300_380", "1",
-          "joint decision: lowest success rate over 300-380 km/h", 0.9975, "≥", digits=4),
-    _spec("handover.a3.success.v350", "1", "A3: handover success rate at 350 km/h", 0.995, "<", digits=4),
-    _spec("handover.distance.success.v350", "1", "distance trigger: success rate at 350 km/h", digits=4),
-    _spec("handover.a3.delay_ms.v250", "ms", "A3: mean handover delay at 250 km/h", 45.0, ">"),
-    _spec("handover.joint.delay_ms.v350", "ms", "joint decision: mean handover delay at 350 km/h "
-          "(source: meets the 45 ms requirement)", 45.0, "≤"),
-    _spec("handover.distance.delay_ms.v350", "ms", "distance trigger: mean handover delay at 350 km/h"),
-    _spec("handover.joint.pingpong.v350", "1", "joint decision: ping-pong rate at 350 km/h (0 by construction)"),
-    _spec("handover.a3.pingpong.v350", "1", "A3: ping-pong rate at 350 km/h"),
-    _spec("handover.distance.pingpong.v350", "1", "distance trigger: ping-pong rate at 350 km/h"),
-    _spec("handover.claim.joint_pingpong_lowest_frac", "1",
-          "share of speeds where the joint ping-pong rate is strictly the lowest of the three: the "
-          "upper 95% bound of joint below the lower 95% bound of both A3 and distance (a tie is not lower)",
-          1.0, "="),
-    _spec("handover.claim.pingpong_tie_frac", "1",
-          "share of speeds where the joint ping-pong rate is not separable from another policy's "
-          "(95% intervals overlap)"),
-    _spec("handover.claim.joint_gap_lowest_frac", "1",
-          "share of speeds where the joint mean |RSRP-GAP| is the lowest of the three", 1.0, "="),
-    _spec("handover.joint.rsrp_gap_db.v350", "dB", "joint decision: mean |RSRP-GAP| at completion, 350 km/h"),
-    _spec("handover.a3.rsrp_gap_db.v350", "dB", "A3: mean |RSRP-GAP| at completion, 350 km/h"),
-    _spec("handover.distance.rsrp_gap_db.v350", "dB", "distance trigger: mean |RSRP-GAP| at completion, 350 km/h"),
-    _spec("handover.joint.success.v100", "1", "joint decision: success rate at 100 km/h", digits=4),
-    _spec("handover.a3.success.v100", "1", "A3: success rate at 100 km/h (railway requirement: >= 0.995)",
-          digits=4),
-    _spec("handover.distance.success.v100", "1", "distance trigger: success rate at 100 km/h", digits=4),
-    *[_spec(f"handover.{pol}.delay_all_ms.v{v}", "ms",
-            f"{pol}: mean command-to-completion time over all handovers at {v} km/h (failed attempts, "
-            f"retries and re-establishment included)" + (" (source: A3 > 45 ms above 250 km/h)"
-                                                          if pol == "a3" and v == 350 else ""),
-            45.0 if pol == "a3" and v == 350 else None, ">" if pol == "a3" and v == 350 else None)
-      for pol in ("joint", "a3", "distance") for v in (100, 250, 350)],
-    *[_spec(f"handover.{pol}.delay_trigger_ms.v{v}", "ms",
-            f"{pol}: mean trigger-to-completion time over all handovers at {v} km/h (A3: from the start "
-            f"of its time-to-trigger)") for pol in ("joint", "a3", "distance") for v in (100, 250, 350)],
-    _spec("handover.gaph_db", "dB", "handover threshold GapH(sigma0)"),
-    _spec("handover.bound.first_attempt_success_xc", "1",
-          "closed form, the earlier instant rule: first-attempt success at the overlap centre, "
-          "Phi(hi/sigma_G) - Phi(lo/sigma_G), interference-limited, from the config's eta, Q_out, Q_in, sigma", digits=4),
-    _spec("handover.bound.gap_lo_db", "dB", "closed form: lowest true gap at which an attempt succeeds, "
-          "Q_out + 10 log10 eta"),
-    _spec("handover.bound.gap_hi_db", "dB", "closed form: highest true gap at which an attempt succeeds, "
-          "-(Q_in + 10 log10 eta)"),
-    _spec("handover.bound.t304_success_xc", "1",
-          "closed form, rlm rule: target access success at the overlap centre Phi(-(Q_out + 10 log10 eta)"
-          "/sigma_G), an upper bound on a first attempt there (radio-link failure not counted)", digits=4),
-    _spec("handover.bound.t304_gap_hi_db", "dB", "closed form, rlm rule: highest true gap at which the "
-          "target's access succeeds, -(Q_out + 10 log10 eta)"),
-    _spec("handover.bound.gap_sigma_db", "dB", "closed form: std of the shadowing gap sigma sqrt(2(1 - rho_st))"),
-    _spec("handover.sigma0_db", "dB", "std of the filtered gap-measurement error sigma0"),
-    _spec("handover.n_handovers_per_speed", "1", "node handovers simulated per speed point", digits=6),
-]}
+SPECS = {
+    s.name: s
+    for s in [
+        _spec(
+            "handover.best_m",
+            "1",
+            "number of joint nodes m minimizing the cost (config WSLR reading; "
+            "the settings within one standard error are handover.cost.set_1se.*)",
+            3,
+            "=",
+        ),
+        _spec(
+            "handover.best_alpha",
+            "1",
+            "geometric weight parameter alpha at the cost minimum (reported only "
+            "when m* > 1: for m = 1 the weights do not depend on alpha)",
+        ),
+        _spec(
+            "handover.cost.set_1se.m_min",
+            "1",
+            "smallest m among the settings within one standard error of the minimum cost (config WSLR reading)",
+        ),
+        _spec(
+            "handover.cost.set_1se.m_max",
+            "1",
+            "largest m among the settings within one standard error of the minimum cost",
+        ),
+        _spec(
+            "handover.cost.set_1se.n_settings",
+            "1",
+            "distinct (m, alpha) settings within one standard error of the minimum cost (m = 1 counts once)",
+        ),
+        _spec("handover.cost.set_1se.n_grid", "1", "distinct (m, alpha) settings searched (m = 1 counts once)"),
+        _spec("handover.cost.min", "1", "minimum cost J = E[C/N] + E[F]", digits=3),
+        _spec("handover.cost.m3_minus_best", "1", "cost at m = 3 (best alpha) minus the minimum cost"),
+        *[
+            _spec(
+                f"handover.cost.full_grid_gain.m{m}",
+                "1",
+                f"m = {m}: min cost over the geometric family minus over the full per-element grid (same runs; "
+                f"the grid's min over thousands of noisy estimates is biased low, so this gain is biased high)",
+            )
+            for m in (2, 3, 4)
+        ],
+        _spec("handover.cost.min_se", "1", "Monte Carlo standard error of the minimum cost (the one-SE threshold)"),
+        *[
+            _spec(f"handover.cost.full_grid_gain_se.m{m}", "1", f"paired standard error of full_grid_gain.m{m}")
+            for m in (2, 3, 4)
+        ],
+        *[
+            _spec(f"handover.cost.min.m{m}", "1", f"min over alpha of the cost at m = {m} (config WSLR reading)")
+            for m in range(1, 7)
+        ],
+        _spec(
+            "handover.joint.success.v350",
+            "1",
+            "joint decision: handover success rate at 350 km/h",
+            0.9975,
+            "≥",
+            digits=4,
+        ),
+        _spec(
+            "handover.joint.success.min_v300_380",
+            "1",
+            "joint decision: lowest success rate over 300-380 km/h",
+            0.9975,
+            "≥",
+            digits=4,
+        ),
+        _spec("handover.a3.success.v350", "1", "A3: handover success rate at 350 km/h", 0.995, "<", digits=4),
+        _spec("handover.distance.success.v350", "1", "distance trigger: success rate at 350 km/h", digits=4),
+        _spec("handover.a3.delay_ms.v250", "ms", "A3: mean handover delay at 250 km/h", 45.0, ">"),
+        _spec(
+            "handover.joint.delay_ms.v350",
+            "ms",
+            "joint decision: mean handover delay at 350 km/h (source: meets the 45 ms requirement)",
+            45.0,
+            "≤",
+        ),
+        _spec("handover.distance.delay_ms.v350", "ms", "distance trigger: mean handover delay at 350 km/h"),
+        _spec("handover.joint.pingpong.v350", "1", "joint decision: ping-pong rate at 350 km/h (0 by construction)"),
+        _spec("handover.a3.pingpong.v350", "1", "A3: ping-pong rate at 350 km/h"),
+        _spec("handover.distance.pingpong.v350", "1", "distance trigger: ping-pong rate at 350 km/h"),
+        _spec(
+            "handover.claim.joint_pingpong_lowest_frac",
+            "1",
+            "share of speeds where the joint ping-pong rate is strictly the lowest of the three: the "
+            "upper 95% bound of joint below the lower 95% bound of both A3 and distance (a tie is not lower)",
+            1.0,
+            "=",
+        ),
+        _spec(
+            "handover.claim.pingpong_tie_frac",
+            "1",
+            "share of speeds where the joint ping-pong rate is not separable from another policy's "
+            "(95% intervals overlap)",
+        ),
+        _spec(
+            "handover.claim.joint_gap_lowest_frac",
+            "1",
+            "share of speeds where the joint mean |RSRP-GAP| is the lowest of the three",
+            1.0,
+            "=",
+        ),
+        _spec("handover.joint.rsrp_gap_db.v350", "dB", "joint decision: mean |RSRP-GAP| at completion, 350 km/h"),
+        _spec("handover.a3.rsrp_gap_db.v350", "dB", "A3: mean |RSRP-GAP| at completion, 350 km/h"),
+        _spec("handover.distance.rsrp_gap_db.v350", "dB", "distance trigger: mean |RSRP-GAP| at completion, 350 km/h"),
+        _spec("handover.joint.success.v100", "1", "joint decision: success rate at 100 km/h", digits=4),
+        _spec(
+            "handover.a3.success.v100", "1", "A3: success rate at 100 km/h (railway requirement: >= 0.995)", digits=4
+        ),
+        _spec("handover.distance.success.v100", "1", "distance trigger: success rate at 100 km/h", digits=4),
+        *[
+            _spec(
+                f"handover.{pol}.delay_all_ms.v{v}",
+                "ms",
+                f"{pol}: mean command-to-completion time over all handovers at {v} km/h (failed attempts, "
+                f"retries and re-establishment included)"
+                + (" (source: A3 > 45 ms above 250 km/h)" if pol == "a3" and v == 350 else ""),
+                45.0 if pol == "a3" and v == 350 else None,
+                ">" if pol == "a3" and v == 350 else None,
+            )
+            for pol in ("joint", "a3", "distance")
+            for v in (100, 250, 350)
+        ],
+        *[
+            _spec(
+                f"handover.{pol}.delay_trigger_ms.v{v}",
+                "ms",
+                f"{pol}: mean trigger-to-completion time over all handovers at {v} km/h (A3: from the start "
+                f"of its time-to-trigger)",
+            )
+            for pol in ("joint", "a3", "distance")
+            for v in (100, 250, 350)
+        ],
+        _spec("handover.gaph_db", "dB", "handover threshold GapH(sigma0)"),
+        _spec(
+            "handover.bound.first_attempt_success_xc",
+            "1",
+            "closed form, the earlier instant rule: first-attempt success at the overlap centre, "
+            "Phi(hi/sigma_G) - Phi(lo/sigma_G), interference-limited, from the config's eta, Q_out, Q_in, sigma",
+            digits=4,
+        ),
+        _spec(
+            "handover.bound.gap_lo_db",
+            "dB",
+            "closed form: lowest true gap at which an attempt succeeds, Q_out + 10 log10 eta",
+        ),
+        _spec(
+            "handover.bound.gap_hi_db",
+            "dB",
+            "closed form: highest true gap at which an attempt succeeds, -(Q_in + 10 log10 eta)",
+        ),
+        _spec(
+            "handover.bound.t304_success_xc",
+            "1",
+            "closed form, rlm rule: target access success at the overlap centre Phi(-(Q_out + 10 log10 eta)"
+            "/sigma_G), an upper bound on a first attempt there (radio-link failure not counted)",
+            digits=4,
+        ),
+        _spec(
+            "handover.bound.t304_gap_hi_db",
+            "dB",
+            "closed form, rlm rule: highest true gap at which the target's access succeeds, -(Q_out + 10 log10 eta)",
+        ),
+        _spec("handover.bound.gap_sigma_db", "dB", "closed form: std of the shadowing gap sigma sqrt(2(1 - rho_st))"),
+        _spec("handover.sigma0_db", "dB", "std of the filtered gap-measurement error sigma0"),
+        _spec("handover.n_handovers_per_speed", "1", "node handovers simulated per speed point", digits=6),
+    ]
+}
 
 
 def _pick(summary: xr.Dataset, policy: str, name: str, speed: float):
@@ -139,8 +231,9 @@ def sens_values(sens: xr.Dataset) -> dict[str, Any]:
         name = f"handover.sens.{var}.value"
         short = sw.split(".")[-1]
         unit = next((u for suf, u in (("_db", "dB"), ("_s", "s"), ("_m", "m")) if short.endswith(suf)), "1")
-        out[name] = KeySpec(name, unit, f"value of {sw} in the sensitivity variant {var}",
-                            digits=_sig_digits(val)).entry(val, 0.0)
+        out[name] = KeySpec(
+            name, unit, f"value of {sw} in the sensitivity variant {var}", digits=_sig_digits(val)
+        ).entry(val, 0.0)
     return out
 
 
@@ -154,18 +247,27 @@ def sens_specs(sens: xr.Dataset) -> dict[str, KeySpec]:
         for pol in sens["policy"].values:
             if not bool(sens["affected"].sel(variant=var, policy=pol)):
                 continue
-            for metric, unit, digits in (("success", "1", 4), ("pingpong", "1", 3), ("delay_ms", "ms", 3),
-                                         ("delay_all_ms", "ms", 3)):
+            for metric, unit, digits in (
+                ("success", "1", 4),
+                ("pingpong", "1", 3),
+                ("delay_ms", "ms", 3),
+                ("delay_all_ms", "ms", 3),
+            ):
                 if metric == "pingpong" and pol == "joint":
                     continue
                 name = f"handover.sens.{var}.{pol}.{metric}"
-                out[name] = KeySpec(name, unit, f"sensitivity at {float(sens['speed_kmh']):g} km/h, "
-                                                f"{what}: {pol} {metric}", digits=digits)
+                out[name] = KeySpec(
+                    name,
+                    unit,
+                    f"sensitivity at {float(sens['speed_kmh']):g} km/h, {what}: {pol} {metric}",
+                    digits=digits,
+                )
     return out
 
 
-def key_numbers(summary: xr.Dataset, cost: xr.Dataset, sens: xr.Dataset, gaph_db: float,
-                sigma0_db: float, wslr: str, radio=None) -> dict[str, Any]:
+def key_numbers(
+    summary: xr.Dataset, cost: xr.Dataset, sens: xr.Dataset, gaph_db: float, sigma0_db: float, wslr: str, radio=None
+) -> dict[str, Any]:
     """All handover.* key numbers (mc_stderr from the clustered standard errors)."""
     out: dict[str, Any] = {}
 
@@ -193,8 +295,7 @@ def key_numbers(summary: xr.Dataset, cost: xr.Dataset, sens: xr.Dataset, gaph_db
     for m in cost["m"].values:
         name = f"handover.cost.min.m{int(m)}"
         if name in SPECS:
-            put(name, float(cost["cost_min_m"].sel(wslr=wslr, m=m)),
-                float(cost["cost_min_m_se"].sel(wslr=wslr, m=m)))
+            put(name, float(cost["cost_min_m"].sel(wslr=wslr, m=m)), float(cost["cost_min_m_se"].sel(wslr=wslr, m=m)))
         name = f"handover.cost.full_grid_gain.m{int(m)}"
         if "full_grid_gain" in cost and name in SPECS and np.isfinite(float(cost["full_grid_gain"].sel(m=m))):
             put(name, float(cost["full_grid_gain"].sel(m=m)), float(cost["full_grid_gain_se"].sel(m=m)))
@@ -237,5 +338,6 @@ def key_numbers(summary: xr.Dataset, cost: xr.Dataset, sens: xr.Dataset, gaph_db
     for meth in cost["wslr"].values:
         name = f"handover.cost.best_m.{meth}"
         out[name] = KeySpec(name, "1", f"cost-minimizing m with the WSLR read as {meth}").entry(
-            int(cost["best_m"].sel(wslr=meth)), 0.0)
+            int(cost["best_m"].sel(wslr=meth)), 0.0
+        )
     return out

@@ -15,13 +15,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from railradio.handover.params import Scenario
-from railradio.handover.radio import (
-    l3_coefficient_at,
-    l3_filter,
-    mean_rsrp_dbm,
-    shadowing_fields,
-    sinr_db,
-)
+from railradio.handover.radio import l3_coefficient_at, l3_filter, mean_rsrp_dbm, shadowing_fields, sinr_db
 from railradio.handover.rlm import first_rlf, indications
 from railradio.handover.train import Kinematics, gnss_error_m
 from railradio.rng import make_rng, spawn_key, stable_id
@@ -36,8 +30,8 @@ class Draws:
     """Standard normals of one block of B crossings."""
 
     field_white: np.ndarray  # [B, 2, G]   shadowing field of both links along the track
-    meas_white: np.ndarray   # [B, N, 2, K] measurement error per node, link, sample
-    gnss_white: np.ndarray   # [B, K]       GNSS/INS error process
+    meas_white: np.ndarray  # [B, N, 2, K] measurement error per node, link, sample
+    gnss_white: np.ndarray  # [B, K]       GNSS/INS error process
 
     @property
     def n_runs(self) -> int:
@@ -55,12 +49,15 @@ def block_keys(speed_kmh: float, block: int, stream: str = "sweep") -> tuple[tup
     if not isinstance(block, (int, np.integer)) or block < 0:
         raise ValueError(f"block must be a non-negative integer, got {block!r}")
     s_field, s_noise = STREAMS[stream]
-    return (spawn_key("handover", s_field, int(block)),
-            spawn_key("handover", s_noise, stable_id(float(speed_kmh)), int(block)))
+    return (
+        spawn_key("handover", s_field, int(block)),
+        spawn_key("handover", s_noise, stable_id(float(speed_kmh)), int(block)),
+    )
 
 
-def draw_block(seed: int, speed_kmh: float, block: int, n_runs: int, kin: Kinematics, n_nodes: int,
-               stream: str = "sweep") -> Draws:
+def draw_block(
+    seed: int, speed_kmh: float, block: int, n_runs: int, kin: Kinematics, n_nodes: int, stream: str = "sweep"
+) -> Draws:
     """The draws of block ``block`` (``n_runs`` crossings) at ``speed_kmh``."""
     if n_runs < 1:
         raise ValueError(f"n_runs must be >= 1, got {n_runs!r}")
@@ -80,10 +77,10 @@ class BlockContext:
 
     scn: Scenario
     kin: Kinematics
-    zeta_db: np.ndarray       # [B, 2, G] shadowing on the grid (positive = extra loss)
-    meas_dbm: np.ndarray      # [B, N, 2, K] raw measurements M
-    filt_dbm: np.ndarray      # [B, N, 2, K] L3-filtered F
-    gnss_err_m: np.ndarray    # [B, K]
+    zeta_db: np.ndarray  # [B, 2, G] shadowing on the grid (positive = extra loss)
+    meas_dbm: np.ndarray  # [B, N, 2, K] raw measurements M
+    filt_dbm: np.ndarray  # [B, N, 2, K] L3-filtered F
+    gnss_err_m: np.ndarray  # [B, K]
     l3_a: float
     _cache: dict = field(default_factory=dict)
 
@@ -133,12 +130,14 @@ def build_context(scn: Scenario, kin: Kinematics, draws: Draws) -> BlockContext:
     rd = scn.radio
     n_nodes = scn.train.n_nodes
     if draws.meas_white.shape[1:] != (n_nodes, 2, kin.n_samples):
-        raise ValueError(f"draws do not match the scenario: meas_white {draws.meas_white.shape}, "
-                         f"expected [B, {n_nodes}, 2, {kin.n_samples}]")
-    zeta = shadowing_fields(draws.field_white, kin.grid, rd)               # [B, 2, G]
-    idx = kin.grid.index(kin.x_nodes_m)                                   # [N, K]
-    p_s, p_t = mean_rsrp_dbm(kin.x_nodes_m, rd)                           # [N, K]
-    mean = np.stack([p_s, p_t], axis=1)                                   # [N, 2, K]
+        raise ValueError(
+            f"draws do not match the scenario: meas_white {draws.meas_white.shape}, "
+            f"expected [B, {n_nodes}, 2, {kin.n_samples}]"
+        )
+    zeta = shadowing_fields(draws.field_white, kin.grid, rd)  # [B, 2, G]
+    idx = kin.grid.index(kin.x_nodes_m)  # [N, K]
+    p_s, p_t = mean_rsrp_dbm(kin.x_nodes_m, rd)  # [N, K]
+    mean = np.stack([p_s, p_t], axis=1)  # [N, 2, K]
     # M = P_tx - L(d) - zeta + eps (eq. 1-2), built in place: [B, N, 2, K]
     meas = np.ascontiguousarray(zeta[:, :, idx].transpose(0, 2, 1, 3))
     np.subtract(mean[None], meas, out=meas)
@@ -150,17 +149,18 @@ def build_context(scn: Scenario, kin: Kinematics, draws: Draws) -> BlockContext:
 
 # --- execution (reconstruction eq. 3 and 8) --------------------------------------------
 
+
 @dataclass
 class Execution:
     """Outcome of executing the handover commands of a set of node crossings."""
 
-    attempts: np.ndarray       # int, attempts made
-    success: np.ndarray        # bool
+    attempts: np.ndarray  # int, attempts made
+    success: np.ndarray  # bool
     completion_x_m: np.ndarray  # He of the successful (or last) attempt [m]
-    delay_s: np.ndarray        # command to completion, NaN if failed
-    gap_db: np.ndarray         # true RSRP_s − RSRP_t at completion_x_m [dB]
-    delay_all_s: np.ndarray    # command (or earlier RLF) to completion incl. re-establishment [s]
-    t_detect_s: np.ndarray     # failure detection after the first command [s] (NaN: success)
+    delay_s: np.ndarray  # command to completion, NaN if failed
+    gap_db: np.ndarray  # true RSRP_s − RSRP_t at completion_x_m [dB]
+    delay_all_s: np.ndarray  # command (or earlier RLF) to completion incl. re-establishment [s]
+    t_detect_s: np.ndarray  # failure detection after the first command [s] (NaN: success)
 
 
 def rlf_window_samples(ex, period_s: float) -> tuple[int, int]:
@@ -213,11 +213,11 @@ def serving_ok(ctx: BlockContext, run: np.ndarray, hb_m: np.ndarray) -> np.ndarr
         return np.asarray(hb_m, dtype=float) < rlm_failure_x_m(ctx)[run]
     n_eval, n_t = rlf_window_samples(ex, ctx.kin.period_s)
     step = ctx.kin.speed_m_s * ctx.kin.period_s
-    x = hb_m[:, None] - step * np.arange(n_eval + n_t)[None, :]          # [n, J], j = 0 at H_b
+    x = hb_m[:, None] - step * np.arange(n_eval + n_t)[None, :]  # [n, J], j = 0 at H_b
     r_s, r_t = ctx.true_rsrp_dbm(run[:, None], x)
     s = sinr_db(r_s, r_t, rd)
     c = np.concatenate([np.zeros((s.shape[0], 1)), np.cumsum(s, axis=1)], axis=1)
-    avg = (c[:, n_eval:] - c[:, :-n_eval]) / n_eval                       # window ending at j = 0…n_t
+    avg = (c[:, n_eval:] - c[:, :-n_eval]) / n_eval  # window ending at j = 0…n_t
     return np.any(avg >= rd.q_out_db, axis=1)
 
 
@@ -269,13 +269,13 @@ def execute(ctx: BlockContext, run: np.ndarray, hb_m: np.ndarray, retry_allowed)
     from the radio-link failure when that came first (the command then cannot be received).
     """
     sc = ctx.scn
-    rd, ex = sc.radio, sc.execution
+    ex = sc.execution
     v = ctx.kin.speed_m_s
     n = hb_m.shape[0]
     attempts = np.zeros(n, dtype=np.int64)
     success = np.zeros(n, dtype=bool)
     he_final = np.full(n, np.nan)
-    t_detect = np.full(n, np.nan)              # failure detection, s after the first command
+    t_detect = np.full(n, np.nan)  # failure detection, s after the first command
     done = np.zeros(n, dtype=bool)
     hb0 = hb_m.astype(float)
     hb = hb0.copy()

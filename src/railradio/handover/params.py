@@ -18,8 +18,14 @@ KMH = 1.0 / 3.6
 """m/s per km/h."""
 
 
-def _check(name: str, value: float, lo: float | None = None, hi: float | None = None,
-           lo_open: bool = False, hi_open: bool = False) -> None:
+def _check(
+    name: str,
+    value: float,
+    lo: float | None = None,
+    hi: float | None = None,
+    lo_open: bool = False,
+    hi_open: bool = False,
+) -> None:
     if not isinstance(value, (int, float)) or isinstance(value, bool) or not math.isfinite(value):
         raise ValueError(f"{name} must be a finite number, got {value!r}")
     if lo is not None and (value <= lo if lo_open else value < lo):
@@ -240,9 +246,16 @@ class Execution:
 
     def rlm(self, radio: Radio) -> RlmConfig:
         """The ``rlm`` rule's constants, with Q_out and Q_in from ``radio``."""
-        return RlmConfig(indication_s=self.rlm_indication_s, qout_eval_s=self.rlf_eval_s,
-                         qin_eval_s=self.rlm_qin_eval_s, q_out_db=radio.q_out_db, q_in_db=radio.q_in_db,
-                         n310=self.rlm_n310, n311=self.rlm_n311, t310_s=self.rlf_t310_s)
+        return RlmConfig(
+            indication_s=self.rlm_indication_s,
+            qout_eval_s=self.rlf_eval_s,
+            qin_eval_s=self.rlm_qin_eval_s,
+            q_out_db=radio.q_out_db,
+            q_in_db=radio.q_in_db,
+            n310=self.rlm_n310,
+            n311=self.rlm_n311,
+            t310_s=self.rlf_t310_s,
+        )
 
 
 @dataclass(frozen=True)
@@ -347,14 +360,20 @@ SIM_SECTIONS = ("radio", "train", "execution", "joint", "a3")
 
 def scenario_from_config(cfg: dict[str, Any]) -> Scenario:
     """:class:`Scenario` from the config's ``handover`` section (or a subset of it)."""
+
     def sub(cls, name):
         values = dict(cfg.get(name, {}))
         if name == "joint" and "exponent_bounds" in values:
             values["exponent_bounds"] = tuple(float(v) for v in values["exponent_bounds"])
         return cls(**values)
 
-    return Scenario(radio=sub(Radio, "radio"), train=sub(Train, "train"),
-                    execution=sub(Execution, "execution"), joint=sub(Joint, "joint"), a3=sub(A3, "a3"))
+    return Scenario(
+        radio=sub(Radio, "radio"),
+        train=sub(Train, "train"),
+        execution=sub(Execution, "execution"),
+        joint=sub(Joint, "joint"),
+        a3=sub(A3, "a3"),
+    )
 
 
 def check_speed(speed_kmh: float) -> float:

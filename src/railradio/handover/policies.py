@@ -38,8 +38,8 @@ from railradio.handover.radio import l3_filter
 class Command:
     """First handover command of every node crossing and the policy's retry rule."""
 
-    k: np.ndarray                      # [B, N] sample of the first command
-    retry: object                      # callable(a, serving_ok, hb_next_m, flat_sel) -> bool
+    k: np.ndarray  # [B, N] sample of the first command
+    retry: object  # callable(a, serving_ok, hb_next_m, flat_sel) -> bool
     extras: dict = field(default_factory=dict)  # name -> (dims, array, units, long_name)
     k_trigger: np.ndarray | None = None  # [B, N] start of the period that led to the command (None: k)
 
@@ -66,6 +66,7 @@ class Policy(ABC):
             # every policy (execution.retry = common): retried after TZ while the serving
             # link holds
             return serving_ok & (a < max_a)
+
         return retry
 
 
@@ -149,12 +150,12 @@ class DistancePolicy(Policy):
 
     def returns(self, ctx, k_from, t_complete_s):
         idx, in_window = _window(ctx, k_from, t_complete_s)
-        xhat = np.take_along_axis(ctx.xhat_head_m[:, None, :], idx, axis=-1) \
-            - ctx.kin.node_offsets_m[None, :, None]
+        xhat = np.take_along_axis(ctx.xhat_head_m[:, None, :], idx, axis=-1) - ctx.kin.node_offsets_m[None, :, None]
         return np.any(in_window & (xhat < ctx.scn.radio.overlap_centre_m), axis=-1)
 
 
 # --- the joint decision -----------------------------------------------------------------
+
 
 @dataclass
 class Band:
@@ -209,7 +210,7 @@ def head_band(ctx: BlockContext) -> Band:
     rd, jt = sc.radio, sc.joint
     v = ctx.kin.speed_m_s
     _, gaph = sigma0_and_gaph(rd, jt)
-    g = joint_gaps(ctx)[:, 0, :]                                    # [B, K]
+    g = joint_gaps(ctx)[:, 0, :]  # [B, K]
     xhat = ctx.xhat_head_m
     zone = np.abs(xhat - rd.overlap_centre_m) <= sc.train.prep_zone_m
     r = np.where(zone, joint_regressors(ctx)[:, 0, :], 0.0)
@@ -264,23 +265,24 @@ def joint_nodes(ctx: BlockContext, band: Band, weights: np.ndarray, method: str)
     dp = np.zeros((n_a, b_n, n_n))
     dev = np.zeros((n_a, b_n, n_n))
     pred = np.zeros((n_a, b_n, n_n))
-    w = weights[:, None, :]                                          # [A, 1, m]
+    w = weights[:, None, :]  # [A, 1, m]
     for i in range(n_n):
         if i == 0:
             x_i = np.broadcast_to(band.xm_m, (n_a, b_n))
             k_i = np.broadcast_to(band.k_head, (n_a, b_n))
         else:
             p = min(m, i)
-            preds = dev[:, :, i - p:i][:, :, ::-1]                     # nearest first
-            c = wslr_predict(preds, w, method)                         # [A, B]
+            preds = dev[:, :, i - p : i][:, :, ::-1]  # nearest first
+            c = wslr_predict(preds, w, method)  # [A, B]
             pred[:, :, i] = c
-            dx = position_correction_m(c, band.xm_m, band.pl_m, pr_retry, band.gaph_db,
-                                       band.a_db, band.n_hat, jt.dead_zone_db, rd)
+            dx = position_correction_m(
+                c, band.xm_m, band.pl_m, pr_retry, band.gaph_db, band.a_db, band.n_hat, jt.dead_zone_db, rd
+            )
             x_i = band.xm_m + dx
             k_i = np.maximum(ctx.first_passage(x_i + offs[i]), k[:, :, i - 1])
         k[:, :, i] = k_i
         x_trig[:, :, i] = x_i
-        dp_i = gaps[rows, i, k_i]                                       # [A, B]
+        dp_i = gaps[rows, i, k_i]  # [A, B]
         dp[:, :, i] = dp_i
         # deviation from the fitted model seen through the same filter (no filter lag)
         dev[:, :, i] = dp_i - (band.a_db + 10.0 * band.n_hat * reg[rows, i, k_i])
@@ -288,8 +290,15 @@ def joint_nodes(ctx: BlockContext, band: Band, weights: np.ndarray, method: str)
     conv_price = np.where(converged.any(axis=-1), np.argmax(converged, axis=-1) + 1, n_n + 1)
     width = np.maximum(band.pr_m - band.pl_m, 1e-9)
     fluct = np.minimum(1.0, x_trig.std(axis=-1) / width)
-    return {"k": k, "x_trig_m": x_trig, "dp_db": dp, "dev_db": dev, "pred_db": pred,
-            "conv_price": conv_price, "fluct": fluct}
+    return {
+        "k": k,
+        "x_trig_m": x_trig,
+        "dp_db": dp,
+        "dev_db": dev,
+        "pred_db": pred,
+        "conv_price": conv_price,
+        "fluct": fluct,
+    }
 
 
 @register
@@ -329,10 +338,18 @@ class JointPolicy(Policy):
             "band_xm_m": (("run",), band.xm_m, "m", "band midpoint Xm (the head's trigger)"),
             "fit_offset_db": (("run",), band.a_db, "dB", "fitted gap offset a_hat"),
             "fit_exponent": (("run",), band.n_hat, "1", "fitted path-loss exponent n_hat"),
-            "trigger_gap_db": (("run", "node"), nodes["dp_db"][0], "dB",
-                               "measured gap serving - target at the trigger (Delta P_i)"),
-            "conv_price": (("run",), nodes["conv_price"][0], "1",
-                           "convergence price C: first node with |Delta P| < threshold (N+1: none)"),
+            "trigger_gap_db": (
+                ("run", "node"),
+                nodes["dp_db"][0],
+                "dB",
+                "measured gap serving - target at the trigger (Delta P_i)",
+            ),
+            "conv_price": (
+                ("run",),
+                nodes["conv_price"][0],
+                "1",
+                "convergence price C: first node with |Delta P| < threshold (N+1: none)",
+            ),
             "fluct": (("run",), nodes["fluct"][0], "1", "fluctuation level F: std of X_i / (PR - PL)"),
         }
         return Command(k, retry, extras)
@@ -363,8 +380,9 @@ def run_policy(policy: Policy, ctx: BlockContext) -> dict[str, tuple]:
     k_trig = (cmd.k if cmd.k_trigger is None else cmd.k_trigger).ravel()
     # trigger to completion, from the radio-link failure when that came before the trigger
     lead = t_cmd - kin.t_s[k_trig]
-    delay_trigger = np.where(ex.success, lead + ex.delay_all_s,
-                             ctx.scn.execution.reestablish_s + np.maximum(ex.t_detect_s + lead, 0.0))
+    delay_trigger = np.where(
+        ex.success, lead + ex.delay_all_s, ctx.scn.execution.reestablish_s + np.maximum(ex.t_detect_s + lead, 0.0)
+    )
     t_complete = t_cmd + np.nan_to_num(ex.delay_s)
     k_from = np.ceil(t_complete / kin.period_s - 1e-9).astype(np.intp)
     pp = policy.returns(ctx, k_from.reshape(b_n, n_n), t_complete.reshape(b_n, n_n)).ravel() & ex.success
@@ -375,22 +393,36 @@ def run_policy(policy: Policy, ctx: BlockContext) -> dict[str, tuple]:
     out = {
         "command_x_m": (("run", "node"), sh(hb), "m", "true position of the first handover command Hb"),
         "command_time_s": (("run", "node"), sh(t_cmd), "s", "time of the first command since the head left x_s"),
-        "completion_x_m": (("run", "node"), sh(ex.completion_x_m), "m",
-                           "true completion position He of the successful (or last) attempt"),
+        "completion_x_m": (
+            ("run", "node"),
+            sh(ex.completion_x_m),
+            "m",
+            "true completion position He of the successful (or last) attempt",
+        ),
         "attempts": (("run", "node"), sh(ex.attempts).astype(np.int8), "1", "execution attempts"),
         "success": (("run", "node"), sh(ex.success).astype(np.int8), "1", "1 if the handover succeeded"),
-        "delay_s": (("run", "node"), sh(ex.delay_s), "s",
-                    "first command to completion incl. retries (NaN: failed)"),
-        "delay_all_s": (("run", "node"), sh(ex.delay_all_s), "s",
-                        "first command, or an earlier radio-link failure, to completion, a failed "
-                        "handover's re-establishment included"),
-        "delay_trigger_s": (("run", "node"), sh(delay_trigger), "s",
-                            "trigger (A3: start of the time-to-trigger; else the command), or an earlier "
-                            "radio-link failure, to completion, all handovers"),
-        "pingpong": (("run", "node"), sh(pp).astype(np.int8), "1",
-                     "1 if commanded back to the previous cell within the ping-pong window"),
-        "rsrp_gap_db": (("run", "node"), sh(ex.gap_db), "dB",
-                        "true RSRP-GAP serving - target at completion"),
+        "delay_s": (("run", "node"), sh(ex.delay_s), "s", "first command to completion incl. retries (NaN: failed)"),
+        "delay_all_s": (
+            ("run", "node"),
+            sh(ex.delay_all_s),
+            "s",
+            "first command, or an earlier radio-link failure, to completion, a failed "
+            "handover's re-establishment included",
+        ),
+        "delay_trigger_s": (
+            ("run", "node"),
+            sh(delay_trigger),
+            "s",
+            "trigger (A3: start of the time-to-trigger; else the command), or an earlier "
+            "radio-link failure, to completion, all handovers",
+        ),
+        "pingpong": (
+            ("run", "node"),
+            sh(pp).astype(np.int8),
+            "1",
+            "1 if commanded back to the previous cell within the ping-pong window",
+        ),
+        "rsrp_gap_db": (("run", "node"), sh(ex.gap_db), "dB", "true RSRP-GAP serving - target at completion"),
     }
     out.update(cmd.extras)
     return out

@@ -40,8 +40,7 @@ def path_loss_db(d_m, radio: Radio) -> np.ndarray:
 def link_distances_m(x_m, radio: Radio) -> tuple[np.ndarray, np.ndarray]:
     """3-D-free distances d_s, d_t [m] of track positions x to the serving and target RRH."""
     x = np.asarray(x_m, dtype=float)
-    return (np.hypot(x - radio.x_serving_m, radio.offset_m),
-            np.hypot(x - radio.x_target_m, radio.offset_m))
+    return (np.hypot(x - radio.x_serving_m, radio.offset_m), np.hypot(x - radio.x_target_m, radio.offset_m))
 
 
 def mean_rsrp_dbm(x_m, radio: Radio) -> tuple[np.ndarray, np.ndarray]:
@@ -63,6 +62,7 @@ def sinr_db(p_wanted_dbm, p_other_dbm, radio: Radio) -> np.ndarray:
 
 
 # --- correlated shadowing ---------------------------------------------------------------
+
 
 def ar1_coefficient(step: float, corr_length: float) -> float:
     """ρ = exp(−|step|/corr_length) of an AR(1) (Gauss–Markov) process."""
@@ -137,6 +137,7 @@ def shadowing_fields(white: np.ndarray, grid: ShadowGrid, radio: Radio) -> np.nd
 
 # --- L3 filtering (TS 36.331 §5.5.3.2) ------------------------------------------------
 
+
 def l3_coefficient(k: int) -> float:
     """a = 1/2^(k/4) of TS 36.331 §5.5.3.2 (k = 0: no filtering, a = 1)."""
     if not isinstance(k, (int, np.integer)) or k < 0:
@@ -167,7 +168,7 @@ def l3_filter(m: np.ndarray, a: float) -> np.ndarray:
     m = np.asarray(m, dtype=float)
     if a == 1.0:
         return m.copy()
-    zi = ((1.0 - a) * m[..., :1])
+    zi = (1.0 - a) * m[..., :1]
     return lfilter([a], [1.0, -(1.0 - a)], m, axis=-1, zi=zi)[0]
 
 

@@ -69,8 +69,9 @@ class _Run:
             for k in range(self.k_n):
                 x = self.x_true(i, k)
                 for j in range(2):
-                    mm = self.mean_rsrp(j, x) - self.field(j, x) \
-                        + rd.meas_sigma_db * float(draws.meas_white[b, i, j, k])
+                    mm = (
+                        self.mean_rsrp(j, x) - self.field(j, x) + rd.meas_sigma_db * float(draws.meas_white[b, i, j, k])
+                    )
                     m_i[j].append(mm)
                     f_i[j].append(mm if k == 0 else (1 - a) * f_i[j][-1] + a * mm)
             self.meas.append(m_i)
@@ -114,7 +115,7 @@ class _Run:
         step = self.v * self.tm
         sinrs = [self.sinr(0, hb - step * j) for j in range(n_eval + n_t)]
         for end in range(n_t + 1):  # out-of-sync windows ending j = end samples before hb
-            if sum(sinrs[end:end + n_eval]) / n_eval >= rd.q_out_db:
+            if sum(sinrs[end : end + n_eval]) / n_eval >= rd.q_out_db:
                 return True  # an in-sync evaluation within T310: no radio-link failure
         return False
 
@@ -131,8 +132,8 @@ class _Run:
             n_out, n_in = cfg.samples(cfg.qout_eval_s), cfg.samples(cfg.qin_eval_s)
             oos, ins = [], []
             for j in range(len(xs)):
-                o = j + 1 >= n_out and sum(sinrs[j + 1 - n_out:j + 1]) / n_out < cfg.q_out_db
-                i = j + 1 >= n_in and sum(sinrs[j + 1 - n_in:j + 1]) / n_in > cfg.q_in_db
+                o = j + 1 >= n_out and sum(sinrs[j + 1 - n_out : j + 1]) / n_out < cfg.q_out_db
+                i = j + 1 >= n_in and sum(sinrs[j + 1 - n_in : j + 1]) / n_in > cfg.q_in_db
                 oos.append(o)
                 ins.append(i and not o)
             j_rlf = first_rlf_reference(oos, ins, cfg)
@@ -194,9 +195,18 @@ def _outcome(run: _Run, i: int, k_cmd: int, retry_ok, returns, k_trig: int | Non
     lead = (k_cmd - k_trig) * run.tm
     start_all = 0.0 if ok else min(0.0, t_fail)
     start_trig = -lead if ok else min(-lead, t_fail)
-    return {"k": k_cmd, "command_x_m": hb, "attempts": attempts, "success": ok, "delay_s": delay,
-            "pingpong": pp, "completion_x_m": he, "rsrp_gap_db": gap,
-            "delay_all_s": t_done_rel - start_all, "delay_trigger_s": t_done_rel - start_trig}
+    return {
+        "k": k_cmd,
+        "command_x_m": hb,
+        "attempts": attempts,
+        "success": ok,
+        "delay_s": delay,
+        "pingpong": pp,
+        "completion_x_m": he,
+        "rsrp_gap_db": gap,
+        "delay_all_s": t_done_rel - start_all,
+        "delay_trigger_s": t_done_rel - start_trig,
+    }
 
 
 def _a3(run: _Run) -> list[dict]:
@@ -265,8 +275,11 @@ def _joint(run: _Run) -> list[dict]:
         sigma0 = math.sqrt(2) * rd.meas_sigma_db
     else:
         sigma0 = math.sqrt(2) * rd.meas_sigma_db * math.sqrt(a_l3 / (2 - a_l3))
-    gaph = jt.gaph_gamma_db + jt.gaph_kappa * sigma0 if jt.gaph_variant == "widen" \
+    gaph = (
+        jt.gaph_gamma_db + jt.gaph_kappa * sigma0
+        if jt.gaph_variant == "widen"
         else max(jt.gaph_gamma_db - jt.gaph_kappa * sigma0, jt.gaph_floor_db)
+    )
     src = run.filt if jt.measurements == "l3" else run.meas
 
     def gap(i, k):
@@ -307,8 +320,7 @@ def _joint(run: _Run) -> list[dict]:
             n_hat = rd.pathloss_exponent
         else:
             den = s1 * srr - sr * sr
-            slope = (s1 * srg - sr * sg) / den if den > 1e-12 * max(s1 * srr, 1e-300) \
-                else 10 * rd.pathloss_exponent
+            slope = (s1 * srg - sr * sg) / den if den > 1e-12 * max(s1 * srr, 1e-300) else 10 * rd.pathloss_exponent
             n_hat = min(max(slope / 10, jt.exponent_bounds[0]), jt.exponent_bounds[1])
         a_hat = (sg - 10 * n_hat * sr) / s1 if s1 > 0 else 0.0
         pl, pr = band(a_hat, n_hat)
@@ -364,7 +376,7 @@ def _joint(run: _Run) -> list[dict]:
         x_cmd_hat = run.x_hat(i, ks[i])
         back = v * ex.t0_s if jt.retry_rule == "completed" else 0.0
 
-        def retry_ok(a, s_ok, hb, x_cmd_hat=x_cmd_hat):
+        def retry_ok(a, s_ok, hb, x_cmd_hat=x_cmd_hat, back=back):
             if ex.retry == "common":
                 return s_ok and a < ex.max_attempts
             return a < 2 and x_cmd_hat + v * (ex.t0_s + ex.tz_s) * a + back <= pr
@@ -385,6 +397,5 @@ def simulate_reference(scn: Scenario, kin: Kinematics, draws: Draws, policies: t
             res[p].append(REFERENCE_POLICIES[p](run))
     out = {}
     for p in policies:
-        out[p] = {key: np.array([[node[key] for node in r] for r in res[p]])
-                  for key in res[p][0][0]}
+        out[p] = {key: np.array([[node[key] for node in r] for r in res[p]]) for key in res[p][0][0]}
     return out

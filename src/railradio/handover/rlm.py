@@ -92,7 +92,7 @@ def indications(sinr_db: NDArray, cfg: RlmConfig) -> tuple[NDArray[np.bool_], ND
     def mean_last(n: int) -> NDArray:
         out = np.full(s.shape, np.nan)
         if n <= s.shape[-1]:
-            out[..., n - 1:] = (c[..., n:] - c[..., :-n]) / n
+            out[..., n - 1 :] = (c[..., n:] - c[..., :-n]) / n
         return out
 
     with np.errstate(invalid="ignore"):

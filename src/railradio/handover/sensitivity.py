@@ -13,8 +13,13 @@ from typing import Any
 
 from railradio.handover.params import SIM_SECTIONS, Scenario
 
-AFFECTS = {"joint": ("joint",), "a3": ("a3",), "radio": ("joint", "a3", "distance"),
-           "train": ("joint", "a3", "distance"), "execution": ("joint", "a3", "distance")}
+AFFECTS = {
+    "joint": ("joint",),
+    "a3": ("a3",),
+    "radio": ("joint", "a3", "distance"),
+    "train": ("joint", "a3", "distance"),
+    "execution": ("joint", "a3", "distance"),
+}
 """Policies a switch of each scenario section can change."""
 
 
@@ -31,8 +36,7 @@ def variants(sens_cfg: dict[str, Any]) -> dict[str, dict[str, Any]]:
     for switch, values in sens_cfg.get("switches", {}).items():
         section = switch.split(".")[0]
         if section not in SIM_SECTIONS or switch.count(".") != 1:
-            raise ValueError(f"sensitivity switch must be 'section.key' with section in {SIM_SECTIONS}, "
-                             f"got {switch!r}")
+            raise ValueError(f"sensitivity switch must be 'section.key' with section in {SIM_SECTIONS}, got {switch!r}")
         for v in values:
             vid = variant_id(switch, v)
             if vid in out:

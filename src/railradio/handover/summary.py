@@ -23,50 +23,69 @@ MEANS = ("delay_ms", "delay_all_ms", "delay_trigger_ms", "rsrp_gap_db", "attempt
 
 def policy_metrics(ds: xr.Dataset, policy: str, level: float = 0.95) -> dict[str, float]:
     """Metrics of one policy from a per-handover dataset (variables ``<policy>__<name>``)."""
-    v = {name: ds[f"{policy}__{name}"].values for name in
-         ("success", "pingpong", "attempts", "delay_s", "delay_all_s", "delay_trigger_s", "rsrp_gap_db")}
+    v = {
+        name: ds[f"{policy}__{name}"].values
+        for name in ("success", "pingpong", "attempts", "delay_s", "delay_all_s", "delay_trigger_s", "rsrp_gap_db")
+    }
     out: dict[str, float] = {}
     events = {"success": v["success"], "pingpong": v["pingpong"], "retried": v["attempts"] > 1}
     for name, e in events.items():
         r = clustered_rate(np.asarray(e, dtype=float), level)
-        out.update({name: r["p"], f"{name}_se": r["se"], f"{name}_lo": r["lo"], f"{name}_hi": r["hi"],
-                    f"{name}_neff": r["n_eff"]})
+        out.update(
+            {
+                name: r["p"],
+                f"{name}_se": r["se"],
+                f"{name}_lo": r["lo"],
+                f"{name}_hi": r["hi"],
+                f"{name}_neff": r["n_eff"],
+            }
+        )
     out["n_handovers"] = float(v["success"].size)
     out["n_runs"] = float(v["success"].shape[0])
-    for name, values in (("delay_ms", 1e3 * v["delay_s"]), ("delay_all_ms", 1e3 * v["delay_all_s"]),
-                         ("delay_trigger_ms", 1e3 * v["delay_trigger_s"]),
-                         ("rsrp_gap_db", np.abs(v["rsrp_gap_db"])),
-                         ("attempts", v["attempts"].astype(float))):
+    for name, values in (
+        ("delay_ms", 1e3 * v["delay_s"]),
+        ("delay_all_ms", 1e3 * v["delay_all_s"]),
+        ("delay_trigger_ms", 1e3 * v["delay_trigger_s"]),
+        ("rsrp_gap_db", np.abs(v["rsrp_gap_db"])),
+        ("attempts", v["attempts"].astype(float)),
+    ):
         m = clustered_mean(values)
         out[name], out[f"{name}_se"] = m["mean"], m["se"]
     return out
 
 
-UNITS = {"success": ("1", "handover success rate"),
-         "pingpong": ("1", "ping-pong rate (return within the window)"),
-         "retried": ("1", "share of handovers needing a second attempt"),
-         "delay_ms": ("ms", "mean handover delay (command to completion, successful)"),
-         "delay_all_ms": ("ms", "mean command-to-completion time, all handovers (re-establishment included)"),
-         "delay_trigger_ms": ("ms", "mean trigger-to-completion time, all handovers"),
-         "rsrp_gap_db": ("dB", "mean |RSRP-GAP| at completion"),
-         "attempts": ("1", "mean execution attempts"),
-         "n_handovers": ("1", "node handovers simulated"),
-         "n_runs": ("1", "train crossings simulated")}
+UNITS = {
+    "success": ("1", "handover success rate"),
+    "pingpong": ("1", "ping-pong rate (return within the window)"),
+    "retried": ("1", "share of handovers needing a second attempt"),
+    "delay_ms": ("ms", "mean handover delay (command to completion, successful)"),
+    "delay_all_ms": ("ms", "mean command-to-completion time, all handovers (re-establishment included)"),
+    "delay_trigger_ms": ("ms", "mean trigger-to-completion time, all handovers"),
+    "rsrp_gap_db": ("dB", "mean |RSRP-GAP| at completion"),
+    "attempts": ("1", "mean execution attempts"),
+    "n_handovers": ("1", "node handovers simulated"),
+    "n_runs": ("1", "train crossings simulated"),
+}
 
 
 def _attrs(name: str) -> dict[str, str]:
     for base, (units, long_name) in UNITS.items():
         if name == base:
             return {"units": units, "long_name": long_name}
-        for suffix, what in (("_se", "standard error"), ("_lo", "95% CI lower bound"),
-                             ("_hi", "95% CI upper bound"), ("_neff", "effective sample size")):
+        for suffix, what in (
+            ("_se", "standard error"),
+            ("_lo", "95% CI lower bound"),
+            ("_hi", "95% CI upper bound"),
+            ("_neff", "effective sample size"),
+        ):
             if name == base + suffix:
                 return {"units": units if suffix != "_neff" else "1", "long_name": f"{long_name}: {what}"}
     raise KeyError(name)
 
 
-def metrics_dataset(metrics: dict[str, dict[str, dict[str, float]]], dim: str, dim_attrs: dict,
-                    coord_values: list) -> xr.Dataset:
+def metrics_dataset(
+    metrics: dict[str, dict[str, dict[str, float]]], dim: str, dim_attrs: dict, coord_values: list
+) -> xr.Dataset:
     """Dataset over (policy, ``dim``) from metrics[group][policy][name], groups in insertion
     order labelled by ``coord_values``."""
     keys = list(metrics)
@@ -74,8 +93,14 @@ def metrics_dataset(metrics: dict[str, dict[str, dict[str, float]]], dim: str, d
         raise ValueError("coord_values must label every group of metrics")
     policies = list(metrics[keys[0]])
     names = list(metrics[keys[0]][policies[0]])
-    data = {name: (("policy", dim), np.array([[metrics[c][p][name] for c in keys] for p in policies]),
-                   _attrs(name)) for name in names}
-    return xr.Dataset(data, coords={
-        "policy": ("policy", policies, {"units": "1", "long_name": "handover policy"}),
-        dim: (dim, coord_values, dim_attrs)})
+    data = {
+        name: (("policy", dim), np.array([[metrics[c][p][name] for c in keys] for p in policies]), _attrs(name))
+        for name in names
+    }
+    return xr.Dataset(
+        data,
+        coords={
+            "policy": ("policy", policies, {"units": "1", "long_name": "handover policy"}),
+            dim: (dim, coord_values, dim_attrs),
+        },
+    )

@@ -56,8 +56,11 @@ def kinematics(scn: Scenario, speed_kmh: float) -> Kinematics:
     train_length = tr.node_spacing_m * (tr.n_nodes - 1)
     t_end = (rd.x_target_m + train_length) / v
     n = int(math.floor(t_end / rd.meas_period_s + 1e-9)) + 1
-    grid = ShadowGrid(rd.x_serving_m - train_length - FIELD_MARGIN_BEHIND_M,
-                      rd.x_target_m + train_length + FIELD_MARGIN_AHEAD_M, rd.shadow_grid_m)
+    grid = ShadowGrid(
+        rd.x_serving_m - train_length - FIELD_MARGIN_BEHIND_M,
+        rd.x_target_m + train_length + FIELD_MARGIN_AHEAD_M,
+        rd.shadow_grid_m,
+    )
     return Kinematics(v, rd.meas_period_s, n, tr.node_spacing_m * np.arange(tr.n_nodes), grid)
 
 

@@ -12,7 +12,7 @@ from functools import cached_property
 import numpy as np
 from numpy.typing import NDArray
 
-ELEMENT_MAX_GAIN_DBI = 8.0   # TR 38.901 Table 7.3-1
+ELEMENT_MAX_GAIN_DBI = 8.0  # TR 38.901 Table 7.3-1
 ELEMENT_HPBW_DEG = 65.0
 ELEMENT_FRONT_BACK_DB = 30.0
 ARRAY_NULL_FLOOR = 1e-3
@@ -28,8 +28,7 @@ def element_gain_db(phi_rel_rad: NDArray) -> NDArray[np.float64]:
     """TR 38.901 element gain [dBi] at azimuth φ' from boresight:
     8 - min(12 (φ'/65°)², 30)."""
     phi_deg = np.degrees(wrap_rad(phi_rel_rad))
-    return ELEMENT_MAX_GAIN_DBI - np.minimum(12.0 * (phi_deg / ELEMENT_HPBW_DEG) ** 2,
-                                             ELEMENT_FRONT_BACK_DB)
+    return ELEMENT_MAX_GAIN_DBI - np.minimum(12.0 * (phi_deg / ELEMENT_HPBW_DEG) ** 2, ELEMENT_FRONT_BACK_DB)
 
 
 def ula_gain(phi_rel_rad: NDArray, steer_rel_rad: NDArray, n_elements: int) -> NDArray[np.float64]:
@@ -122,8 +121,7 @@ class TrainArray:
         return 10 * np.log10(total)
 
 
-def facing_panel(x_m: NDArray, rrh_x_m: NDArray, offset_m: float,
-                 panel_x_m: tuple[float, float]) -> NDArray[np.int64]:
+def facing_panel(x_m: NDArray, rrh_x_m: NDArray, offset_m: float, panel_x_m: tuple[float, float]) -> NDArray[np.int64]:
     """The panel (0 head, 1 tail) that sees each RRH closer to its boresight: the one a
     receiver with the train's geometry expects to measure it (the tracker's rule) [ours]."""
     x = np.asarray(x_m, float)

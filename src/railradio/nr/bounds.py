@@ -98,9 +98,18 @@ def change_epochs(phases, dt_s: float) -> NDArray[np.int64]:
     return np.ceil(ends / dt_s - 1e-9).astype(np.int64)
 
 
-def pcrb_m(rrh_xy_seq: list[NDArray], x_true: NDArray, dh_m: float, sigma_toa_s_seq: list[NDArray],
-           sigma_theta_rad: float, dt_s: float, q: float, p0: NDArray,
-           reset_epochs: NDArray | None = None, reset_acc_sigma: float = 10.0) -> NDArray[np.float64]:
+def pcrb_m(
+    rrh_xy_seq: list[NDArray],
+    x_true: NDArray,
+    dh_m: float,
+    sigma_toa_s_seq: list[NDArray],
+    sigma_theta_rad: float,
+    dt_s: float,
+    q: float,
+    p0: NDArray,
+    reset_epochs: NDArray | None = None,
+    reset_acc_sigma: float = 10.0,
+) -> NDArray[np.float64]:
     """Posterior CRB recursion of the 2-D position [m] along the track (Tichavský et al.
     1998) for the given measurement error levels (a prediction when they are measured).
 

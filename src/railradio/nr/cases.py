@@ -24,8 +24,10 @@ def merged_cases(nr_cfg: dict[str, Any], nr_schema: dict[str, Any]) -> dict[str,
     ``sensitivity`` section) with the case's override merged in, validated against the nr
     section's schema (a bad value names ``nr.sensitivity.cases.<case>.<key>``)."""
     base = {k: v for k, v in nr_cfg.items() if k != "sensitivity"}
-    return {case: validate_config(deep_merge(base, override), nr_schema, root=f"nr.sensitivity.cases.{case}")
-            for case, override in nr_cfg["sensitivity"]["cases"].items()}
+    return {
+        case: validate_config(deep_merge(base, override), nr_schema, root=f"nr.sensitivity.cases.{case}")
+        for case, override in nr_cfg["sensitivity"]["cases"].items()
+    }
 
 
 def case_epochs(case_cfg: dict, sens: dict) -> int:
@@ -50,8 +52,9 @@ def case_n_shards(case_cfg: dict, main_cfg: dict, sens: dict, real: str, n_cal_s
     return max(1, min(shards, round(shards * n / n_full)))
 
 
-def case_inputs(case: str, cases: dict, main_cfg: dict, sens: dict, real: str, n_main_epochs: int,
-                n_cal_shards: int) -> list[str]:
+def case_inputs(
+    case: str, cases: dict, main_cfg: dict, sens: dict, real: str, n_main_epochs: int, n_cal_shards: int
+) -> list[str]:
     """Estimate shards read by a case's calibration (``real="cal"``) or track (``"r0"``):
     the main run's shards covering the case's epochs when the case simulates the same
     bursts and needs no more epochs than the main run has, else those of the first case in
@@ -63,13 +66,14 @@ def case_inputs(case: str, cases: dict, main_cfg: dict, sens: dict, real: str, n
 
     n = epochs(cfg)
     if sim_config(cfg) == sim_config(main_cfg):
-        n_main, n_sh = ((main_cfg["calibration"]["epochs"], n_cal_shards) if real == "cal"
-                        else (n_main_epochs, main_cfg["n_shards"]))
+        n_main, n_sh = (
+            (main_cfg["calibration"]["epochs"], n_cal_shards)
+            if real == "cal"
+            else (n_main_epochs, main_cfg["n_shards"])
+        )
         if n <= n_main:
-            return [f"results/nr/estimates/{real}/s{k}.nc" for k in range(n_sh)
-                    if shard_epochs(n_main, n_sh, k)[0] < n]
-    owner = next(c for c, other in cases.items()
-                 if sim_config(other) == sim_config(cfg) and epochs(other) == n)
+            return [f"results/nr/estimates/{real}/s{k}.nc" for k in range(n_sh) if shard_epochs(n_main, n_sh, k)[0] < n]
+    owner = next(c for c, other in cases.items() if sim_config(other) == sim_config(cfg) and epochs(other) == n)
     n_sh = case_n_shards(cases[owner], main_cfg, sens, real, n_cal_shards)
     return [f"results/nr/cases/{owner}/estimates/{real}/s{k}.nc" for k in range(n_sh)]
 
@@ -77,5 +81,3 @@ def case_inputs(case: str, cases: dict, main_cfg: dict, sens: dict, real: str, n
 def sync_sigma_s(case_cfg: dict) -> float:
     """RRH clock spread σ [s] of a case (0 without ``sync``)."""
     return float(case_cfg["sync"]["rrh_sigma_s"])
-
-

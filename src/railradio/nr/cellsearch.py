@@ -62,17 +62,31 @@ class CellSearchConfig:
     def receiver_config(self, burst: ReceiverConfig) -> ReceiverConfig:
         """The correlation settings of the search on bursts of ``burst``'s decimation,
         SS-block pattern and window."""
-        return ReceiverConfig(decimation=burst.decimation, ssb_pattern=burst.ssb_pattern,
-                              n_blocks=burst.n_blocks, search_lags=burst.search_lags,
-                              detect_k_sigma=burst.detect_k_sigma,
-                              prescreen_k_sigma=burst.prescreen_k_sigma, template=self.template)
+        return ReceiverConfig(
+            decimation=burst.decimation,
+            ssb_pattern=burst.ssb_pattern,
+            n_blocks=burst.n_blocks,
+            search_lags=burst.search_lags,
+            detect_k_sigma=burst.detect_k_sigma,
+            prescreen_k_sigma=burst.prescreen_k_sigma,
+            template=self.template,
+        )
 
 
 def correlation_key(cfg: ReceiverConfig, detector: str, pfa: float) -> tuple:
     """What the per-block statistics (η, μ, σ, detection) of a correlator depend on: two
     correlators with the same key give the same :class:`BlockCorrelation` detections."""
-    return (cfg.decimation, cfg.ssb_pattern, cfg.n_blocks, cfg.search_lags, cfg.detect_k_sigma,
-            cfg.prescreen_k_sigma, cfg.template, detector, float(pfa))
+    return (
+        cfg.decimation,
+        cfg.ssb_pattern,
+        cfg.n_blocks,
+        cfg.search_lags,
+        cfg.detect_k_sigma,
+        cfg.prescreen_k_sigma,
+        cfg.template,
+        detector,
+        float(pfa),
+    )
 
 
 def ss_rsrp_db(res: BlockCorrelation) -> NDArray[np.float64]:

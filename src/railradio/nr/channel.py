@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import json
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import cache
 from importlib.resources import files
 
 import numpy as np
@@ -28,8 +28,9 @@ def breakpoint_distance_m(h_bs_m: float, h_ut_m: float, fc_hz: float) -> float:
     return 4.0 * (h_bs_m - 1.0) * (h_ut_m - 1.0) * fc_hz / SPEED_OF_LIGHT_M_S
 
 
-def pathloss_umi_los_db(d3d_m: NDArray, d2d_m: NDArray, fc_hz: float, h_bs_m: float,
-                        h_ut_m: float) -> NDArray[np.float64]:
+def pathloss_umi_los_db(
+    d3d_m: NDArray, d2d_m: NDArray, fc_hz: float, h_bs_m: float, h_ut_m: float
+) -> NDArray[np.float64]:
     """TR 38.901 UMi-street-canyon LOS path loss [dB] (valid 10 m ≤ d2D ≤ 5 km).
 
     PL1 = 32.4 + 21 log10(d3D) + 20 log10(f_c/GHz) for d2D ≤ d'_BP,
@@ -42,13 +43,13 @@ def pathloss_umi_los_db(d3d_m: NDArray, d2d_m: NDArray, fc_hz: float, h_bs_m: fl
     fc_ghz = fc_hz / 1e9
     dbp = breakpoint_distance_m(h_bs_m, h_ut_m, fc_hz)
     pl1 = 32.4 + 21.0 * np.log10(d3d) + 20.0 * np.log10(fc_ghz)
-    pl2 = (32.4 + 40.0 * np.log10(d3d) + 20.0 * np.log10(fc_ghz)
-           - 9.5 * np.log10(dbp**2 + (h_bs_m - h_ut_m) ** 2))
+    pl2 = 32.4 + 40.0 * np.log10(d3d) + 20.0 * np.log10(fc_ghz) - 9.5 * np.log10(dbp**2 + (h_bs_m - h_ut_m) ** 2)
     return np.where(d2d <= dbp, pl1, pl2)
 
 
-def shadowing_field_db(rng: np.random.Generator, n_points: int, sigma_db: float,
-                       corr_dist_m: float, step_m: float = 1.0) -> NDArray[np.float64]:
+def shadowing_field_db(
+    rng: np.random.Generator, n_points: int, sigma_db: float, corr_dist_m: float, step_m: float = 1.0
+) -> NDArray[np.float64]:
     """A stationary Gauss–Markov field on a grid: s[i+1] = ρ s[i] + σ √(1-ρ²) w,
     ρ = exp(-step/d_corr), s[0] ~ N(0, σ²): autocorrelation σ² exp(-|Δ|/d_corr) [dB]."""
     if sigma_db < 0 or corr_dist_m <= 0 or n_points < 1:
@@ -89,7 +90,7 @@ class TdlProfile:
         return float(10 * np.log10(self.los_power / first))
 
 
-@lru_cache(maxsize=None)
+@cache
 def _table() -> dict:
     return json.loads((files("railradio") / "data" / "tdl.json").read_text(encoding="utf-8"))
 
@@ -107,8 +108,7 @@ def tdl_profile(name: str, delay_spread_s: float) -> TdlProfile:
     dl = np.array([x["delay"] for x in t["rayleigh_taps"]]) * delay_spread_s
     p_los = 10 ** (los["power_db"] / 10) if los else 0.0
     total = p_los + pw.sum()
-    return TdlProfile(name, p_los / total, (los["delay"] * delay_spread_s) if los else 0.0,
-                      pw / total, dl)
+    return TdlProfile(name, p_los / total, (los["delay"] * delay_spread_s) if los else 0.0, pw / total, dl)
 
 
 def sos_params(rng: np.random.Generator, n_taps: int, n_sinusoids: int) -> tuple[NDArray, NDArray]:
@@ -118,8 +118,9 @@ def sos_params(rng: np.random.Generator, n_taps: int, n_sinusoids: int) -> tuple
     return alpha, phi
 
 
-def sos_eval(powers: NDArray, doppler_hz: float, times_s: NDArray, alpha: NDArray,
-             phi: NDArray) -> NDArray[np.complex128]:
+def sos_eval(
+    powers: NDArray, doppler_hz: float, times_s: NDArray, alpha: NDArray, phi: NDArray
+) -> NDArray[np.complex128]:
     """Evaluate a sum-of-sinusoids process with given (α, φ) at ``times_s``: [n_times, n_taps]."""
     powers = np.asarray(powers, dtype=float)
     f = doppler_hz * np.cos(alpha)
@@ -130,8 +131,9 @@ def sos_eval(powers: NDArray, doppler_hz: float, times_s: NDArray, alpha: NDArra
     return np.sqrt(powers / alpha.shape[1])[None, :] * s
 
 
-def sos_taps(rng: np.random.Generator, powers: NDArray, doppler_hz: float, times_s: NDArray,
-             n_sinusoids: int = 32) -> NDArray[np.complex128]:
+def sos_taps(
+    rng: np.random.Generator, powers: NDArray, doppler_hz: float, times_s: NDArray, n_sinusoids: int = 32
+) -> NDArray[np.complex128]:
     """Rayleigh tap gains by a sum of sinusoids (Clarke's model, random arrival angles).
 
     a_l(t) = sqrt(P_l / M) Σ_m exp(j(2π f_D cos α_{l,m} t + φ_{l,m})), α, φ ~ U[0, 2π):

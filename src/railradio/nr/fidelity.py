@@ -75,7 +75,6 @@ draws use KEY_EPOCH)."""
 D_FULL = 1
 
 
-
 @dataclass(frozen=True)
 class Comparison:
     """A shortcut's measurement: the variant with it off against the variant it is
@@ -106,6 +105,7 @@ def comparisons(scn: Scenario) -> dict[str, Comparison]:
     if scn.exact_spill:
         skip.add("spill")
     return {k: c for k, c in COMPARISONS.items() if k not in skip}
+
 
 DECISIONS = ("detection", "selection", "toa", "aod")
 TOA_CHANGE_SAMPLES = 1.0
@@ -141,15 +141,15 @@ class Receivers:
         self.n_use = n_use
 
         def cor(rc, det, pfa):
-            return Correlator(dataclasses.replace(rc, decimation=decimation), det, pfa,
-                              template_decimation=base)
+            return Correlator(dataclasses.replace(rc, decimation=decimation), det, pfa, template_decimation=base)
 
         self.cors = [cor(rc, det, scn.pfa) for _, rc, det in rx]
         cs = scn.cell_search
         cs_rc = cs.receiver_config(scn.receiver)
         key = correlation_key(cs_rc, cs.detector, cs.pfa)
-        self.cs_shared = next((j for j, (_, rc, det) in enumerate(rx) if correlation_key(rc, det, scn.pfa) == key),
-                              None)
+        self.cs_shared = next(
+            (j for j, (_, rc, det) in enumerate(rx) if correlation_key(rc, det, scn.pfa) == key), None
+        )
         self.cs_cor = None if self.cs_shared is not None else cor(cs_rc, cs.detector, cs.pfa)
 
     def __call__(self, z: NDArray[np.complex64], s_min: int, n1: NDArray, n2: NDArray) -> dict[str, ReceiverDecisions]:
@@ -161,7 +161,11 @@ class Receivers:
             return spectra[c.n_win]
 
         res = [c.correlate(z, s_min, n1, n2, zf=zf(c)) for c in self.cors]
-        cs_res = res[self.cs_shared] if self.cs_shared is not None else self.cs_cor.correlate(z, s_min, n1, n2, zf=zf(self.cs_cor))
+        cs_res = (
+            res[self.cs_shared]
+            if self.cs_shared is not None
+            else self.cs_cor.correlate(z, s_min, n1, n2, zf=zf(self.cs_cor))
+        )
         rsrp = ss_rsrp_db(cs_res)
         out = {}
         for name, r in zip(self.names, res, strict=True):
@@ -173,8 +177,9 @@ class Receivers:
             order = np.argsort(-s)[: self.n_use]  # railradio.nr.tracking.selected, one epoch
             sel = np.zeros(n1.size, dtype=bool)
             sel[order[ok[order]]] = True
-            out[name] = ReceiverDecisions(r.detected.copy(), r.toa_samples.copy(), r.aod_rad.copy(),
-                                          np.asarray(strength, float), sel)
+            out[name] = ReceiverDecisions(
+                r.detected.copy(), r.toa_samples.copy(), r.aod_rad.copy(), np.asarray(strength, float), sel
+            )
         return out
 
 
@@ -199,16 +204,46 @@ class FidelityRun:
         # the exact synthesis takes the pool as the fast path uses it ("none": no data, no PBCH)
         self.pool_ref = np.zeros_like(pool) if scn.data_beam == "none" else pool
         self.cfg_full = dataclasses.replace(scn.receiver, decimation=D_FULL)
-        self.fast_full = Synthesizer(self.cfg_full, scn.profile, pool, scn.n_sinusoids,
-                                     scn.full_channel_range_m, scn.data_beam, scn.load,
-                                     exact_spill=scn.exact_spill)
+        self.fast_full = Synthesizer(
+            self.cfg_full,
+            scn.profile,
+            pool,
+            scn.n_sinusoids,
+            scn.full_channel_range_m,
+            scn.data_beam,
+            scn.load,
+            exact_spill=scn.exact_spill,
+        )
         self.far_flat = bool(np.isfinite(scn.full_channel_range_m))
         self.down = self.synthesis.down  # synthesis rate -> the front end's
-        self.fast_fading = (Synthesizer(self.fast.cfg, scn.profile, pool, scn.n_sinusoids, np.inf, scn.data_beam,
-                                        scn.load, exact_spill=scn.exact_spill) if self.far_flat else None)
-        self.fast_spill = (None if scn.exact_spill else
-                           Synthesizer(self.fast.cfg, scn.profile, pool, scn.n_sinusoids, scn.full_channel_range_m,
-                                       scn.data_beam, scn.load, exact_spill=True))
+        self.fast_fading = (
+            Synthesizer(
+                self.fast.cfg,
+                scn.profile,
+                pool,
+                scn.n_sinusoids,
+                np.inf,
+                scn.data_beam,
+                scn.load,
+                exact_spill=scn.exact_spill,
+            )
+            if self.far_flat
+            else None
+        )
+        self.fast_spill = (
+            None
+            if scn.exact_spill
+            else Synthesizer(
+                self.fast.cfg,
+                scn.profile,
+                pool,
+                scn.n_sinusoids,
+                scn.full_channel_range_m,
+                scn.data_beam,
+                scn.load,
+                exact_spill=True,
+            )
+        )
         d_c = scn.search_decimation or scn.receiver.decimation
         self.rx = Receivers(scn, selection, d_c)
         self.rx_exact = Receivers(scn, selection, D_FULL)
@@ -216,8 +251,13 @@ class FidelityRun:
         self.det_cors = {}
         if any(n == "robust" for n, _, _ in scn.variants):
             for label, (rc, det, kw, attrs) in detector_variants(scn).items():
-                c = Correlator(dataclasses.replace(rc, decimation=d_c), det, scn.pfa,
-                               template_decimation=scn.receiver.decimation, **kw)
+                c = Correlator(
+                    dataclasses.replace(rc, decimation=d_c),
+                    det,
+                    scn.pfa,
+                    template_decimation=scn.receiver.decimation,
+                    **kw,
+                )
                 for k, v in attrs.items():
                     setattr(c, k, v)
                 self.det_cors[label] = c
@@ -270,13 +310,51 @@ class FidelityRun:
             z["far_taps"] = clock("far_taps", lambda: fast(self.fast_fading)) + n8
         if self.fast_spill is not None:
             z["spill"] = clock("spill", lambda: fast(self.fast_spill)) + n8
-        z["form"] = clock("form", lambda: project(reference_received(
-            self.cfg_full, links, scn.profile, self.pool_ref, draws, symbols, t0, symbol_taps=True,
-            flat=flat, **ref), d)) + n8
-        z["taps"] = clock("taps", lambda: project(reference_received(
-            self.cfg_full, links, scn.profile, self.pool_ref, draws, symbols, t0, flat=flat, **ref), d)) + n8
-        z["exact"] = clock("exact", lambda: project(reference_received(
-            self.cfg_full, links, scn.profile, self.pool_ref, draws, symbols, t0, motion=motion, **ref), d)) + n8
+        z["form"] = (
+            clock(
+                "form",
+                lambda: project(
+                    reference_received(
+                        self.cfg_full,
+                        links,
+                        scn.profile,
+                        self.pool_ref,
+                        draws,
+                        symbols,
+                        t0,
+                        symbol_taps=True,
+                        flat=flat,
+                        **ref,
+                    ),
+                    d,
+                ),
+            )
+            + n8
+        )
+        z["taps"] = (
+            clock(
+                "taps",
+                lambda: project(
+                    reference_received(
+                        self.cfg_full, links, scn.profile, self.pool_ref, draws, symbols, t0, flat=flat, **ref
+                    ),
+                    d,
+                ),
+            )
+            + n8
+        )
+        z["exact"] = (
+            clock(
+                "exact",
+                lambda: project(
+                    reference_received(
+                        self.cfg_full, links, scn.profile, self.pool_ref, draws, symbols, t0, motion=motion, **ref
+                    ),
+                    d,
+                ),
+            )
+            + n8
+        )
         dec = {}
         for name, zz in z.items():
             if name == "exact":
@@ -290,12 +368,21 @@ class FidelityRun:
         # interference only: the anchor cell (the list's first) silent, its PCI still searched
         keep = np.asarray(link_rrh) != cand[0]
         sub = _subset_links(links, keep)
-        z_int = self.fast(sub, None, noise=False, t0_s=t0, d2d_m=np.asarray(lb.link_d2d_m)[keep],
-                          draws=[dr for dr, k in zip(draws, keep, strict=True) if k], serving=serv[keep])[0]
+        z_int = self.fast(
+            sub,
+            None,
+            noise=False,
+            t0_s=t0,
+            d2d_m=np.asarray(lb.link_d2d_m)[keep],
+            draws=[dr for dr, k in zip(draws, keep, strict=True) if k],
+            serving=serv[keep],
+        )[0]
         z_int = project(z_int, down)
         z_int = z_int[: z8.size] if z_int.size >= z8.size else np.pad(z_int, (0, z8.size - z_int.size))
-        fa_int = {name: int(r.detected.sum()) for name, r in
-                  self.rx(upsample(z_int + n8, d // d_c), s_min, n1[:1], n2[:1]).items()}
+        fa_int = {
+            name: int(r.detected.sum())
+            for name, r in self.rx(upsample(z_int + n8, d // d_c), s_min, n1[:1], n2[:1]).items()
+        }
         dec["search"] = clock("search", lambda: self.rx_exact(upsample(z["production"], d), s_min, n1, n2))
         dec["exact"] = clock("exact", lambda: self.rx_exact(upsample(z["exact"], d), s_min, n1, n2))
         # truth, for scoring only
@@ -305,10 +392,25 @@ class FidelityRun:
         aod = dep.aod_rad(np.full(cand.size, x), cand)
         d3d[inr], aod[inr] = lb.d3d_m[pos], lb.aod_rad[pos]
         p_all = 10 ** (lb.rx_power_dbm / 10)
-        truth = dict(x=x, v=v, a=a, d3d=d3d, aod=aod, in_range=inr, n_links=links.n,
-                     sir_db=10 * np.log10(p_all.max() / (p_all.sum() - p_all.max())))
-        return {"decisions": dec, "truth": truth, "seconds": secs, "detector": detector,
-                "interference_false_alarms": fa_int, "cand": np.asarray(cand), "epoch": int(epoch)}
+        truth = dict(
+            x=x,
+            v=v,
+            a=a,
+            d3d=d3d,
+            aod=aod,
+            in_range=inr,
+            n_links=links.n,
+            sir_db=10 * np.log10(p_all.max() / (p_all.sum() - p_all.max())),
+        )
+        return {
+            "decisions": dec,
+            "truth": truth,
+            "seconds": secs,
+            "detector": detector,
+            "interference_false_alarms": fa_int,
+            "cand": np.asarray(cand),
+            "epoch": int(epoch),
+        }
 
     def _at_train(self, n: int, serv: NDArray[np.bool_]) -> NDArray[np.bool_]:
         """The links whose data go toward the train under the scenario's traffic policy."""
@@ -360,10 +462,12 @@ def stack(epochs: list[dict], receivers: list[str]) -> dict:
         out[v] = {}
         for r in receivers:
             ds = [e["decisions"][v][r] for e in epochs]
-            out[v][r] = {"detected": np.stack([d.detected for d in ds]),
-                         "selected": np.stack([d.selected for d in ds]),
-                         "toa": np.stack([d.toa_samples for d in ds]),
-                         "aod": np.stack([d.aod_rad for d in ds])}
+            out[v][r] = {
+                "detected": np.stack([d.detected for d in ds]),
+                "selected": np.stack([d.selected for d in ds]),
+                "toa": np.stack([d.toa_samples for d in ds]),
+                "aod": np.stack([d.aod_rad for d in ds]),
+            }
     return out
 
 
@@ -381,10 +485,12 @@ def within_share(toa: NDArray, d3d_m: NDArray, in_range: NDArray) -> NDArray[np.
     return np.where(in_range, ok.astype(float), np.nan)
 
 
-def paired_bootstrap_diff(a: NDArray, b: NDArray, rng: np.random.Generator, n_boot: int = 2000,
-                          level: float = 0.95) -> tuple[float, float, float]:
+def paired_bootstrap_diff(
+    a: NDArray, b: NDArray, rng: np.random.Generator, n_boot: int = 2000, level: float = 0.95
+) -> tuple[float, float, float]:
     """Difference of means mean(a) - mean(b) of per-epoch values a, b [E, n] (NaN ignored)
     with a bootstrap interval over epochs (the epochs resampled, pairs kept)."""
+
     def diff(idx):
         return np.nanmean(a[idx]) - np.nanmean(b[idx])
 
@@ -394,8 +500,9 @@ def paired_bootstrap_diff(a: NDArray, b: NDArray, rng: np.random.Generator, n_bo
     return float(diff(np.arange(e))), float(np.quantile(boots, q)), float(np.quantile(boots, 1 - q))
 
 
-def summarize(stacked: dict, truth: dict, receivers: list[str], comps: dict[str, Comparison] | None = None,
-              seed: int = 0) -> dict:
+def summarize(
+    stacked: dict, truth: dict, receivers: list[str], comps: dict[str, Comparison] | None = None, seed: int = 0
+) -> dict:
     """Every comparison's measures: ``{shortcut: {receiver: {...}}}`` with, per decision,
     the changed share, its 95 % interval (clustered by epoch,
     :func:`railradio.handover.stats.clustered_rate`) and the number of decisions; and the
@@ -439,6 +546,7 @@ def summarize(stacked: dict, truth: dict, receivers: list[str], comps: dict[str,
 
 # ---- the sample of epochs -------------------------------------------------------------------
 
+
 def sample_epochs(n_run: int, n: int, change_epochs: NDArray, speed_m_s: NDArray) -> NDArray[np.int64]:
     """``n`` epochs of a run of ``n_run``: the acceleration changes (``change_epochs``, those
     inside the run) and the epoch of the highest speed, the rest spread evenly from the first
@@ -464,7 +572,13 @@ DETECTOR_SETTINGS = {
     "ca_window": (256, 1024),  # full-rate lags on each side (the default CA_WINDOW_FULL: 512)
     "ca_guard": (16, 64),  # full-rate guard lags (default CA_GUARD_FULL: 32)
     "ca_prescreen": (0.6, 0.9),  # share of the threshold (default CA_PRESCREEN: 0.8)
-    "toa_blocks": (1, 2, 4, 6, 0),  # the most significant detected blocks combined (0: all; default nr.receiver_variants)
+    "toa_blocks": (
+        1,
+        2,
+        4,
+        6,
+        0,
+    ),  # the most significant detected blocks combined (0: all; default nr.receiver_variants)
 }
 """One-at-a-time settings of our receiver's detector constants around the defaults."""
 
@@ -493,20 +607,26 @@ def detector_variants(scn: Scenario, name: str = "robust") -> dict[str, tuple]:
     return out
 
 
-def noise_false_alarms(scn: Scenario, n_bursts: int, rng: np.random.Generator,
-                       n_cells: int = 6) -> dict[str, tuple[int, int]]:
+def noise_false_alarms(
+    scn: Scenario, n_bursts: int, rng: np.random.Generator, n_cells: int = 6
+) -> dict[str, tuple[int, int]]:
     """False alarms of every receiver on noise-only bursts: ``{receiver: (detections,
     block tests)}``. Each burst is complex white noise at the front end's rate with the
     production burst's length, tested for ``n_cells`` cells drawn from the deployment."""
-    rx = Receivers(scn, {n: "peak" for n, _, _ in [("seed", None, None)] + list(scn.variants)},
-                   scn.search_decimation or scn.receiver.decimation)
+    rx = Receivers(
+        scn,
+        {n: "peak" for n, _, _ in [("seed", None, None)] + list(scn.variants)},
+        scn.search_decimation or scn.receiver.decimation,
+    )
     d = scn.receiver.decimation
     fast = Synthesizer(scn.receiver, scn.profile, np.zeros((1, 1024), np.complex64))
     sp = fast.span(0.0)
     n1_all, n2_all = scn.deployment.n_id()
     counts = {name: [0, 0] for name in rx.names}
     for _ in range(n_bursts):
-        z = ((rng.standard_normal(sp["total"]) + 1j * rng.standard_normal(sp["total"])) / np.sqrt(2)).astype(np.complex64)
+        z = ((rng.standard_normal(sp["total"]) + 1j * rng.standard_normal(sp["total"])) / np.sqrt(2)).astype(
+            np.complex64
+        )
         cells = rng.choice(n1_all.size, size=n_cells, replace=False)
         out = rx(upsample(z, d // rx.decimation), sp["s_min"], n1_all[cells], n2_all[cells])
         for name, dec in out.items():
@@ -516,6 +636,7 @@ def noise_false_alarms(scn: Scenario, n_bursts: int, rng: np.random.Generator,
 
 
 # ---- datasets -------------------------------------------------------------------------------
+
 
 def to_dataset(results: list[dict], receivers: list[str]):
     """The per-epoch results of :meth:`FidelityRun.epoch` as an :class:`xarray.Dataset`."""
@@ -536,27 +657,69 @@ def to_dataset(results: list[dict], receivers: list[str]):
     vr, dims = ("variant", "receiver", "epoch", "cand"), ("epoch", "cand")
     ds = xr.Dataset(
         {
-            "detected": (vr + ("block",), per("detected").astype(np.int8), {"units": "1", "long_name": "SS block detected"}),
-            "selected": (vr, per("selected").astype(np.int8), {"units": "1", "long_name": "candidate among the receiver's selected cells"}),
-            "toa": (vr, per("toa"), {"units": "1", "long_name": "TOA estimate in full-rate samples (NaN: nothing detected)"}),
+            "detected": (
+                vr + ("block",),
+                per("detected").astype(np.int8),
+                {"units": "1", "long_name": "SS block detected"},
+            ),
+            "selected": (
+                vr,
+                per("selected").astype(np.int8),
+                {"units": "1", "long_name": "candidate among the receiver's selected cells"},
+            ),
+            "toa": (
+                vr,
+                per("toa"),
+                {"units": "1", "long_name": "TOA estimate in full-rate samples (NaN: nothing detected)"},
+            ),
             "aod": (vr, per("aod"), {"units": "rad", "long_name": "AOD estimate (NaN: nothing detected)"}),
-            "rrh": (dims, np.stack([r["cand"] for r in results]), {"units": "1", "long_name": "candidate RRH (the main run's neighbour list)"}),
+            "rrh": (
+                dims,
+                np.stack([r["cand"] for r in results]),
+                {"units": "1", "long_name": "candidate RRH (the main run's neighbour list)"},
+            ),
             "d3d": (dims, t["d3d"], {"units": "m", "long_name": "true 3-D distance (scoring only)"}),
             "aod_true": (dims, t["aod"], {"units": "rad", "long_name": "true AOD (scoring only)"}),
-            "in_range": (dims, t["in_range"].astype(np.int8), {"units": "1", "long_name": "the candidate transmits (within nr.radio.range_m)"}),
+            "in_range": (
+                dims,
+                t["in_range"].astype(np.int8),
+                {"units": "1", "long_name": "the candidate transmits (within nr.radio.range_m)"},
+            ),
             "x_true": (("epoch",), s["x"], {"units": "m", "long_name": "true train position"}),
             "v_true": (("epoch",), s["v"], {"units": "m s-1", "long_name": "true speed"}),
             "a_true": (("epoch",), s["a"], {"units": "m s-2", "long_name": "true acceleration"}),
-            "sir_best": (("epoch",), s["sir_db"], {"units": "dB", "long_name": "strongest RRH's power over the sum of the others"}),
+            "sir_best": (
+                ("epoch",),
+                s["sir_db"],
+                {"units": "dB", "long_name": "strongest RRH's power over the sum of the others"},
+            ),
             "n_links": (("epoch",), s["n_links"], {"units": "1", "long_name": "RRHs in range (synthesized)"}),
-            "seconds": (("variant", "epoch"), np.array([[r["seconds"].get(v, np.nan) for r in results] for v in variants]),
-                        {"units": "s", "long_name": "wall time of the variant's synthesis and correlation (one core)"}),
-            "det_toa": (("setting",) + dims, np.stack([np.stack([r["detector"][k]["toa"] for r in results]) for k in settings]),
-                        {"units": "1", "long_name": "our receiver's TOA [full-rate samples] with one detector constant changed"}),
-            "det_n_detected": (("setting",) + dims, np.stack([np.stack([r["detector"][k]["n_detected"] for r in results]) for k in settings]),
-                               {"units": "1", "long_name": "our receiver's detected blocks with one detector constant changed"}),
-            "fa_interference": (("receiver", "epoch"), np.array([[r["interference_false_alarms"][rx] for r in results] for rx in receivers]),
-                                {"units": "1", "long_name": "blocks detected for the anchor cell's PCI with the anchor silent (of n_blocks)"}),
+            "seconds": (
+                ("variant", "epoch"),
+                np.array([[r["seconds"].get(v, np.nan) for r in results] for v in variants]),
+                {"units": "s", "long_name": "wall time of the variant's synthesis and correlation (one core)"},
+            ),
+            "det_toa": (
+                ("setting",) + dims,
+                np.stack([np.stack([r["detector"][k]["toa"] for r in results]) for k in settings]),
+                {
+                    "units": "1",
+                    "long_name": "our receiver's TOA [full-rate samples] with one detector constant changed",
+                },
+            ),
+            "det_n_detected": (
+                ("setting",) + dims,
+                np.stack([np.stack([r["detector"][k]["n_detected"] for r in results]) for k in settings]),
+                {"units": "1", "long_name": "our receiver's detected blocks with one detector constant changed"},
+            ),
+            "fa_interference": (
+                ("receiver", "epoch"),
+                np.array([[r["interference_false_alarms"][rx] for r in results] for rx in receivers]),
+                {
+                    "units": "1",
+                    "long_name": "blocks detected for the anchor cell's PCI with the anchor silent (of n_blocks)",
+                },
+            ),
         },
         coords={
             "variant": ("variant", variants, {"units": "1", "long_name": "synthesis and receiver path"}),
@@ -577,9 +740,12 @@ def from_dataset(ds) -> tuple[dict, dict]:
         stacked[str(v)] = {}
         for r in ds["receiver"].values:
             sel = ds.sel(variant=v, receiver=r)
-            stacked[str(v)][str(r)] = {"detected": sel["detected"].values.astype(bool),
-                                       "selected": sel["selected"].values.astype(bool),
-                                       "toa": sel["toa"].values, "aod": sel["aod"].values}
+            stacked[str(v)][str(r)] = {
+                "detected": sel["detected"].values.astype(bool),
+                "selected": sel["selected"].values.astype(bool),
+                "toa": sel["toa"].values,
+                "aod": sel["aod"].values,
+            }
     truth = {"d3d": ds["d3d"].values, "aod": ds["aod_true"].values, "in_range": ds["in_range"].values.astype(bool)}
     return stacked, truth
 
@@ -597,8 +763,7 @@ def distributions_agree(m: dict) -> bool:
     """KS p-values of the TOA and AOD errors ≥ :data:`KS_ALPHA` and the TOA-within-5-m
     difference's interval inside ±:data:`DIST_TOL`."""
     ks = [p for p in (m["toa_ks_p"], m["aod_ks_p"]) if np.isfinite(p)]
-    return (all(p >= KS_ALPHA for p in ks) and m["within5_diff_lo"] >= -DIST_TOL
-            and m["within5_diff_hi"] <= DIST_TOL)
+    return all(p >= KS_ALPHA for p in ks) and m["within5_diff_lo"] >= -DIST_TOL and m["within5_diff_hi"] <= DIST_TOL
 
 
 def bounded(m: dict, noise: dict, stochastic: bool) -> bool:
@@ -619,8 +784,12 @@ def bounded(m: dict, noise: dict, stochastic: bool) -> bool:
     return True
 
 
-DECISION_LABEL = {"detection": "SS-block detection", "selection": "selected cells",
-                  "toa": "TOA (> 1 full-rate sample)", "aod": "AOD (> 0.1 deg)"}
+DECISION_LABEL = {
+    "detection": "SS-block detection",
+    "selection": "selected cells",
+    "toa": "TOA (> 1 full-rate sample)",
+    "aod": "AOD (> 0.1 deg)",
+}
 COMPARISON_LABEL = {
     "search": "the decimated coarse-to-fine search against every full-rate lag",
     "band": "the band-limited synthesis against the full band through the front end",
@@ -641,12 +810,18 @@ def key_numbers(summary: dict, comps: dict[str, Comparison], n_epochs: int, seco
     out = {}
 
     def put(name, unit, desc, value, digits=3):
-        out[name] = KeySpec(name, unit, desc, digits=digits).entry(None if value is None or not np.isfinite(value)
-                                                                    else float(value))
+        out[name] = KeySpec(name, unit, desc, digits=digits).entry(
+            None if value is None or not np.isfinite(value) else float(value)
+        )
 
     put("nr.fidelity.n_epochs", "1", "paper-scale epochs on which every shortcut was measured", n_epochs)
     for v, sec in seconds.items():
-        put(f"nr.fidelity.cost_s.{v}", "s", f"mean time per epoch of the '{v}' path (synthesis and correlation, one core)", sec)
+        put(
+            f"nr.fidelity.cost_s.{v}",
+            "s",
+            f"mean time per epoch of the '{v}' path (synthesis and correlation, one core)",
+            sec,
+        )
     all_ok = True
     for c, per in summary.items():
         comp = comps[c]
@@ -659,23 +834,47 @@ def key_numbers(summary: dict, comps: dict[str, Comparison], n_epochs: int, seco
                 put(base + ".lo", "1", f"lower end of the 95 % interval (epoch-clustered Wilson) of {base}", m[k]["lo"])
                 put(base + ".hi", "1", f"upper end of the 95 % interval (epoch-clustered Wilson) of {base}", m[k]["hi"])
                 put(f"nr.fidelity.{c}.{r}.{k}_n", "1", f"decisions compared: {DECISION_LABEL[k]} ({where})", m[k]["n"])
-            put(f"nr.fidelity.{c}.{r}.toa_ks_p", "1", f"two-sample KS p-value of the TOA range errors ({where})", m["toa_ks_p"])
-            put(f"nr.fidelity.{c}.{r}.aod_ks_p", "1", f"two-sample KS p-value of the AOD errors ({where})", m["aod_ks_p"])
+            put(
+                f"nr.fidelity.{c}.{r}.toa_ks_p",
+                "1",
+                f"two-sample KS p-value of the TOA range errors ({where})",
+                m["toa_ks_p"],
+            )
+            put(
+                f"nr.fidelity.{c}.{r}.aod_ks_p",
+                "1",
+                f"two-sample KS p-value of the AOD errors ({where})",
+                m["aod_ks_p"],
+            )
             d = f"nr.fidelity.{c}.{r}.within5m_diff"
-            put(d, "1", f"difference of the share of candidates with a TOA within 5 m, shortcut off minus on ({where})",
-                m["within5_diff"])
+            put(
+                d,
+                "1",
+                f"difference of the share of candidates with a TOA within 5 m, shortcut off minus on ({where})",
+                m["within5_diff"],
+            )
             put(d + ".lo", "1", f"lower end of the 95 % epoch-bootstrap interval of {d}", m["within5_diff_lo"])
             put(d + ".hi", "1", f"upper end of the 95 % epoch-bootstrap interval of {d}", m["within5_diff_hi"])
             ok = bounded(m, summary["noise"][r], comp.stochastic)
-            put(f"nr.fidelity.{c}.{r}.bounded", "1", f"1: bounded by the rule of railradio.nr.fidelity.bounded, 0: not ({where})",
-                float(ok))
+            put(
+                f"nr.fidelity.{c}.{r}.bounded",
+                "1",
+                f"1: bounded by the rule of railradio.nr.fidelity.bounded, 0: not ({where})",
+                float(ok),
+            )
             c_ok &= ok
-        put(f"nr.fidelity.{c}.bounded", "1", f"1: {COMPARISON_LABEL[c]} bounded for every receiver, 0: not", float(c_ok))
+        put(
+            f"nr.fidelity.{c}.bounded", "1", f"1: {COMPARISON_LABEL[c]} bounded for every receiver, 0: not", float(c_ok)
+        )
         all_ok &= c_ok
     put("nr.fidelity.all_bounded", "1", "1: every comparison bounded for every receiver, 0: not", float(all_ok))
     ks = [m[k] for per in summary.values() for m in per.values() for k in ("toa_ks_p", "aod_ks_p") if np.isfinite(m[k])]
-    put("nr.fidelity.min_ks_p", "1", "smallest two-sample KS p-value of the TOA and AOD errors over every comparison "
-                                     "and receiver", min(ks) if ks else None)
+    put(
+        "nr.fidelity.min_ks_p",
+        "1",
+        "smallest two-sample KS p-value of the TOA and AOD errors over every comparison and receiver",
+        min(ks) if ks else None,
+    )
     return out
 
 
@@ -704,10 +903,24 @@ def detector_key_numbers(ds, noise_fa: dict[str, tuple[int, int]]) -> dict:
         for i, f in enumerate(fa):
             ev[i, : int(f)] = 1.0
         rate = clustered_rate(ev)
-        put(f"nr.detector.{r}.pfa_interference", "1",
-            f"blocks detected per block test for the anchor cell's PCI with the anchor silent (receiver {r})", rate["p"])
-        put(f"nr.detector.{r}.pfa_interference.lo", "1", "lower end of its 95 % epoch-clustered Wilson interval", rate["lo"])
-        put(f"nr.detector.{r}.pfa_interference.hi", "1", "upper end of its 95 % epoch-clustered Wilson interval", rate["hi"])
+        put(
+            f"nr.detector.{r}.pfa_interference",
+            "1",
+            f"blocks detected per block test for the anchor cell's PCI with the anchor silent (receiver {r})",
+            rate["p"],
+        )
+        put(
+            f"nr.detector.{r}.pfa_interference.lo",
+            "1",
+            "lower end of its 95 % epoch-clustered Wilson interval",
+            rate["lo"],
+        )
+        put(
+            f"nr.detector.{r}.pfa_interference.hi",
+            "1",
+            "upper end of its 95 % epoch-clustered Wilson interval",
+            rate["hi"],
+        )
     inr = ds["in_range"].values.astype(bool)
     d3d = ds["d3d"].values
     prod = ds.sel(variant="production", receiver="robust")
@@ -715,11 +928,18 @@ def detector_key_numbers(ds, noise_fa: dict[str, tuple[int, int]]) -> dict:
     for s in ds["setting"].values:
         rows[str(s)] = (ds["det_toa"].sel(setting=s).values, ds["det_n_detected"].sel(setting=s).values)
     for label, (toa, n_det) in rows.items():
-        put(f"nr.detector.robust.sens.{label}.within5m", "1",
+        put(
+            f"nr.detector.robust.sens.{label}.within5m",
+            "1",
             f"share of in-range candidates with a TOA within 5 m, our receiver ({label})",
-            float(np.nanmean(within_share(toa, d3d, inr))))
-        put(f"nr.detector.robust.sens.{label}.detected_blocks", "1",
-            f"mean detected blocks per in-range candidate, our receiver ({label})", float(np.mean(n_det[inr])))
+            float(np.nanmean(within_share(toa, d3d, inr))),
+        )
+        put(
+            f"nr.detector.robust.sens.{label}.detected_blocks",
+            "1",
+            f"mean detected blocks per in-range candidate, our receiver ({label})",
+            float(np.mean(n_det[inr])),
+        )
     return out
 
 
@@ -738,7 +958,11 @@ def check_production(res: dict, main_row, receivers: list[str]) -> None:
         d = res["decisions"]["own_noise"][r]
         toa = main_row["toa_hat"].values[j] * FS
         aod = main_row["aod_hat"].values[j]
-        if not (np.allclose(d.toa_samples, toa, rtol=0, atol=1e-6, equal_nan=True)
-                and np.array_equal(d.aod_rad, aod, equal_nan=True)):
-            raise ValueError(f"epoch {res['epoch']}, receiver {r}: the production path differs from the main run's "
-                             f"estimates (TOA {d.toa_samples} vs {toa})")
+        if not (
+            np.allclose(d.toa_samples, toa, rtol=0, atol=1e-6, equal_nan=True)
+            and np.array_equal(d.aod_rad, aod, equal_nan=True)
+        ):
+            raise ValueError(
+                f"epoch {res['epoch']}, receiver {r}: the production path differs from the main run's "
+                f"estimates (TOA {d.toa_samples} vs {toa})"
+            )

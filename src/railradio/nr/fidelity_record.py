@@ -31,8 +31,13 @@ def inputs(config: dict[str, Any]) -> dict[str, Any]:
     the main run's length and cell search, and ``nr.fidelity``."""
     nr = config["nr"]
     fidelity = {k: v for k, v in nr["fidelity"].items() if k != "n_shards"}  # how the work is split only
-    return {"seed": config["seed"], "sim": sim_config(nr), "max_epochs": nr["max_epochs"],
-            "cell_search": nr["cell_search"], "fidelity": fidelity}
+    return {
+        "seed": config["seed"],
+        "sim": sim_config(nr),
+        "max_epochs": nr["max_epochs"],
+        "cell_search": nr["cell_search"],
+        "fidelity": fidelity,
+    }
 
 
 def provenance(root: Path, config: dict[str, Any]) -> dict[str, Any]:
@@ -44,8 +49,9 @@ def publish(numbers_json: Path, paper_dir: Path, root: Path, config: dict[str, A
     """Copy the fidelity key numbers to ``paper_dir`` with their provenance."""
     numbers = json.loads(Path(numbers_json).read_text(encoding="utf-8"))
     (paper_dir / NUMBERS).write_text(json.dumps(numbers, indent=1, sort_keys=True) + "\n", encoding="utf-8")
-    (paper_dir / PROVENANCE).write_text(json.dumps(provenance(root, config), indent=1, sort_keys=True) + "\n",
-                                        encoding="utf-8")
+    (paper_dir / PROVENANCE).write_text(
+        json.dumps(provenance(root, config), indent=1, sort_keys=True) + "\n", encoding="utf-8"
+    )
 
 
 def main(argv: list[str] | None = None) -> int:

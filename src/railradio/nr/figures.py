@@ -64,17 +64,20 @@ def plot_measurement_cdf(tracks: list[xr.Dataset], pdf: str, png: str) -> None:
     plotting.save(fig, pdf, png)
 
 
-def plot_position_cdf(tracks: list[xr.Dataset], pdf: str, png: str, skip_s: float = 5.0,
-                      bounds: list[xr.Dataset] | None = None) -> None:
+def plot_position_cdf(
+    tracks: list[xr.Dataset], pdf: str, png: str, skip_s: float = 5.0, bounds: list[xr.Dataset] | None = None
+) -> None:
     rxs = tracks[0]["receiver"].values
     fig, axes = plotting.figure(ncols=len(rxs), figsize=(3.4 * len(rxs), 3.0), squeeze=False)
     for ax, rx in zip(axes[0], rxs, strict=True):
         for j, v in enumerate(tracks[0]["variant"].values):
-            e = np.concatenate([t["pos_err"].sel(receiver=rx, variant=v, gate=0).values[t["t"].values >= skip_s]
-                                for t in tracks])
+            e = np.concatenate(
+                [t["pos_err"].sel(receiver=rx, variant=v, gate=0).values[t["t"].values >= skip_s] for t in tracks]
+            )
             _cdf(ax, e, label=f"EKF {VARIANT_LABEL[str(v)]}", color=f"C{j}")
-        e = np.concatenate([t["pos_err"].sel(receiver=rx, variant="aod_toa", gate=1).values[t["t"].values >= skip_s]
-                            for t in tracks])
+        e = np.concatenate(
+            [t["pos_err"].sel(receiver=rx, variant="aod_toa", gate=1).values[t["t"].values >= skip_s] for t in tracks]
+        )
         _cdf(ax, e, label="EKF AOD+TOA, χ² gate", color="C2", linestyle="--")
         e = np.concatenate([t["snap_err"].sel(receiver=rx, variant="aod_toa").values for t in tracks])
         _cdf(ax, e, label="snapshot LS", color="C3", linestyle=":")
@@ -95,14 +98,32 @@ def plot_error_vs_time(track: xr.Dataset, pdf: str, png: str, bounds: xr.Dataset
     fig, ax = plotting.figure(figsize=(6.4, 3.0))
     for i, rx in enumerate(track["receiver"].values):
         for g, style in ((0, "-"), (1, "--")):
-            ax.plot(track["t"], track["pos_err"].sel(receiver=rx, variant="aod_toa", gate=g), linewidth=0.6,
-                    linestyle=style, label=f"EKF AOD+TOA ({rx}{', gated' if g else ''})", color=f"C{2 * i + g}")
+            ax.plot(
+                track["t"],
+                track["pos_err"].sel(receiver=rx, variant="aod_toa", gate=g),
+                linewidth=0.6,
+                linestyle=style,
+                label=f"EKF AOD+TOA ({rx}{', gated' if g else ''})",
+                color=f"C{2 * i + g}",
+            )
     if bounds is not None:
         ax.plot(bounds["t"], bounds["pcrb"], label="PCRB prediction (white-jerk model)", **plotting.BOUND_STYLE)
         if "pcrb_true_motion" in bounds:
-            ax.plot(bounds["t"], bounds["pcrb_true_motion"], color="black", linestyle=":", linewidth=1.0,
-                    label="PCRB prediction (true motion, genie)")
-        ax.plot(bounds["t"], bounds["peb"], color="grey", linewidth=0.6, label="snapshot PEB prediction (integer-sample TOA)")
+            ax.plot(
+                bounds["t"],
+                bounds["pcrb_true_motion"],
+                color="black",
+                linestyle=":",
+                linewidth=1.0,
+                label="PCRB prediction (true motion, genie)",
+            )
+        ax.plot(
+            bounds["t"],
+            bounds["peb"],
+            color="grey",
+            linewidth=0.6,
+            label="snapshot PEB prediction (integer-sample TOA)",
+        )
     ax.axhline(INTEGER_SAMPLE_FLOOR_M, color="grey", linestyle=":", linewidth=1.0, label="integer-sample σ (0.35 m)")
     ax.set_yscale("log")
     ax.set_ylim(1e-2, 1e8)  # headroom for the legend; diverged tracks leave the axis
@@ -116,10 +137,11 @@ def plot_sensitivity(numbers: dict, cases: list[str], pdf: str, png: str) -> Non
     """Sensitivity cases beside the base run: TOA range error p95 and gated EKF mean error
     per receiver (key numbers ``sens.nr.<case>.<receiver>.*``); a tracker whose all-epoch
     accuracy is null because it loses the train is marked with its lost share."""
-    rxs = sorted({k.split(".")[3] for k in numbers if k.startswith("sens.nr.")} - {"bound"},
-                 key=lambda r: r != "seed")
-    panels = (("meas.toa_err_m.p95", "TOA range error p95 [m]"),
-              ("track.aod_toa_gated.err_m.mean", "gated EKF AOD+TOA\nmean error [m]"))
+    rxs = sorted({k.split(".")[3] for k in numbers if k.startswith("sens.nr.")} - {"bound"}, key=lambda r: r != "seed")
+    panels = (
+        ("meas.toa_err_m.p95", "TOA range error p95 [m]"),
+        ("track.aod_toa_gated.err_m.mean", "gated EKF AOD+TOA\nmean error [m]"),
+    )
     fig, axes = plotting.figure(nrows=2, figsize=(7.2, 4.6), sharex=True)
     width = 0.8 / max(len(rxs), 1)
     x = np.arange(len(cases))
@@ -132,8 +154,17 @@ def plot_sensitivity(numbers: dict, cases: list[str], pdf: str, png: str) -> Non
                 for xi, c, v in zip(xs, cases, vals, strict=True):
                     lost = numbers.get(f"sens.nr.{c}.{rx}.track.aod_toa_gated.lost_frac", {}).get("value")
                     if v is None and lost is not None:
-                        ax.text(xi, 0.03, f"lost {100 * lost:.0f} %", transform=ax.get_xaxis_transform(),
-                                rotation=90, ha="center", va="bottom", fontsize=6, color=f"C{i}")
+                        ax.text(
+                            xi,
+                            0.03,
+                            f"lost {100 * lost:.0f} %",
+                            transform=ax.get_xaxis_transform(),
+                            rotation=90,
+                            ha="center",
+                            va="bottom",
+                            fontsize=6,
+                            color=f"C{i}",
+                        )
         ax.set_yscale("log")
         ax.set_ylabel(label)
     axes[-1].set_xticks(x, cases, fontsize=7, rotation=35, ha="right")
@@ -147,22 +178,26 @@ def plot_sweeps(numbers: dict, sweeps: dict, sync_sigma_s: dict, pdf: str, png: 
     share of TOAs within 5 m (outliers: another RRH's peak or a false alarm) and the gated
     EKF AOD+TOA mean error, per receiver (key numbers ``sens.nr.<case>.<receiver>.*``); the
     sweep's reference point (the base settings) circled."""
-    rxs = sorted({k.split(".")[3] for k in numbers if k.startswith("sens.nr.")} - {"bound"},
-                 key=lambda r: r != "seed")
-    rows = (("meas.toa_err_m.median_abs", "median |TOA error| [m]", True),
-            ("meas.toa_err_m.frac_lt_5m", "TOAs within 5 m", False),
-            ("track.aod_toa_gated.err_m.mean", "gated EKF mean error [m]", True))
+    rxs = sorted({k.split(".")[3] for k in numbers if k.startswith("sens.nr.")} - {"bound"}, key=lambda r: r != "seed")
+    rows = (
+        ("meas.toa_err_m.median_abs", "median |TOA error| [m]", True),
+        ("meas.toa_err_m.frac_lt_5m", "TOAs within 5 m", False),
+        ("track.aod_toa_gated.err_m.mean", "gated EKF mean error [m]", True),
+    )
     n = len(sweeps)
-    fig, axes = plotting.figure(nrows=len(rows), ncols=n, figsize=(1.9 * n + 0.6, 6.0), squeeze=False,
-                                sharey="row")
+    fig, axes = plotting.figure(nrows=len(rows), ncols=n, figsize=(1.9 * n + 0.6, 6.0), squeeze=False, sharey="row")
     for j, (name, sw) in enumerate(sweeps.items()):
         x = np.arange(len(sw["cases"]))
         ref = sw.get("reference")
         for r, (metric, label, log) in enumerate(rows):
             ax = axes[r][j]
             for i, rx in enumerate(rxs):
-                vals = np.array([np.nan if (v := numbers.get(f"sens.nr.{c}.{rx}.{metric}", {}).get("value")) is None
-                                 else v for c in sw["cases"]])
+                vals = np.array(
+                    [
+                        np.nan if (v := numbers.get(f"sens.nr.{c}.{rx}.{metric}", {}).get("value")) is None else v
+                        for c in sw["cases"]
+                    ]
+                )
                 ax.plot(x, vals, marker="o", color=f"C{i}", label=f"{rx} receiver")
                 if ref in sw["cases"]:
                     k = sw["cases"].index(ref)
@@ -199,8 +234,12 @@ def plot_reproduction_map(numbers: dict, receivers: dict[str, list[str]], pdf: s
     names = list(receivers)
     n_rows = [len(receivers[r]) for r in names]
     height = 0.3 * max(n_rows) + 2.0
-    fig, axes = plotting.figure(ncols=len(names), figsize=(4.6 * len(names), height),
-                                squeeze=False, gridspec_kw={"width_ratios": [1] * len(names)})
+    fig, axes = plotting.figure(
+        ncols=len(names),
+        figsize=(4.6 * len(names), height),
+        squeeze=False,
+        gridspec_kw={"width_ratios": [1] * len(names)},
+    )
     for ax, rx in zip(axes[0], names, strict=True):
         rows = receivers[rx]
         for i, cell in enumerate(rows):
@@ -227,8 +266,14 @@ def plot_reproduction_map(numbers: dict, receivers: dict[str, list[str]], pdf: s
         ax.tick_params(length=0)
         ax.grid(False)
         ax.set_title("source's receiver (no gate)" if rx == "seed" else f"our receiver ({rx}, gated)", fontsize=9)
-    fig.legend(handles=[Patch(facecolor=colours[s], label=STATUS_NAMES[s]) for s in (HOLDS, UNRESOLVED, FAILS)],
-               loc="lower center", ncol=3, fontsize=7, frameon=False, bbox_to_anchor=(0.5, 0.0))
+    fig.legend(
+        handles=[Patch(facecolor=colours[s], label=STATUS_NAMES[s]) for s in (HOLDS, UNRESOLVED, FAILS)],
+        loc="lower center",
+        ncol=3,
+        fontsize=7,
+        frameon=False,
+        bbox_to_anchor=(0.5, 0.0),
+    )
     fig.subplots_adjust(bottom=1.5 / height, top=1 - 0.35 / height, wspace=0.45)
     plotting.save(fig, pdf, png)
 

@@ -36,12 +36,12 @@ from railradio.nr.tracking import (
     VARIANTS,
     TrackerConfig,
     distances_m,
-    track_setup,
     hx,
     jacobian,
     process_noise,
     residual_fn,
     run_ekf,
+    track_setup,
     transition,
 )
 
@@ -137,8 +137,18 @@ def _moments(mu: NDArray, xs: NDArray, ps: NDArray) -> tuple[NDArray, NDArray]:
     return x, np.einsum("j,jab->ab", mu, ps) + np.einsum("j,ja,jb->ab", mu, d, d)
 
 
-def run_imm(select, dt_s: float, dh_m: float, cfg: TrackerConfig, imm: ImmConfig, s0: NDArray,
-            p0: NDArray, n_epochs: int, reacquire=None, reacquire_after: int = 10) -> dict[str, NDArray]:
+def run_imm(
+    select,
+    dt_s: float,
+    dh_m: float,
+    cfg: TrackerConfig,
+    imm: ImmConfig,
+    s0: NDArray,
+    p0: NDArray,
+    n_epochs: int,
+    reacquire=None,
+    reacquire_after: int = 10,
+) -> dict[str, NDArray]:
     """Run the IMM over ``n_epochs`` epochs; ``select(n, x_pred) -> (rrh_xy, aod, toa)`` and
     ``reacquire`` as in :func:`railradio.nr.tracking.run_ekf` (measurement noise, variant and
     gate from ``cfg``; its ``q`` is not used: each model has its own).
@@ -160,9 +170,13 @@ def run_imm(select, dt_s: float, dh_m: float, cfg: TrackerConfig, imm: ImmConfig
     per = sum(VARIANTS[cfg.variant])
     gate = chi2.ppf(cfg.gate_prob, per) if cfg.gate else np.inf
     eye = np.eye(6)
-    out = {"state": np.zeros((n_epochs, 6)), "cov": np.zeros((n_epochs, 6, 6)), "mu": np.zeros((n_epochs, m)),
-           "n_used": np.zeros(n_epochs, dtype=np.int64),
-           "reacquired": np.zeros(n_epochs, dtype=bool)}
+    out = {
+        "state": np.zeros((n_epochs, 6)),
+        "cov": np.zeros((n_epochs, 6, 6)),
+        "mu": np.zeros((n_epochs, m)),
+        "n_used": np.zeros(n_epochs, dtype=np.int64),
+        "reacquired": np.zeros(n_epochs, dtype=bool),
+    }
     misses = 0
     for k in range(n_epochs):
         cbar = mu.copy()
@@ -186,9 +200,9 @@ def run_imm(select, dt_s: float, dh_m: float, cfg: TrackerConfig, imm: ImmConfig
                 for i in range(xy.shape[0]):
                     ok = False
                     for j in range(m):
-                        hi = jacobian(xs[j], xy[i:i + 1], dh_m, cfg.variant)
-                        si = hi @ ps[j] @ hi.T + cfg.noise(1, distances_m(xs[j], xy[i:i + 1]))
-                        ri = res(z[i * per:(i + 1) * per], hx(xs[j], xy[i:i + 1], dh_m, cfg.variant))
+                        hi = jacobian(xs[j], xy[i : i + 1], dh_m, cfg.variant)
+                        si = hi @ ps[j] @ hi.T + cfg.noise(1, distances_m(xs[j], xy[i : i + 1]))
+                        ri = res(z[i * per : (i + 1) * per], hx(xs[j], xy[i : i + 1], dh_m, cfg.variant))
                         ok = ok or float(ri @ np.linalg.solve(si, ri)) <= gate
                     keep[i] = ok
             if keep.any():
@@ -231,8 +245,17 @@ def run_imm(select, dt_s: float, dh_m: float, cfg: TrackerConfig, imm: ImmConfig
     return out
 
 
-def track_filters(ds, rrh_x: NDArray, rrh_y: float, dh_m: float, dt_s: float, cfg: TrackerConfig,
-                  imm: ImmConfig | None, strength: str = "peak", n_use: int = 3) -> dict[str, dict[str, NDArray]]:
+def track_filters(
+    ds,
+    rrh_x: NDArray,
+    rrh_y: float,
+    dh_m: float,
+    dt_s: float,
+    cfg: TrackerConfig,
+    imm: ImmConfig | None,
+    strength: str = "peak",
+    n_use: int = 3,
+) -> dict[str, dict[str, NDArray]]:
     """Track one realization with the EKF of :func:`railradio.nr.tracking.track` (q =
     ``cfg.q``) and, if ``imm`` is given, the IMM, on the same selection, gate and
     re-acquisition rules. Returns ``{"ekf": ..., "imm": ...}``, each with ``state`` [n, 6],

@@ -25,10 +25,16 @@ from railradio.nr import loss
 from railradio.nr.keys import SKIP_S
 
 FILTERS = ("ekf", "imm", "rts")
-LABEL = {"ekf": "EKF (seed, calibrated q)", "imm": "IMM (quiet + manoeuvre)", "rts": "RTS smoother (offline, over the EKF)"}
+LABEL = {
+    "ekf": "EKF (seed, calibrated q)",
+    "imm": "IMM (quiet + manoeuvre)",
+    "rts": "RTS smoother (offline, over the EKF)",
+}
 
 
-def change_windows(ds: xr.Dataset, window_s: float, before_s: float = 0.0) -> list[tuple[int, NDArray[np.int64], float]]:
+def change_windows(
+    ds: xr.Dataset, window_s: float, before_s: float = 0.0
+) -> list[tuple[int, NDArray[np.int64], float]]:
     """(change epoch, epoch indices from ``before_s`` before to ``window_s`` after it
     (clipped to the run), Δa [m/s²]) of every acceleration change inside the run."""
     if not window_s > 0 or before_s < 0:
@@ -41,7 +47,6 @@ def change_windows(ds: xr.Dataset, window_s: float, before_s: float = 0.0) -> li
         idx = np.arange(max(lo, 0), min(int(c) + int(round(window_s / dt)), n))
         out.append((int(c), idx, float(da)))
     return out
-
 
 
 def _pooled(runs: list[xr.Dataset], fn) -> tuple[float | None, float | None]:
@@ -95,38 +100,78 @@ def key_numbers(runs: list[xr.Dataset], window_s: float) -> dict[str, Any]:
         out[name] = KeySpec(name, unit, desc).entry(value, se, lost_frac=lost_frac)
 
     for f in FILTERS:
-        who = {"ekf": "the seed's EKF (robust receiver, AOD+TOA, gated)", "imm": "the IMM (same measurements and gate)",
-               "rts": "the RTS-smoothed EKF (offline)"}[f]
-        put(f"nr.track.{f}.lost_frac", "1", f"share of the scored epochs lost by {who} (2-D error above half "
-            "the RRH spacing)", lambda rs, f=f: float(np.mean(loss.lost_mask(_overall(rs, "pos_err", f), spacing))))
+        who = {
+            "ekf": "the seed's EKF (robust receiver, AOD+TOA, gated)",
+            "imm": "the IMM (same measurements and gate)",
+            "rts": "the RTS-smoothed EKF (offline)",
+        }[f]
+        put(
+            f"nr.track.{f}.lost_frac",
+            "1",
+            f"share of the scored epochs lost by {who} (2-D error above half the RRH spacing)",
+            lambda rs, f=f: float(np.mean(loss.lost_mask(_overall(rs, "pos_err", f), spacing))),
+        )
         lf = out[f"nr.track.{f}.lost_frac"]["value"]
-        put(f"nr.track.{f}.tracked.err_m.mean", "m", f"mean 2-D position error of {who} over the epochs not lost",
-            lambda rs, f=f: (lambda v: _stat(v[~loss.lost_mask(v, spacing)], np.mean))(_overall(rs, "pos_err", f)))
-        put(f"nr.track.{f}.err_m.mean", "m", f"mean 2-D position error of {who}",
-            lambda rs, f=f: _stat(_overall(rs, "pos_err", f), np.mean), lf)
-        put(f"nr.track.{f}.err_m.p95", "m", f"95th percentile of the 2-D position error of {who}",
-            lambda rs, f=f: _stat(_overall(rs, "pos_err", f), lambda v: np.percentile(v, 95)), lf)
-        put(f"nr.track.{f}.err_m.after_change_mean", "m",
+        put(
+            f"nr.track.{f}.tracked.err_m.mean",
+            "m",
+            f"mean 2-D position error of {who} over the epochs not lost",
+            lambda rs, f=f: (lambda v: _stat(v[~loss.lost_mask(v, spacing)], np.mean))(_overall(rs, "pos_err", f)),
+        )
+        put(
+            f"nr.track.{f}.err_m.mean",
+            "m",
+            f"mean 2-D position error of {who}",
+            lambda rs, f=f: _stat(_overall(rs, "pos_err", f), np.mean),
+            lf,
+        )
+        put(
+            f"nr.track.{f}.err_m.p95",
+            "m",
+            f"95th percentile of the 2-D position error of {who}",
+            lambda rs, f=f: _stat(_overall(rs, "pos_err", f), lambda v: np.percentile(v, 95)),
+            lf,
+        )
+        put(
+            f"nr.track.{f}.err_m.after_change_mean",
+            "m",
             f"mean 2-D position error of {who} in the {w} after each acceleration change",
-            lambda rs, f=f: _stat(_after(rs, "pos_err", f, window_s), np.mean), lf)
-        put(f"nr.track.{f}.lag_m.after_change_mean", "m",
+            lambda rs, f=f: _stat(_after(rs, "pos_err", f, window_s), np.mean),
+            lf,
+        )
+        put(
+            f"nr.track.{f}.lag_m.after_change_mean",
+            "m",
             f"mean along-track lag −sign(Δa)·(x̂ − x) of {who} in the {w} after each acceleration change",
-            lambda rs, f=f: _stat(_after(rs, "along_err", f, window_s, signed=True), np.mean), lf)
-        put(f"nr.track.{f}.nees.mean", "1",
+            lambda rs, f=f: _stat(_after(rs, "along_err", f, window_s, signed=True), np.mean),
+            lf,
+        )
+        put(
+            f"nr.track.{f}.nees.mean",
+            "1",
             f"mean 2-D position NEES of {who} (2 for a consistent filter)",
-            lambda rs, f=f: _stat(_overall(rs, "pos_nees", f), np.mean))
+            lambda rs, f=f: _stat(_overall(rs, "pos_nees", f), np.mean),
+        )
     for mode in ("quiet", "manoeuvre"):
         name = f"nr.track.imm.q_{mode}"
         q = {float(r["q"].sel(mode=mode)) for r in runs}
         if len(q) != 1:
             raise ValueError(f"runs disagree on the {mode} model's q: {sorted(q)}")
         out[name] = KeySpec(name, "m2 s-5", f"white-jerk intensity of the IMM's {mode} model").entry(q.pop())
-    put("nr.track.imm.manoeuvre_prob.mean", "1", "mean probability of the IMM's manoeuvre model",
-        lambda rs: _stat(np.concatenate([r["mode_prob"].sel(mode="manoeuvre").values[r["t"].values >= SKIP_S]
-                                         for r in rs]), np.mean))
-    put("nr.track.imm.manoeuvre_prob.after_change_mean", "1",
+    put(
+        "nr.track.imm.manoeuvre_prob.mean",
+        "1",
+        "mean probability of the IMM's manoeuvre model",
+        lambda rs: _stat(
+            np.concatenate([r["mode_prob"].sel(mode="manoeuvre").values[r["t"].values >= SKIP_S] for r in rs]), np.mean
+        ),
+    )
+    put(
+        "nr.track.imm.manoeuvre_prob.after_change_mean",
+        "1",
         f"mean probability of the IMM's manoeuvre model in the {w} after each acceleration change",
-        lambda rs: _stat(_after(rs, "mode_prob", None, window_s), np.mean))
+        lambda rs: _stat(_after(rs, "mode_prob", None, window_s), np.mean),
+    )
     return out
 
 
@@ -152,8 +197,15 @@ def plot_lag(runs: list[xr.Dataset], pdf: str, png: str, window_s: float = 20.0,
         return
     dt = float(runs[0]["t"].values[1] - runs[0]["t"].values[0])
     n_s = max(int(round(smooth_s / dt)), 1)
-    fig, axes = plotting.figure(nrows=3, ncols=len(wins), figsize=(2.4 * len(wins) + 0.6, 5.8), sharex=True, layout="constrained",
-                                sharey="row", squeeze=False)
+    fig, axes = plotting.figure(
+        nrows=3,
+        ncols=len(wins),
+        figsize=(2.4 * len(wins) + 0.6, 5.8),
+        sharex=True,
+        layout="constrained",
+        sharey="row",
+        squeeze=False,
+    )
     for col, (c, idx, da) in enumerate(wins):
         rel = (idx - c) * dt
         for i, f in enumerate(FILTERS):

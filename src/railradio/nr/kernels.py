@@ -14,8 +14,7 @@ _TWO_PI = 2.0 * np.pi
 
 
 @njit(cache=True, nogil=True)
-def sos_taps(amp_l: np.ndarray, f_lm_hz: np.ndarray, phi_lm: np.ndarray,
-             t_s: np.ndarray) -> np.ndarray:
+def sos_taps(amp_l: np.ndarray, f_lm_hz: np.ndarray, phi_lm: np.ndarray, t_s: np.ndarray) -> np.ndarray:
     """Sum-of-sinusoids tap gains a_l(t_s) = amp_l Σ_m e^{j(2π f_lm t_s + φ_lm)}, [S, L].
 
     Phasor recursion over increasing times in complex128 (the rotation recomputed when the
@@ -51,10 +50,21 @@ def sos_taps(amp_l: np.ndarray, f_lm_hz: np.ndarray, phi_lm: np.ndarray,
 
 
 @njit(cache=True, nogil=True)
-def fill_grid(x: np.ndarray, pool: np.ndarray, pool_idx: np.ndarray, ov_row: np.ndarray,
-              ov_full: np.ndarray, ov_mask: np.ndarray, ov_val: np.ndarray, h: np.ndarray,
-              has_h: bool, ramp: np.ndarray, g_row: np.ndarray, long_of: np.ndarray,
-              long_ramp: np.ndarray) -> None:
+def fill_grid(
+    x: np.ndarray,
+    pool: np.ndarray,
+    pool_idx: np.ndarray,
+    ov_row: np.ndarray,
+    ov_full: np.ndarray,
+    ov_mask: np.ndarray,
+    ov_val: np.ndarray,
+    h: np.ndarray,
+    has_h: bool,
+    ramp: np.ndarray,
+    g_row: np.ndarray,
+    long_of: np.ndarray,
+    long_ramp: np.ndarray,
+) -> None:
     """x[s, k] = src[s, k] · h[s, k] · ramp[k] · g_row[s] · long_ramp[long_of[s], k], in place.
 
     src[s, k] is the data-pool symbol ``pool[pool_idx[s], k]`` unless row s carries the
@@ -93,8 +103,17 @@ def fill_grid(x: np.ndarray, pool: np.ndarray, pool_idx: np.ndarray, ov_row: np.
 
 
 @njit(cache=True, nogil=True)
-def place(z: np.ndarray, y: np.ndarray, starts: np.ndarray, cps: np.ndarray, n_c: int,
-          w_rad_s: float, t_first_s: float, phase0_rad: float, dt_s: float) -> None:
+def place(
+    z: np.ndarray,
+    y: np.ndarray,
+    starts: np.ndarray,
+    cps: np.ndarray,
+    n_c: int,
+    w_rad_s: float,
+    t_first_s: float,
+    phase0_rad: float,
+    dt_s: float,
+) -> None:
     """Add the CP-OFDM symbols y [S, n] (IFFT outputs) to z from sample n_c on, times the
     LOS phasor e^{j(w t + φ0)} at receive times t = t_first + m dt.
 
@@ -233,8 +252,7 @@ def shifted_parts(p: np.ndarray, k0: np.ndarray, roots: np.ndarray, rows: np.nda
     return out
 
 
-def at_offsets(p: np.ndarray, k0: np.ndarray, roots: np.ndarray, cs_t: np.ndarray,
-               rows: np.ndarray) -> np.ndarray:
+def at_offsets(p: np.ndarray, k0: np.ndarray, roots: np.ndarray, cs_t: np.ndarray, rows: np.ndarray) -> np.ndarray:
     """Band-limited |c(k0 + δ)| = |(1/N) Σ_f p[f] e^{j2π f (k0 + δ)/N}| at the symmetric
     offsets δ = -δ_{H-1} … -δ_1, 0, δ_1 … δ_{H-1} for the rows ``rows`` [R] of the
     cross-spectra p [M, N] (row i of the result: p[rows[i]], k0[i]).
@@ -253,8 +271,8 @@ def at_offsets(p: np.ndarray, k0: np.ndarray, roots: np.ndarray, cs_t: np.ndarra
     a_re, s_re = m[:n_r, :n_h], m[:n_r, n_h:]
     a_im, s_im = m[n_r:, :n_h], m[n_r:, n_h:]
     out = np.empty((n_r, 2 * n_h - 1))
-    out[:, n_h - 1:] = np.sqrt((a_re - s_im) ** 2 + (a_im + s_re) ** 2) / n  # c(k0 + δ) = A + jS
-    out[:, n_h - 1::-1] = np.sqrt((a_re + s_im) ** 2 + (a_im - s_re) ** 2) / n  # c(k0 - δ) = A - jS
+    out[:, n_h - 1 :] = np.sqrt((a_re - s_im) ** 2 + (a_im + s_re) ** 2) / n  # c(k0 + δ) = A + jS
+    out[:, n_h - 1 :: -1] = np.sqrt((a_re + s_im) ** 2 + (a_im - s_re) ** 2) / n  # c(k0 - δ) = A - jS
     return out
 
 
@@ -271,8 +289,17 @@ def cross_spectra(zf: np.ndarray, bspec: np.ndarray, out: np.ndarray) -> None:
 
 
 @njit(cache=True, nogil=True)
-def mix_taps(z: np.ndarray, delayed: np.ndarray, coarse: np.ndarray, step: int, sym_of: np.ndarray,
-             per_symbol: bool, mult: np.ndarray, los: np.ndarray, los_amp: float) -> None:
+def mix_taps(
+    z: np.ndarray,
+    delayed: np.ndarray,
+    coarse: np.ndarray,
+    step: int,
+    sym_of: np.ndarray,
+    per_symbol: bool,
+    mult: np.ndarray,
+    los: np.ndarray,
+    los_amp: float,
+) -> None:
     """z[m] += los_amp · los[m] · delayed[0, m] + mult[m] · Σ_l g_l(m) · delayed[1 + l, m], in
     place (the exact reference's time-varying channel, :mod:`railradio.nr.reference`).
 
@@ -298,9 +325,19 @@ def mix_taps(z: np.ndarray, delayed: np.ndarray, coarse: np.ndarray, step: int, 
 
 
 @njit(cache=True, nogil=True)
-def add_spill(z: np.ndarray, at: np.ndarray, col_of: np.ndarray, b: np.ndarray, gains: np.ndarray,
-              starts: np.ndarray, n_c: int, w_rad_s: float, t_first_s: float, phase0_rad: float,
-              dt_s: float) -> None:
+def add_spill(
+    z: np.ndarray,
+    at: np.ndarray,
+    col_of: np.ndarray,
+    b: np.ndarray,
+    gains: np.ndarray,
+    starts: np.ndarray,
+    n_c: int,
+    w_rad_s: float,
+    t_first_s: float,
+    phase0_rad: float,
+    dt_s: float,
+) -> None:
     """z[n_c + starts[s] + j] += LOS(m) · Σ_{l: j < b[l]} gains[s, l] · at[s, col_of[l, j]], in
     place: the delayed taps' spill across symbol boundaries (:class:`railradio.nr.receiver.
     Synthesizer`), from ``at`` [S, Q], the boundary difference's waveform at each tap's delayed

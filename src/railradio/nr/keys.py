@@ -2,12 +2,11 @@
 
 from __future__ import annotations
 
+import re
 from typing import Any
 
 import numpy as np
 import xarray as xr
-
-import re
 
 from railradio.constants import SPEED_OF_LIGHT_M_S
 from railradio.keynumbers import KeySpec
@@ -20,7 +19,12 @@ SPECS = {
     "meas.aod_err_deg.p95": ("deg", "95th percentile of |AOD error| of the measured RRHs", 1.3, "<"),
     "meas.toa_err_m.p95": ("m", "95th percentile of |TOA range error| of the measured RRHs", 1.6, "<"),
     "meas.detection_rate": ("1", "share of (epoch, measured RRH) pairs with a valid TOA", None, None),
-    "meas.toa_err_m.frac_lt_5m": ("1", "share of (epoch, measured RRH) pairs with a TOA range error below 5 m", None, None),
+    "meas.toa_err_m.frac_lt_5m": (
+        "1",
+        "share of (epoch, measured RRH) pairs with a TOA range error below 5 m",
+        None,
+        None,
+    ),
     "track.aod_toa.err_m.mean": ("m", "mean 2-D position error, EKF with AOD+TOA", 0.66, "="),
     "track.aod_toa.err_m.p95": ("m", "95th percentile of the position error, EKF AOD+TOA", 1.7, "<"),
     "track.aod_toa.err_m.p99": ("m", "99th percentile of the position error, EKF AOD+TOA", 2.3, "<"),
@@ -52,8 +56,11 @@ _ACCURACY = re.compile(r"^track\.(?P<variant>aod_toa|aod|toa)(?P<gated>_gated)?\
 
 TRACK_LOSS_SPECS = {
     "lost_frac": ("1", "share of the scored epochs lost (2-D error above half the RRH spacing)"),
-    "time_to_loss_s": ("s", "time from the run's start to its first lost epoch (mean over the realizations that "
-                            "lose the track; null if none does)"),
+    "time_to_loss_s": (
+        "s",
+        "time from the run's start to its first lost epoch (mean over the realizations that "
+        "lose the track; null if none does)",
+    ),
     "tracked.err_m.mean": ("m", "mean 2-D position error over the epochs not lost"),
     "tracked.err_m.p95": ("m", "95th percentile of the 2-D position error over the epochs not lost"),
     "tracked.err_m.p99": ("m", "99th percentile of the 2-D position error over the epochs not lost"),
@@ -61,10 +68,18 @@ TRACK_LOSS_SPECS = {
 """Per tracker (receiver × variant × gate): ``track.<variant>[_gated].<metric>``."""
 
 CONSISTENCY_SPECS = {
-    "nis.mean": ("1", "mean NIS per measurement dimension over the epochs with an update (1 for a consistent "
-                      "filter)", "nis", False),
-    "nees.mean": ("1", "mean position NEES per dimension over the epochs not lost (1 for a consistent filter)",
-                  "nees", True),
+    "nis.mean": (
+        "1",
+        "mean NIS per measurement dimension over the epochs with an update (1 for a consistent filter)",
+        "nis",
+        False,
+    ),
+    "nees.mean": (
+        "1",
+        "mean position NEES per dimension over the epochs not lost (1 for a consistent filter)",
+        "nees",
+        True,
+    ),
 }
 """Filter consistency per tracker (unit, description, track variable, over tracked epochs
 only), where the track datasets carry it."""
@@ -90,10 +105,12 @@ def _loss_fns(spacing_m: float, rx: str, variant: str, gate: int) -> dict:
         return float(fn(v)) if v.size else np.nan
 
     return {
-        "lost_frac": lambda ts: float(np.mean(loss.lost_mask(
-            np.concatenate([e for _, e in _runs(ts, rx, variant, gate)]), spacing_m))),
+        "lost_frac": lambda ts: float(
+            np.mean(loss.lost_mask(np.concatenate([e for _, e in _runs(ts, rx, variant, gate)]), spacing_m))
+        ),
         "time_to_loss_s": lambda ts: (lambda v: np.nan if v is None else v)(
-            loss.time_to_loss_s(_runs(ts, rx, variant, gate), spacing_m)),
+            loss.time_to_loss_s(_runs(ts, rx, variant, gate), spacing_m)
+        ),
         "tracked.err_m.mean": lambda ts: stat(tracked(ts), np.mean),
         "tracked.err_m.p95": lambda ts: stat(tracked(ts), lambda v: np.percentile(v, 95)),
         "tracked.err_m.p99": lambda ts: stat(tracked(ts), lambda v: np.percentile(v, 99)),
@@ -129,8 +146,9 @@ def _metric_fns(rx: str) -> dict:
     """Each key of :data:`SPECS` as a function of a list of track datasets (receiver ``rx``)."""
 
     def err(ts, variant, gate=0):
-        return np.concatenate([t["pos_err"].sel(receiver=rx, variant=variant, gate=gate).values[t["t"].values >= SKIP_S]
-                               for t in ts])
+        return np.concatenate(
+            [t["pos_err"].sel(receiver=rx, variant=variant, gate=gate).values[t["t"].values >= SKIP_S] for t in ts]
+        )
 
     def meas(ts, name):
         return np.concatenate([t[name].sel(receiver=rx).values.ravel() for t in ts])
@@ -152,42 +170,67 @@ def _metric_fns(rx: str) -> dict:
         "track.aod_toa_gated.err_m.p95": lambda ts: float(np.nanpercentile(err(ts, "aod_toa", 1), 95)),
         "track.aod_toa_gated.err_m.p99": lambda ts: float(np.nanpercentile(err(ts, "aod_toa", 1), 99)),
         "track.aod_toa_gated.frac_submeter": lambda ts: float(np.mean(err(ts, "aod_toa", 1) < 1.0)),
-        "snapshot.aod_toa.err_m.median": lambda ts: float(np.nanmedian(np.concatenate(
-            [t["snap_err"].sel(receiver=rx, variant="aod_toa").values for t in ts]))),
+        "snapshot.aod_toa.err_m.median": lambda ts: float(
+            np.nanmedian(np.concatenate([t["snap_err"].sel(receiver=rx, variant="aod_toa").values for t in ts]))
+        ),
     }
 
 
 BOUND_SPECS = {
-    "nr.bound.toa_crb_m.median": ("toa_crb", np.median, "median TOA range CRB of the best RRH: its detected blocks' "
-                                  "PSS+SSS energy against noise and the other RRHs' SS blocks (interference-limited)"),
-    "nr.predict.peb_m.median": ("peb", np.median, "median snapshot position error predicted from the TOA CRB with the "
-                                "integer-sample floor and the calibration run's AOD spread (a prediction: measured errors)"),
-    "nr.predict.pcrb_m.mean": ("pcrb", np.mean, "mean PCRB recursion of the tracked position with the calibrated q and the "
-                               "measured error levels (white-jerk model; a prediction, not a bound)"),
-    "nr.predict.pcrb_true_motion_m.mean": ("pcrb_true_motion", np.mean,
-                                           "mean PCRB recursion for the true piecewise-constant-acceleration motion (genie knows "
-                                           "the change instants) with the measured error levels (a prediction, not a bound)"),
+    "nr.bound.toa_crb_m.median": (
+        "toa_crb",
+        np.median,
+        "median TOA range CRB of the best RRH: its detected blocks' "
+        "PSS+SSS energy against noise and the other RRHs' SS blocks (interference-limited)",
+    ),
+    "nr.predict.peb_m.median": (
+        "peb",
+        np.median,
+        "median snapshot position error predicted from the TOA CRB with the "
+        "integer-sample floor and the calibration run's AOD spread (a prediction: measured errors)",
+    ),
+    "nr.predict.pcrb_m.mean": (
+        "pcrb",
+        np.mean,
+        "mean PCRB recursion of the tracked position with the calibrated q and the "
+        "measured error levels (white-jerk model; a prediction, not a bound)",
+    ),
+    "nr.predict.pcrb_true_motion_m.mean": (
+        "pcrb_true_motion",
+        np.mean,
+        "mean PCRB recursion for the true piecewise-constant-acceleration motion (genie knows "
+        "the change instants) with the measured error levels (a prediction, not a bound)",
+    ),
 }
 
 
 def key_numbers(tracks: list[xr.Dataset], bounds: list[xr.Dataset] | None = None) -> dict[str, Any]:
     out: dict[str, Any] = {}
-    for name, (var, fn, desc) in (BOUND_SPECS.items() if bounds else ()):
+    for name, (var, fn, desc) in BOUND_SPECS.items() if bounds else ():
         vals = [float(fn(b[var].values[b["t"].values >= SKIP_S])) for b in bounds]
         pooled = float(fn(np.concatenate([b[var].values[b["t"].values >= SKIP_S] for b in bounds])))
         se = float(np.std(vals, ddof=1) / np.sqrt(len(vals))) if len(vals) > 1 else None
         out[name] = KeySpec(name, "m", desc).entry(pooled, se)
     sir = np.concatenate([t["sir_best"].values for t in tracks])
     out["nr.link.sir_best_db.median"] = KeySpec(
-        "nr.link.sir_best_db.median", "dB",
-        "median power of the strongest RRH over the sum of all others in range").entry(float(np.median(sir)))
+        "nr.link.sir_best_db.median", "dB", "median power of the strongest RRH over the sum of all others in range"
+    ).entry(float(np.median(sir)))
     spacing = _spacing(tracks)
     for name, unit, desc, value in (
-            ("nr.track.score_from_s", "s", "tracking errors are scored from this time of the run on", SKIP_S),
-            ("nr.track.lost_threshold_m", "m", "an epoch is lost when its 2-D error exceeds this (half the RRH "
-             "spacing)", spacing / 2),
-            ("nr.track.lost_frac_max", "1", "an all-epoch accuracy is reported only below this lost share",
-             loss.LOST_FRAC_MAX)):
+        ("nr.track.score_from_s", "s", "tracking errors are scored from this time of the run on", SKIP_S),
+        (
+            "nr.track.lost_threshold_m",
+            "m",
+            "an epoch is lost when its 2-D error exceeds this (half the RRH spacing)",
+            spacing / 2,
+        ),
+        (
+            "nr.track.lost_frac_max",
+            "1",
+            "an all-epoch accuracy is reported only below this lost share",
+            loss.LOST_FRAC_MAX,
+        ),
+    ):
         out[name] = KeySpec(name, unit, desc).entry(value)
     variants = [str(v) for v in tracks[0]["variant"].values]
     for rx in [str(r) for r in tracks[0]["receiver"].values]:
@@ -203,7 +246,8 @@ def key_numbers(tracks: list[xr.Dataset], bounds: list[xr.Dataset] | None = None
                     name = f"{prefix}{track}.{metric}"
                     value, se = _per_real(tracks, rx, lfns[metric])
                     out[name] = KeySpec(name, unit, f"{desc}, EKF {variant}{', gated' if gate else ''}{who}").entry(
-                        value if np.isfinite(value) else None, se if metric != "time_to_loss_s" else None)
+                        value if np.isfinite(value) else None, se if metric != "time_to_loss_s" else None
+                    )
                 lost[(variant, gate)] = out[f"{prefix}{track}.lost_frac"]["value"]
                 for metric, (unit, desc, var, tracked_only) in CONSISTENCY_SPECS.items():
                     if var not in tracks[0]:
@@ -212,7 +256,8 @@ def key_numbers(tracks: list[xr.Dataset], bounds: list[xr.Dataset] | None = None
                     fn = _consistency_fn(spacing, rx, variant, gate, var, tracked_only)
                     value, se = _per_real(tracks, rx, fn)
                     out[name] = KeySpec(name, unit, f"{desc}, EKF {variant}{', gated' if gate else ''}{who}").entry(
-                        value if np.isfinite(value) else None, se)
+                        value if np.isfinite(value) else None, se
+                    )
         for key, (unit, desc, src, rel) in SPECS.items():
             name = prefix + key
             if rx != "seed":
@@ -222,8 +267,9 @@ def key_numbers(tracks: list[xr.Dataset], bounds: list[xr.Dataset] | None = None
             if m:  # an all-epoch accuracy: null where the track is lost too often
                 lf = lost[(m["variant"], int(bool(m["gated"])))]
                 value = loss.accuracy(value, lf)
-                out[name] = KeySpec(name, unit, desc, src, rel).entry(value, se if value is not None else None,
-                                                                      lost_frac=lf)
+                out[name] = KeySpec(name, unit, desc, src, rel).entry(
+                    value, se if value is not None else None, lost_frac=lf
+                )
                 continue
             out[name] = KeySpec(name, unit, desc, src, rel).entry(value if np.isfinite(value) else None, se)
     return out
@@ -231,10 +277,16 @@ def key_numbers(tracks: list[xr.Dataset], bounds: list[xr.Dataset] | None = None
 
 CALIBRATION_SPECS = {
     "q": ("m2 s-5", "white-jerk intensity q calibrated on the calibration run (position NEES consistency)"),
-    "q_at_edge": ("1", "1 if the calibrated q sits on an edge of the searched range (grid widened by decades up to "
-                       "1e-6 ... 1e6), else 0"),
-    "q_cost_monotone": ("1", "1 if the search reached the limit of its range with the consistency cost falling "
-                             "at every decade from the grid's edge on (no q is identified), else 0"),
+    "q_at_edge": (
+        "1",
+        "1 if the calibrated q sits on an edge of the searched range (grid widened by decades up to "
+        "1e-6 ... 1e6), else 0",
+    ),
+    "q_cost_monotone": (
+        "1",
+        "1 if the search reached the limit of its range with the consistency cost falling "
+        "at every decade from the grid's edge on (no q is identified), else 0",
+    ),
     "q_cost": ("1", "|log(median NEES / median chi2_2)| of the calibration run at the calibrated q (0: consistent)"),
     "sigma_aod_deg": ("deg", "calibrated AOD standard deviation (inliers of the calibration run's errors)"),
     "sigma_range_m": ("m", "calibrated TOA range standard deviation (inliers of the calibration run's errors)"),
@@ -264,20 +316,23 @@ def calibration_key_numbers(cal: dict[str, dict]) -> dict[str, Any]:
         for metric, (unit, desc) in CALIBRATION_SPECS.items():
             key = f"{prefix}{track}.{metric}"
             out[key] = KeySpec(key, unit, f"{desc}, EKF {variant}{', gated' if gate == 'gate' else ''}{who}").entry(
-                values[metric])
+                values[metric]
+            )
     edges = [k for k in out if k.endswith(".q_at_edge") and out[k]["value"] == 1.0]
     for key, desc, value in (
-            ("nr.cal.n_trackers", "trackers calibrated (receiver x measurement set x gate)", len(cal)),
-            ("nr.cal.n_q_at_edge", "calibrated q on an edge of the searched range", len(edges)),
-            ("nr.cal.n_q_at_edge_monotone", "of those, with a cost monotone in q (no q identified)",
-             sum(out[k[: -len("q_at_edge")] + "q_cost_monotone"]["value"] == 1.0 for k in edges))):
+        ("nr.cal.n_trackers", "trackers calibrated (receiver x measurement set x gate)", len(cal)),
+        ("nr.cal.n_q_at_edge", "calibrated q on an edge of the searched range", len(edges)),
+        (
+            "nr.cal.n_q_at_edge_monotone",
+            "of those, with a cost monotone in q (no q identified)",
+            sum(out[k[: -len("q_at_edge")] + "q_cost_monotone"]["value"] == 1.0 for k in edges),
+        ),
+    ):
         out[key] = KeySpec(key, "1", desc).entry(float(value))
     return out
 
 
-SENSITIVITY_SPECS = {
-    "meas.toa_err_m.median_abs": ("m", "median |TOA range error| of the measured RRHs (valid TOAs)"),
-}
+SENSITIVITY_SPECS = {"meas.toa_err_m.median_abs": ("m", "median |TOA range error| of the measured RRHs (valid TOAs)")}
 """Metrics of the sensitivity cases only (unit, description), beside :data:`SPECS`."""
 
 SENSITIVITY_METRICS = (
@@ -296,8 +351,9 @@ SENSITIVITY_LOSS_METRICS = ("lost_frac", "time_to_loss_s", "tracked.err_m.mean",
 """Loss metrics of the sensitivity cases' AOD+TOA trackers (gate off and on)."""
 
 
-def sensitivity_key_numbers(base: xr.Dataset, cases: dict[str, xr.Dataset],
-                            n_epochs: int | dict[str, int]) -> dict[str, Any]:
+def sensitivity_key_numbers(
+    base: xr.Dataset, cases: dict[str, xr.Dataset], n_epochs: int | dict[str, int]
+) -> dict[str, Any]:
     """Key numbers ``sens.nr.<case>.<receiver>.<metric>`` of the sensitivity cases and of
     ``base`` (the main run's realization r0, with the main calibration), all on the first
     ``n_epochs`` epochs (a tracker-only case tracks the main run's whole r0), or per case
@@ -324,7 +380,8 @@ def sensitivity_key_numbers(base: xr.Dataset, cases: dict[str, xr.Dataset],
                     name = f"sens.nr.{case}.{rx}.{track}.{metric}"
                     value = lfns[metric]([ds])
                     out[name] = KeySpec(name, unit, f"{desc}, EKF AOD+TOA{', gated' if gate else ''} {where}").entry(
-                        value if np.isfinite(value) else None)
+                        value if np.isfinite(value) else None
+                    )
                 lost[gate] = out[f"sens.nr.{case}.{rx}.{track}.lost_frac"]["value"]
             for metric in SENSITIVITY_METRICS:
                 unit, desc = (SPECS | SENSITIVITY_SPECS)[metric][:2]
@@ -367,7 +424,10 @@ def sensitivity_floor_numbers(sync_sigma_s: dict[str, float]) -> dict[str, Any]:
     out: dict[str, Any] = {}
     for case, sigma in sync_sigma_s.items():
         name = f"sens.nr.{case}.bound.toa_floor_m.median"
-        out[name] = KeySpec(name, "m", "median of |integer-sample TOA error + c x RRH clock offset| "
-                            f"(uniform +-c/(2F_s) and N(0, sigma^2), sigma = {sigma:g} s; case {case})").entry(
-                                toa_floor_m(float(sigma)))
+        out[name] = KeySpec(
+            name,
+            "m",
+            "median of |integer-sample TOA error + c x RRH clock offset| "
+            f"(uniform +-c/(2F_s) and N(0, sigma^2), sigma = {sigma:g} s; case {case})",
+        ).entry(toa_floor_m(float(sigma)))
     return out

@@ -105,12 +105,25 @@ class LinkBudget:
     @cached_property
     def rx_power_dbm(self) -> NDArray[np.float64]:
         """Received power over the carrier with the best beam [dBm]."""
-        return (self.links.extra["tx_power_dbm"] - self.pathloss_db + self.shadowing_db
-                + self.beam_gain_db.max(axis=1) + self.rx_gain_db)
+        return (
+            self.links.extra["tx_power_dbm"]
+            - self.pathloss_db
+            + self.shadowing_db
+            + self.beam_gain_db.max(axis=1)
+            + self.rx_gain_db
+        )
 
 
-def link_budget(x_m: float, speed_m_s: float, dep: Deployment, radio: RadioParams, rrh_array: RrhArray,
-                train: TrainArray, shadow: ShadowingMap, shadowing: bool = True) -> LinkBudget:
+def link_budget(
+    x_m: float,
+    speed_m_s: float,
+    dep: Deployment,
+    radio: RadioParams,
+    rrh_array: RrhArray,
+    train: TrainArray,
+    shadow: ShadowingMap,
+    shadowing: bool = True,
+) -> LinkBudget:
     """Large-scale parameters and the synthesis inputs of every RRH within ``radio.range_m``
     of the train's reference point ``x_m``."""
     d2d_all = np.hypot(dep.x_m - x_m, dep.offset_m)
@@ -125,24 +138,39 @@ def link_budget(x_m: float, speed_m_s: float, dep: Deployment, radio: RadioParam
         d2d = dep.distance_2d_m(xp, rrh)
         aod = dep.aod_rad(np.full(rrh.size, xp), rrh)
         aoa = dep.aoa_rad(np.full(rrh.size, xp), rrh)
-        return dict(xp=xp, d3d=d3d, d2d=d2d, aod=aod, aoa=aoa, gt=rrh_array.beam_gains_db(aod), gr=gain_db(aoa),
-                    pl=pathloss_umi_los_db(d3d, d2d, radio.carrier_hz, dep.h_bs_m, dep.h_ut_m),
-                    sh=shadow.at(xp, rrh) if shadowing else np.zeros(rrh.size))
+        return dict(
+            xp=xp,
+            d3d=d3d,
+            d2d=d2d,
+            aod=aod,
+            aoa=aoa,
+            gt=rrh_array.beam_gains_db(aod),
+            gr=gain_db(aoa),
+            pl=pathloss_umi_los_db(d3d, d2d, radio.carrier_hz, dep.h_bs_m, dep.h_ut_m),
+            sh=shadow.at(xp, rrh) if shadowing else np.zeros(rrh.size),
+        )
 
     if train.co_located:
         c = path(x_m, train.gain_db)
         d3d, d2d, pl, sh, aod, aoa, gt, gr = (c[k] for k in ("d3d", "d2d", "pl", "sh", "aod", "aoa", "gt", "gr"))
         amp = np.sqrt(radio.epre_w * 10 ** ((-pl + sh + gr) / 10))
         links = Links(
-            n_id1=n1[rrh], n_id2=n2[rrh], tau_s=d3d / SPEED_OF_LIGHT_M_S, amp=amp,
-            beam_amp=10 ** (gt / 20), data_amp=10 ** (gt.max(axis=1) / 20),
+            n_id1=n1[rrh],
+            n_id2=n2[rrh],
+            tau_s=d3d / SPEED_OF_LIGHT_M_S,
+            amp=amp,
+            beam_amp=10 ** (gt / 20),
+            data_amp=10 ** (gt.max(axis=1) / 20),
             f_los_hz=speed_m_s / lam * (dep.x_m[rrh] - x_m) / d3d,
             phase0=(-2 * np.pi * d3d / lam) % (2 * np.pi),
-            doppler_hz=abs(speed_m_s) / lam, noise_psd_w_hz=radio.noise_psd_w_hz,
-            n_chains=train.n_chains, extra={"tx_power_dbm": radio.tx_power_dbm},
+            doppler_hz=abs(speed_m_s) / lam,
+            noise_psd_w_hz=radio.noise_psd_w_hz,
+            n_chains=train.n_chains,
+            extra={"tx_power_dbm": radio.tx_power_dbm},
         )
-        return LinkBudget(rrh, d3d, pl, sh, aod, aoa, gt, gr, links, link_rrh=rrh, link_d2d_m=d2d,
-                          link_panel_x_m=np.zeros(rrh.size))
+        return LinkBudget(
+            rrh, d3d, pl, sh, aod, aoa, gt, gr, links, link_rrh=rrh, link_d2d_m=d2d, link_panel_x_m=np.zeros(rrh.size)
+        )
     # separate panels: each RRH reaches the head panel at x + panel_x[0] and the tail panel
     # at x + panel_x[1] over its own path (delay, path loss, shadowing, angles, fading)
     per = []
@@ -159,14 +187,31 @@ def link_budget(x_m: float, speed_m_s: float, dep: Deployment, radio: RadioParam
     x_rrh_l = np.repeat(dep.x_m[rrh], 2)
     xp_l = np.tile([per[0]["xp"], per[1]["xp"]], rrh.size)
     links = Links(
-        n_id1=np.repeat(n1[rrh], 2), n_id2=np.repeat(n2[rrh], 2), tau_s=cols["d3d"] / SPEED_OF_LIGHT_M_S,
+        n_id1=np.repeat(n1[rrh], 2),
+        n_id2=np.repeat(n2[rrh], 2),
+        tau_s=cols["d3d"] / SPEED_OF_LIGHT_M_S,
         amp=np.sqrt(radio.epre_w * 10 ** ((-cols["pl"] + cols["sh"] + cols["gr"]) / 10)),
-        beam_amp=10 ** (gt_l / 20), data_amp=10 ** (gt_l[np.arange(gt_l.shape[0]), np.repeat(b_data, 2)] / 20),
+        beam_amp=10 ** (gt_l / 20),
+        data_amp=10 ** (gt_l[np.arange(gt_l.shape[0]), np.repeat(b_data, 2)] / 20),
         f_los_hz=speed_m_s / lam * (x_rrh_l - xp_l) / cols["d3d"],
         phase0=(-2 * np.pi * cols["d3d"] / lam) % (2 * np.pi),
-        doppler_hz=abs(speed_m_s) / lam, noise_psd_w_hz=radio.noise_psd_w_hz,
-        n_chains=train.n_chains, extra={"tx_power_dbm": radio.tx_power_dbm},
+        doppler_hz=abs(speed_m_s) / lam,
+        noise_psd_w_hz=radio.noise_psd_w_hz,
+        n_chains=train.n_chains,
+        extra={"tx_power_dbm": radio.tx_power_dbm},
     )
-    return LinkBudget(rrh, pick["d3d"], pick["pl"], pick["sh"], pick["aod"], pick["aoa"], gt_serv,
-                      pick["gr"], links, panel=panel, link_rrh=np.repeat(rrh, 2), link_d2d_m=cols["d2d"],
-                      link_panel_x_m=np.tile(np.asarray(train.panel_x_m, float), rrh.size))
+    return LinkBudget(
+        rrh,
+        pick["d3d"],
+        pick["pl"],
+        pick["sh"],
+        pick["aod"],
+        pick["aoa"],
+        gt_serv,
+        pick["gr"],
+        links,
+        panel=panel,
+        link_rrh=np.repeat(rrh, 2),
+        link_d2d_m=cols["d2d"],
+        link_panel_x_m=np.tile(np.asarray(train.panel_x_m, float), rrh.size),
+    )

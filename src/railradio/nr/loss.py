@@ -37,8 +37,9 @@ def rrh_spacing_m(ds: xr.Dataset) -> float:
     try:
         return float(json.loads(ds.attrs["config_json"])["sim"]["deployment"]["spacing_m"])
     except (KeyError, TypeError, ValueError) as exc:
-        raise ValueError("the track dataset names no deployment spacing in its config_json attribute "
-                         "(sim.deployment.spacing_m)") from exc
+        raise ValueError(
+            "the track dataset names no deployment spacing in its config_json attribute (sim.deployment.spacing_m)"
+        ) from exc
 
 
 def lost_mask(err_m: NDArray[np.float64], spacing_m: float) -> NDArray[np.bool_]:

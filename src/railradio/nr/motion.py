@@ -107,5 +107,14 @@ def burst_motion(lb, scn, x0_m: float, v_m_s: float, a_m_s2: float, t0_s: float)
     (:class:`railradio.nr.link.LinkBudget`) in scenario ``scn``."""
     rrh = lb.rrh if lb.link_rrh is None else lb.link_rrh
     panel = np.zeros(len(rrh)) if lb.link_panel_x_m is None else lb.link_panel_x_m
-    return BurstMotion(scn.deployment, scn.rrh_array, np.asarray(rrh, np.int64), np.asarray(panel, float),
-                       float(x0_m), float(v_m_s), float(a_m_s2), float(t0_s), scn.radio.wavelength_m)
+    return BurstMotion(
+        scn.deployment,
+        scn.rrh_array,
+        np.asarray(rrh, np.int64),
+        np.asarray(panel, float),
+        float(x0_m),
+        float(v_m_s),
+        float(a_m_s2),
+        float(t0_s),
+        scn.radio.wavelength_m,
+    )

@@ -72,8 +72,9 @@ class Numerology:
         sf, l_in = np.divmod(sym, SYMBOLS_PER_SUBFRAME)
         base = (self.n_fft + CP_NORMAL // self.decimation) * l_in
         # the long CPs of symbols 0 and 112 delay every later symbol of the subframe
-        extra = np.where(l_in == 0, 0, (CP_LONG - CP_NORMAL) // self.decimation
-                         * (1 + (l_in > SYMBOLS_PER_SUBFRAME // 2)))
+        extra = np.where(
+            l_in == 0, 0, (CP_LONG - CP_NORMAL) // self.decimation * (1 + (l_in > SYMBOLS_PER_SUBFRAME // 2))
+        )
         return sf * (SAMPLES_PER_SUBFRAME // self.decimation) + base + extra
 
     def symbol_length(self, symbol: NDArray[np.int64] | int) -> NDArray[np.int64]:

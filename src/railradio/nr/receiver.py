@@ -182,9 +182,17 @@ class Synthesizer:
     policy or the serving cell changes no other draw.
     """
 
-    def __init__(self, cfg: ReceiverConfig, profile: TdlProfile, pool: NDArray[np.complex64],
-                 n_sinusoids: int = 16, full_channel_range_m: float = np.inf,
-                 data_beam: str = "serving", load: float = 1.0, exact_spill: bool = False):
+    def __init__(
+        self,
+        cfg: ReceiverConfig,
+        profile: TdlProfile,
+        pool: NDArray[np.complex64],
+        n_sinusoids: int = 16,
+        full_channel_range_m: float = np.inf,
+        data_beam: str = "serving",
+        load: float = 1.0,
+        exact_spill: bool = False,
+    ):
         if data_beam not in DATA_BEAMS:
             raise ValueError(f"data_beam must be one of {DATA_BEAMS}, got {data_beam!r}")
         if not 0.0 <= load <= 1.0:
@@ -230,8 +238,9 @@ class Synthesizer:
         if self._span is not None and self._span["n_pre"] >= n_pre:
             return self._span
         n_pre = max(n_pre, 4)
-        last_needed = cfg.block_start_full[-1] + cfg.lags_full + len(
-            reference_waveform(num1, 0, 0, int(cfg.ssb_first[-1])))
+        last_needed = (
+            cfg.block_start_full[-1] + cfg.lags_full + len(reference_waveform(num1, 0, 0, int(cfg.ssb_first[-1])))
+        )
         s_end = int(cfg.ssb_first[-1])
         while num1.symbol_start(s_end) < last_needed:
             s_end += 1
@@ -251,14 +260,26 @@ class Synthesizer:
                     block_of[first_pos[int(f) + off]] = b
         cp0 = int(num.cp_length(1))
         long_rows = np.flatnonzero(cps != cp0)
-        long_ramp = np.exp(-2j * np.pi * np.outer(cps[long_rows] - cp0, np.fft.fftfreq(n, 1.0 / n)) / n).astype(np.complex64)
+        long_ramp = np.exp(-2j * np.pi * np.outer(cps[long_rows] - cp0, np.fft.fftfreq(n, 1.0 / n)) / n).astype(
+            np.complex64
+        )
         long_of = np.full(symbols.size, -1, dtype=np.int64)
         long_of[long_rows] = np.arange(long_rows.size)
         slot = symbols // SYMBOLS_PER_SLOT
         slot = slot - slot[0]  # each symbol's slot, 0-based
-        self._span = dict(n_pre=n_pre, symbols=symbols, slot=slot, cps=np.ascontiguousarray(cps, dtype=np.int64),
-                          starts=np.ascontiguousarray(starts, dtype=np.int64), total=total,
-                          cp0=cp0, long_of=long_of, long_ramp=long_ramp, block_of=block_of, s_min=int(symbols[0]))
+        self._span = dict(
+            n_pre=n_pre,
+            symbols=symbols,
+            slot=slot,
+            cps=np.ascontiguousarray(cps, dtype=np.int64),
+            starts=np.ascontiguousarray(starts, dtype=np.int64),
+            total=total,
+            cp0=cp0,
+            long_of=long_of,
+            long_ramp=long_ramp,
+            block_of=block_of,
+            s_min=int(symbols[0]),
+        )
         self._overlays.clear()
         return self._span
 
@@ -271,9 +292,14 @@ class Synthesizer:
         if key not in self._overlays:
             sp = self._span
             num = self.cfg.num
-            marked, _ = burst_grid(num, sp["symbols"], self.cfg.ssb_first, *key,
-                                   np.full((1, N_FFT), np.nan + 0j, dtype=np.complex64),
-                                   np.zeros(sp["symbols"].size, dtype=np.int64))
+            marked, _ = burst_grid(
+                num,
+                sp["symbols"],
+                self.cfg.ssb_first,
+                *key,
+                np.full((1, N_FFT), np.nan + 0j, dtype=np.complex64),
+                np.zeros(sp["symbols"].size, dtype=np.int64),
+            )
             mask = ~np.isnan(marked.real) & (sp["block_of"][:, None] >= 0)
             rows = np.flatnonzero(mask.any(axis=1))
             ov_row = np.full(mask.shape[0], -1, dtype=np.int64)
@@ -324,13 +350,31 @@ class Synthesizer:
         delta -= u_all
         b = np.ceil((tau0_s + self.profile.delays_s) * fs - 1e-9).astype(np.int64) - n_c
         b = np.clip(b, 0, self.spill_reach)
-        kernels.add_spill(z, delta @ self.spill_at, self.spill_col_of, b, gains, sp["starts"], n_c,
-                          w_rad_s, t_first_s, phase0_rad, 1.0 / fs)
+        kernels.add_spill(
+            z,
+            delta @ self.spill_at,
+            self.spill_col_of,
+            b,
+            gains,
+            sp["starts"],
+            n_c,
+            w_rad_s,
+            t_first_s,
+            phase0_rad,
+            1.0 / fs,
+        )
 
-    def __call__(self, links: Links, rng: np.random.Generator, t0_s: float = 0.0,
-                 noise: bool = True, d2d_m: NDArray | None = None,
-                 draws: list[dict] | None = None,
-                 serving: NDArray[np.bool_] | None = None, motion=None) -> tuple[NDArray[np.complex64], int]:
+    def __call__(
+        self,
+        links: Links,
+        rng: np.random.Generator,
+        t0_s: float = 0.0,
+        noise: bool = True,
+        d2d_m: NDArray | None = None,
+        draws: list[dict] | None = None,
+        serving: NDArray[np.bool_] | None = None,
+        motion=None,
+    ) -> tuple[NDArray[np.complex64], int]:
         """The received burst at F_s/D (sum over RRHs in range + AWGN).
 
         ``serving`` [links]: the links of the serving cell (``data_beam="serving"``; none
@@ -359,8 +403,11 @@ class Synthesizer:
         every = rows.size == symbols.size
         x = np.empty((rows.size, n), dtype=np.complex64)
         u = np.empty_like(x) if self.exact_spill and prof.powers.size else None  # tap-less spectra
-        long_of, starts, cps = ((sp["long_of"], sp["starts"], sp["cps"]) if every else
-                                (sp["long_of"][rows], sp["starts"][rows], sp["cps"][rows]))
+        long_of, starts, cps = (
+            (sp["long_of"], sp["starts"], sp["cps"])
+            if every
+            else (sp["long_of"][rows], sp["starts"][rows], sp["cps"][rows])
+        )
         no_h = np.ones((1, 1), dtype=np.complex64)
         amp_l = np.sqrt(prof.powers / self.n_sinusoids)
         # per-RRH quantities, vectorized over RRHs: delay τ0 = (n_c - ε)/F_s is placed at
@@ -385,15 +432,21 @@ class Synthesizer:
             ba_t = motion.beam_amp(t_rx)  # [R, S, B]
             beam = np.empty(ss_amp.shape, dtype=np.int64)
             for r in range(links.n):
-                b_data = (np.full(symbols.size, int(np.argmin(np.abs(links.beam_amp[r] - links.data_amp[r]))))
-                          if at_train[r] else draws[r]["data_beam"])
+                b_data = (
+                    np.full(symbols.size, int(np.argmin(np.abs(links.beam_amp[r] - links.data_amp[r]))))
+                    if at_train[r]
+                    else draws[r]["data_beam"]
+                )
                 beam[r] = np.where(is_ss, np.maximum(sp["block_of"], 0), b_data)
             ss_amp = data_amp = np.take_along_axis(ba_t, beam[:, :, None], axis=2)[:, :, 0]
             d_tau = motion.delay_s(t_rx) - links.tau_s[:, None]  # [R, S]
-            geo_h = np.exp(1j * (motion.phase_excess_rad(t_rx)[:, :, None]
-                                 - 2 * np.pi * d_tau[:, :, None] * self.f_k[None, None, :])).astype(np.complex64)
-        g_syms = (np.where(is_ss[None, :], ss_amp, data_amp)
-                  * (links.amp * n)[:, None]).astype(np.float32)  # × n: unnormalized IFFT
+            geo_h = np.exp(
+                1j
+                * (motion.phase_excess_rad(t_rx)[:, :, None] - 2 * np.pi * d_tau[:, :, None] * self.f_k[None, None, :])
+            ).astype(np.complex64)
+        g_syms = (np.where(is_ss[None, :], ss_amp, data_amp) * (links.amp * n)[:, None]).astype(
+            np.float32
+        )  # × n: unnormalized IFFT
         t_firsts = (num.symbol_start(sp["s_min"]) + n_cs) / fs + t0_s  # [R]
         full = np.ones(links.n, dtype=bool) if d2d_m is None else np.asarray(d2d_m) <= self.full_channel_range_m
         for r in range(links.n):
@@ -416,27 +469,70 @@ class Synthesizer:
                 h += np.float32(np.sqrt(prof.los_power))
                 if u is not None:  # the tap-less spectra kept for the spill, then x = u · h
                     geo = (geo_h[r] if every else geo_h[r][rows]) if geo_h is not None else no_h
-                    kernels.fill_grid(u, self.pool_band, pool_idx, *ov, geo, geo_h is not None,
-                                      ramps[r], g_r, long_of, sp["long_ramp"])
+                    kernels.fill_grid(
+                        u,
+                        self.pool_band,
+                        pool_idx,
+                        *ov,
+                        geo,
+                        geo_h is not None,
+                        ramps[r],
+                        g_r,
+                        long_of,
+                        sp["long_ramp"],
+                    )
                     np.multiply(u, h if every else h[rows], out=x)
                 else:
                     if geo_h is not None:
                         h *= geo_h[r]
-                    kernels.fill_grid(x, self.pool_band, pool_idx, *ov, h if every else h[rows], True,
-                                      ramps[r], g_r, long_of, sp["long_ramp"])
+                    kernels.fill_grid(
+                        x,
+                        self.pool_band,
+                        pool_idx,
+                        *ov,
+                        h if every else h[rows],
+                        True,
+                        ramps[r],
+                        g_r,
+                        long_of,
+                        sp["long_ramp"],
+                    )
             elif geo_h is not None:  # far interferer, its geometry symbol by symbol
-                kernels.fill_grid(x, self.pool_band, pool_idx, *ov, geo_h[r] if every else geo_h[r][rows], True,
-                                  ramps[r], g_r, long_of, sp["long_ramp"])
+                kernels.fill_grid(
+                    x,
+                    self.pool_band,
+                    pool_idx,
+                    *ov,
+                    geo_h[r] if every else geo_h[r][rows],
+                    True,
+                    ramps[r],
+                    g_r,
+                    long_of,
+                    sp["long_ramp"],
+                )
             else:  # far interferer: one tap with the profile's total power, LOS Doppler
-                kernels.fill_grid(x, self.pool_band, pool_idx, *ov, no_h, False,
-                                  ramps[r], g_r, long_of, sp["long_ramp"])
+                kernels.fill_grid(
+                    x, self.pool_band, pool_idx, *ov, no_h, False, ramps[r], g_r, long_of, sp["long_ramp"]
+                )
             y = fft_rows(x, inverse=True, out=x)
             # LOS phase e^{j(2π f t + φ0)} at receive times, applied while placing
-            kernels.place(z, y, starts, cps, n_c, 2 * np.pi * links.f_los_hz[r],
-                          float(t_firsts[r]), links.phase0[r], 1.0 / fs)
+            kernels.place(
+                z, y, starts, cps, n_c, 2 * np.pi * links.f_los_hz[r], float(t_firsts[r]), links.phase0[r], 1.0 / fs
+            )
             if u is not None and full[r]:
-                self._add_spill(z, u, rows, every, gains, n_c, float(links.tau_s[r]), sp,
-                                2 * np.pi * links.f_los_hz[r], float(t_firsts[r]), float(links.phase0[r]))
+                self._add_spill(
+                    z,
+                    u,
+                    rows,
+                    every,
+                    gains,
+                    n_c,
+                    float(links.tau_s[r]),
+                    sp,
+                    2 * np.pi * links.f_los_hz[r],
+                    float(t_firsts[r]),
+                    float(links.phase0[r]),
+                )
         if noise:
             var = links.noise_psd_w_hz * fs * links.n_chains
             # complex AWGN: interleaved (re, im) float32 draws, variance var/2 each
@@ -505,9 +601,15 @@ class Correlator:
     number = P_fa, the false-alarm probability per block.
     """
 
-    def __init__(self, cfg: ReceiverConfig, detector: str = "seed", pfa: float = 1e-3,
-                 ca_window: int | None = None, ca_guard: int | None = None,
-                 template_decimation: int | None = None):
+    def __init__(
+        self,
+        cfg: ReceiverConfig,
+        detector: str = "seed",
+        pfa: float = 1e-3,
+        ca_window: int | None = None,
+        ca_guard: int | None = None,
+        template_decimation: int | None = None,
+    ):
         """``ca_window``, ``ca_guard``: the CA-CFAR's reference lags on each side and guard
         lags at this correlator's rate (default: :data:`CA_WINDOW_FULL` and
         :data:`CA_GUARD_FULL` full-rate lags). ``template_decimation``: the rate F_s/D_t of
@@ -519,7 +621,9 @@ class Correlator:
         d = cfg.decimation
         td = d if template_decimation is None else int(template_decimation)
         if td < d or td % d:
-            raise ValueError(f"template_decimation must be a multiple of the decimation {d}, got {template_decimation!r}")
+            raise ValueError(
+                f"template_decimation must be a multiple of the decimation {d}, got {template_decimation!r}"
+            )
         self.template_decimation = td
         self.ca_window = CA_WINDOW_FULL // d if ca_window is None else int(ca_window)
         self.ca_guard = CA_GUARD_FULL // d if ca_guard is None else int(ca_guard)
@@ -564,12 +668,14 @@ class Correlator:
             self._spectra[key] = np.conj(sfft.fft(b, self.n_win)).astype(np.complex64)
         return self._spectra[key]
 
-    def _at_offsets(self, p: NDArray[np.complex64], rows: NDArray[np.int64],
-                    k0: NDArray[np.int64]) -> NDArray[np.float64]:
+    def _at_offsets(
+        self, p: NDArray[np.complex64], rows: NDArray[np.int64], k0: NDArray[np.int64]
+    ) -> NDArray[np.float64]:
         """|c(k0 + δ)| for δ in ``self.offsets`` from the rows ``rows`` of the cross-spectra
         p [M, N] (band-limited evaluation: c(λ) = (1/N) Σ_f p[f] e^{j2π f λ/N})."""
-        return kernels.at_offsets(p, np.asarray(k0, dtype=np.int64), self.roots, self.offset_cs_t,
-                                  np.asarray(rows, dtype=np.int64))
+        return kernels.at_offsets(
+            p, np.asarray(k0, dtype=np.int64), self.roots, self.offset_cs_t, np.asarray(rows, dtype=np.int64)
+        )
 
     def window_spectra(self, z: NDArray[np.complex64], s_min: int) -> NDArray[np.complex64]:
         """FFT of the received burst over each SS block's window (v_i ... v_i + N - 1),
@@ -582,8 +688,15 @@ class Correlator:
         zw[ok] = z[idx[ok]]
         return fft_rows(zw, out=zw)
 
-    def correlate(self, z: NDArray[np.complex64], s_min: int, n_id1: NDArray, n_id2: NDArray,
-                  keep_corr: bool = False, zf: NDArray[np.complex64] | None = None) -> BlockCorrelation:
+    def correlate(
+        self,
+        z: NDArray[np.complex64],
+        s_min: int,
+        n_id1: NDArray,
+        n_id2: NDArray,
+        keep_corr: bool = False,
+        zf: NDArray[np.complex64] | None = None,
+    ) -> BlockCorrelation:
         """Per-block correlation, detection, AOD and TOA of the candidate cells (seed eq. 4–9).
 
         ``zf``: the burst's :meth:`window_spectra`, when already computed for ``z``.
@@ -606,8 +719,10 @@ class Correlator:
             xc = fft_rows(p[c], inverse=True)
             r[c], mu[c], sigma[c], eta[c], k_lo[c] = kernels.magnitude_stats(xc, cfg.lags)
         if self.detector == "cacfar":  # [ours] local noise floor per lag
-            k_lo, eta, floor_at = (a.reshape(n_c, n_b) for a in kernels.local_mean_argmax(
-                r.reshape(n_c * n_b, cfg.lags), self.ca_window, self.ca_guard))
+            k_lo, eta, floor_at = (
+                a.reshape(n_c, n_b)
+                for a in kernels.local_mean_argmax(r.reshape(n_c * n_b, cfg.lags), self.ca_window, self.ca_guard)
+            )
             # both tests: the seed's μ + kσ over the window and the local CFAR test
             threshold = np.maximum(floor_at * self.cfar_factor, mu + cfg.detect_k_sigma * sigma)
             pre = threshold * self.ca_prescreen
@@ -666,8 +781,7 @@ class Correlator:
             top = det[np.argsort(eta[c, det])[::-1][: cfg.n_aod_blocks]]  # seed eq. 7
             w = eta[c, top] / eta[c, top].sum()
             aod[c] = float(np.sum(w * self.beam_angles[top]))
-        return BlockCorrelation(eta, mu, sigma, detected, toa, aod, peak,
-                                r.astype(np.float32) if keep_corr else None)
+        return BlockCorrelation(eta, mu, sigma, detected, toa, aod, peak, r.astype(np.float32) if keep_corr else None)
 
     @cached_property
     def beam_angles(self) -> NDArray[np.float64]:

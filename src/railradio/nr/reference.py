@@ -45,7 +45,7 @@ from numpy.typing import NDArray
 
 from railradio.nr import kernels
 from railradio.nr.channel import TdlProfile
-from railradio.nr.numerology import N_FFT, Numerology
+from railradio.nr.numerology import Numerology
 from railradio.nr.receiver import Links, ReceiverConfig
 from railradio.nr.ssb import burst_grid, reference_waveform
 
@@ -53,8 +53,16 @@ TAP_STEP_FULL = 16
 """Full-rate samples between exact evaluations of the sum-of-sinusoids taps."""
 
 
-def _coarse_fading(profile: TdlProfile, doppler_hz: float, alpha: NDArray, phi: NDArray, t_first_s: float,
-                   dt_s: float, n_samples: int, step: int) -> NDArray[np.complex128]:
+def _coarse_fading(
+    profile: TdlProfile,
+    doppler_hz: float,
+    alpha: NDArray,
+    phi: NDArray,
+    t_first_s: float,
+    dt_s: float,
+    n_samples: int,
+    step: int,
+) -> NDArray[np.complex128]:
     """[C, L] sum-of-sinusoids tap gains, exact, at samples 0, step, 2·step, … past the
     last of ``n_samples`` samples ``dt_s`` apart from ``t_first_s`` (for linear
     interpolation in :func:`railradio.nr.kernels.mix_taps`)."""
@@ -63,10 +71,20 @@ def _coarse_fading(profile: TdlProfile, doppler_hz: float, alpha: NDArray, phi: 
     return kernels.sos_taps(amp_l, doppler_hz * np.cos(alpha), phi, t_c)
 
 
-def reference_received(cfg: ReceiverConfig, links: Links, profile: TdlProfile, pool: NDArray[np.complex64],
-                       draws: list[dict], symbols: NDArray[np.int64], t0_s: float = 0.0,
-                       at_train: NDArray[np.bool_] | None = None, *, motion=None,
-                       symbol_taps: bool = False, flat: NDArray[np.bool_] | None = None) -> NDArray[np.complex128]:
+def reference_received(
+    cfg: ReceiverConfig,
+    links: Links,
+    profile: TdlProfile,
+    pool: NDArray[np.complex64],
+    draws: list[dict],
+    symbols: NDArray[np.int64],
+    t0_s: float = 0.0,
+    at_train: NDArray[np.bool_] | None = None,
+    *,
+    motion=None,
+    symbol_taps: bool = False,
+    flat: NDArray[np.bool_] | None = None,
+) -> NDArray[np.complex128]:
     """Noiseless received samples at F_s/D (D = ``cfg.decimation``) over ``symbols``
     (index 0 = CP start of ``symbols[0]``), with the draws of :meth:`Synthesizer.draws`.
 
@@ -98,7 +116,6 @@ def reference_received(cfg: ReceiverConfig, links: Links, profile: TdlProfile, p
     starts = num.symbol_start(symbols) - num.symbol_start(symbols[0])
     cps = num.cp_length(symbols)
     total = int(starts[-1] + n + cps[-1])
-    ends = np.append(starts[1:], total)
     s_first = float(num.symbol_start(symbols[0]))
     t = (np.arange(total) + s_first) / fs + t0_s  # receive-sample times
     at_train = np.ones(links.n, dtype=bool) if at_train is None else np.asarray(at_train, dtype=bool)
@@ -113,8 +130,11 @@ def reference_received(cfg: ReceiverConfig, links: Links, profile: TdlProfile, p
     buf = np.zeros(total, dtype=np.complex64)
     for r in range(links.n):
         tau0 = float(links.tau_s[r])
-        m = None if motion is None else dataclasses.replace(
-            motion, link_rrh=motion.link_rrh[r:r + 1], panel_x_m=motion.panel_x_m[r:r + 1])
+        m = (
+            None
+            if motion is None
+            else dataclasses.replace(motion, link_rrh=motion.link_rrh[r : r + 1], panel_x_m=motion.panel_x_m[r : r + 1])
+        )
         idx = draws[r]["pool_idx"]
         data_beam = np.full(symbols.size, int(np.argmin(np.abs(links.beam_amp[r] - links.data_amp[r]))))
         if not at_train[r]:
@@ -131,14 +151,18 @@ def reference_received(cfg: ReceiverConfig, links: Links, profile: TdlProfile, p
         else:  # the geometry at each symbol's (and edge's) receive instant
             ba = m.beam_amp(t_sym + tau0)[0, np.arange(symbols.size), beam]
             tau_sym = m.delay_s(t_sym + tau0)[0]
-            edges_t = (np.append(num.symbol_start(symbols), num.symbol_start(symbols[-1]) + n + cps[-1]) / fs
-                       + t0_s + tau0)
+            edges_t = (
+                np.append(num.symbol_start(symbols), num.symbol_start(symbols[-1]) + n + cps[-1]) / fs + t0_s + tau0
+            )
             tau_edge = m.delay_s(edges_t)[0]
             excess = m.phase_excess_rad(t)[0]
         los = np.exp(1j * (lin_phase + excess))
         spec = grid * (ba * links.amp[r] * n)[:, None] * cp_ramp  # [S, n], × n: unnormalized IFFT
-        taps = [(1.0 if flat[r] else np.sqrt(profile.los_power), profile.los_delay_s)] if (
-            flat[r] or profile.los_power > 0) else []
+        taps = (
+            [(1.0 if flat[r] else np.sqrt(profile.los_power), profile.los_delay_s)]
+            if (flat[r] or profile.los_power > 0)
+            else []
+        )
         if not flat[r]:
             taps += [(None, d) for d in profile.delays_s]
         delayed = np.empty((len(taps), total), dtype=np.complex64)
@@ -176,8 +200,17 @@ def reference_received(cfg: ReceiverConfig, links: Links, profile: TdlProfile, p
             mult = np.exp(1j * (2 * np.pi * links.f_los_hz[r] * tau0 + excess))
         if profile.los_power <= 0:  # NLOS profile: no LOS row
             delayed = np.vstack([np.zeros((1, total), np.complex64), delayed])
-        kernels.mix_taps(z, delayed, np.ascontiguousarray(coarse), step, sym_of, symbol_taps, mult, los,
-                         float(np.sqrt(profile.los_power)))
+        kernels.mix_taps(
+            z,
+            delayed,
+            np.ascontiguousarray(coarse),
+            step,
+            sym_of,
+            symbol_taps,
+            mult,
+            los,
+            float(np.sqrt(profile.los_power)),
+        )
     return z
 
 
@@ -200,9 +233,7 @@ def reference_correlation(cfg: ReceiverConfig, z: NDArray, s_min: int, n_id1: in
     bf = np.conj(sfft.fft(b, n))
     for i, vi in enumerate(v):
         seg = np.zeros(n, dtype=complex)
-        part = z[vi: vi + n]
+        part = z[vi : vi + n]
         seg[: part.size] = part
         out[i] = np.abs(sfft.ifft(sfft.fft(seg) * bf)[: cfg.lags_full])
     return out
-
-

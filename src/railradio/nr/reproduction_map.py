@@ -79,8 +79,10 @@ METRICS = {
     "track.aod_toa.err_m.p99": ("m", "99th percentile of the 2-D position error, EKF AOD+TOA (null: lost)"),
     "track.aod_toa.frac_submeter": ("1", "share of epochs with a 2-D error below 1 m, EKF AOD+TOA (null: lost)"),
     "rank.toa_minus_aod_m": ("m", "clipped mean error of the TOA EKF minus that of the AOD EKF (< 0: TOA better)"),
-    "rank.fused_minus_best_m": ("m", "clipped mean error of the AOD+TOA EKF minus the better single one's "
-                                     "(< 0: fusion best)"),
+    "rank.fused_minus_best_m": (
+        "m",
+        "clipped mean error of the AOD+TOA EKF minus the better single one's (< 0: fusion best)",
+    ),
 }
 """Every metric of a map cell (unit, description), each with its bootstrap interval."""
 
@@ -110,8 +112,7 @@ def cells(nr: dict, nr_schema: dict) -> dict[str, dict[str, Any]]:
         for s in mp["selections"]:
             if (t, s) != (nr["receiver"]["template"], nr["receiver"]["selection"]):
                 out[f"tpl_{t}_sel_{s}"] = deep_merge(default, {"receiver": {"template": t, "selection": s}})
-    return {name: validate_config(deep_merge(base, o), nr_schema, root=f"nr.map ({name})")
-            for name, o in out.items()}
+    return {name: validate_config(deep_merge(base, o), nr_schema, root=f"nr.map ({name})") for name, o in out.items()}
 
 
 def default_cell(nr: dict) -> str:
@@ -164,8 +165,11 @@ def shard_paths(cell: str, real: str, all_cells: dict[str, dict], main_cfg: dict
         return [f"results/nr/map/{owner}/estimates/r0/s{k}.nc" for k in range(main_cfg["map"]["n_shards"])]
     first, end = main_cfg["map"]["segment"]
     n_sh = main_cfg["n_shards"]
-    return [f"results/nr/estimates/r0/s{k}.nc" for k in range(n_sh)
-            if (lambda e: e.size > 0 and e[0] < end and e[-1] >= first)(shard_epochs(n_main_epochs, n_sh, k))]
+    return [
+        f"results/nr/estimates/r0/s{k}.nc"
+        for k in range(n_sh)
+        if (lambda e: e.size > 0 and e[0] < end and e[-1] >= first)(shard_epochs(n_main_epochs, n_sh, k))
+    ]
 
 
 def calibration_section(nr: dict) -> dict:
@@ -197,8 +201,13 @@ def _nanq(x: np.ndarray, q: float) -> np.ndarray:
         return np.nanpercentile(x, q, axis=-1)
 
 
-def cell_metrics(aod_err_rad: np.ndarray, range_err_m: np.ndarray, pos_err_m: dict[str, np.ndarray],
-                 spacing_m: float, idx: np.ndarray | None = None) -> dict[str, np.ndarray]:
+def cell_metrics(
+    aod_err_rad: np.ndarray,
+    range_err_m: np.ndarray,
+    pos_err_m: dict[str, np.ndarray],
+    spacing_m: float,
+    idx: np.ndarray | None = None,
+) -> dict[str, np.ndarray]:
     """Every metric of :data:`METRICS` (and each tracker's lost share) of one receiver on
     the epochs ``idx`` ([n_boot, n] resamples; None: the sample itself, shape [1, n]).
 
@@ -248,9 +257,19 @@ def _finite(v: float) -> float | None:
     return float(v) if np.isfinite(v) else None
 
 
-def cell_key_numbers(cell: str, rx: str, aod_err_rad: np.ndarray, range_err_m: np.ndarray,
-                     pos_err_m: dict[str, np.ndarray], spacing_m: float, rng: np.random.Generator,
-                     block: int, n_boot: int, confidence: float, where: str) -> dict[str, Any]:
+def cell_key_numbers(
+    cell: str,
+    rx: str,
+    aod_err_rad: np.ndarray,
+    range_err_m: np.ndarray,
+    pos_err_m: dict[str, np.ndarray],
+    spacing_m: float,
+    rng: np.random.Generator,
+    block: int,
+    n_boot: int,
+    confidence: float,
+    where: str,
+) -> dict[str, Any]:
     """Key numbers ``nr.map.<cell>.<rx>.*`` of one receiver in one cell: each metric with
     ``.lo``/``.hi`` (the bootstrap interval at ``confidence``) and each claim's status
     ``claim.<name>`` (1 holds, 0 not resolved, -1 fails)."""
@@ -270,25 +289,31 @@ def cell_key_numbers(cell: str, rx: str, aod_err_rad: np.ndarray, range_err_m: n
         is_acc = metric.startswith("track.aod_toa.")
         void = is_acc and lost["aod_toa"] >= loss.LOST_FRAC_MAX
         ok = x[np.isfinite(x)]
-        lo, hi = ((None, None) if void or ok.size < x.size
-                  else (float(np.quantile(ok, a)), float(np.quantile(ok, 1 - a))))
+        lo, hi = (
+            (None, None) if void or ok.size < x.size else (float(np.quantile(ok, a)), float(np.quantile(ok, 1 - a)))
+        )
         value = loss.accuracy(point[metric], lost["aod_toa"]) if is_acc else _finite(point[metric])
         interval[metric] = (lo, hi)
         se = float(np.std(ok, ddof=1)) if lo is not None and ok.size > 1 else None
         name = f"{p}.{metric}"
         out[name] = KeySpec(name, unit, f"{desc} ({where})").entry(
-            value, se, lost_frac=lost["aod_toa"] if is_acc else None)
+            value, se, lost_frac=lost["aod_toa"] if is_acc else None
+        )
         for end, v in (("lo", lo), ("hi", hi)):
             nm = f"{name}.{end}"
-            out[nm] = KeySpec(nm, unit, f"{'lower' if end == 'lo' else 'upper'} end of the {confidence:.0%} "
-                              f"block-bootstrap interval of {metric} ({where})").entry(
-                                  v if v is None or not is_acc else loss.accuracy(v, 0.0))
+            out[nm] = KeySpec(
+                nm,
+                unit,
+                f"{'lower' if end == 'lo' else 'upper'} end of the {confidence:.0%} "
+                f"block-bootstrap interval of {metric} ({where})",
+            ).entry(v if v is None or not is_acc else loss.accuracy(v, 0.0))
     for cname, claim in CLAIMS.items():
         lo, hi = interval[claim.metric]
         lost_claim = claim.tracker is not None and lost[claim.tracker] >= loss.LOST_FRAC_MAX
         name = f"{p}.claim.{cname}"
-        out[name] = KeySpec(name, "1", f"source claim '{claim.label}': 1 holds, 0 not resolved, -1 fails "
-                            f"({where})").entry(status(claim, lo, hi, lost_claim))
+        out[name] = KeySpec(
+            name, "1", f"source claim '{claim.label}': 1 holds, 0 not resolved, -1 fails ({where})"
+        ).entry(status(claim, lo, hi, lost_claim))
     return out
 
 
@@ -297,8 +322,9 @@ ENDFIRE_DEG = 3.0
 ULA's endfire, where neighbouring beams have nearly equal gain) apart from the others."""
 
 
-def diagnostic_key_numbers(cell: str, rx: str, aod_err_rad: np.ndarray, aod_true_rad: np.ndarray,
-                           n_detected: np.ndarray, where: str) -> dict[str, Any]:
+def diagnostic_key_numbers(
+    cell: str, rx: str, aod_err_rad: np.ndarray, aod_true_rad: np.ndarray, n_detected: np.ndarray, where: str
+) -> dict[str, Any]:
     """What the AOD claim depends on, per cell and receiver: the median |AOD error| of the
     selected RRHs within / beyond :data:`ENDFIRE_DEG` of the track direction, their share
     within it, and the median number of SS blocks detected per selected RRH."""
@@ -309,15 +335,26 @@ def diagnostic_key_numbers(cell: str, rx: str, aod_err_rad: np.ndarray, aod_true
     near = ok & (off < ENDFIRE_DEG)
     p = f"nr.map.{cell}.{rx}.diag"
     vals = {
-        "aod_err_deg.median_endfire": ("deg", f"median |AOD error| of the selected RRHs within {ENDFIRE_DEG:g} deg of "
-                                              "the track direction", np.median(e[near]) if near.any() else np.nan),
-        "aod_err_deg.median_broadside": ("deg", f"median |AOD error| of the selected RRHs beyond {ENDFIRE_DEG:g} deg "
-                                                "of the track direction",
-                                         np.median(e[ok & ~near]) if (ok & ~near).any() else np.nan),
-        "frac_endfire": ("1", f"share of the selected RRHs seen within {ENDFIRE_DEG:g} deg of the track direction",
-                         near.sum() / ok.sum() if ok.any() else np.nan),
-        "n_detected.median": ("1", "median number of SS blocks detected per selected RRH",
-                              np.median(n_detected[ok]) if ok.any() else np.nan),
+        "aod_err_deg.median_endfire": (
+            "deg",
+            f"median |AOD error| of the selected RRHs within {ENDFIRE_DEG:g} deg of the track direction",
+            np.median(e[near]) if near.any() else np.nan,
+        ),
+        "aod_err_deg.median_broadside": (
+            "deg",
+            f"median |AOD error| of the selected RRHs beyond {ENDFIRE_DEG:g} deg of the track direction",
+            np.median(e[ok & ~near]) if (ok & ~near).any() else np.nan,
+        ),
+        "frac_endfire": (
+            "1",
+            f"share of the selected RRHs seen within {ENDFIRE_DEG:g} deg of the track direction",
+            near.sum() / ok.sum() if ok.any() else np.nan,
+        ),
+        "n_detected.median": (
+            "1",
+            "median number of SS blocks detected per selected RRH",
+            np.median(n_detected[ok]) if ok.any() else np.nan,
+        ),
     }
     return {f"{p}.{k}": KeySpec(f"{p}.{k}", u, f"{d} ({where})").entry(_finite(v)) for k, (u, d, v) in vals.items()}
 
@@ -334,6 +371,7 @@ def summary_key_numbers(numbers: dict[str, Any], cell_names: list[str], nr: dict
             st = [numbers[f"nr.map.{c}.{rx}.claim.{cname}"]["value"] for c in names]
             for code, word in ((HOLDS, "holds"), (FAILS, "fails"), (UNRESOLVED, "unresolved")):
                 key = f"nr.map.{rx}.{cname}.n_{word}"
-                out[key] = KeySpec(key, "1", f"map cells where the claim '{claim.label}' {STATUS_NAMES[code]} "
-                                   f"({rx} receiver)").entry(float(sum(s == code for s in st)))
+                out[key] = KeySpec(
+                    key, "1", f"map cells where the claim '{claim.label}' {STATUS_NAMES[code]} ({rx} receiver)"
+                ).entry(float(sum(s == code for s in st)))
     return out

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from functools import lru_cache
+from functools import cache
 
 import numpy as np
 from numpy.typing import NDArray
@@ -21,13 +21,13 @@ def _m_sequence(init: list[int], taps: tuple[int, int]) -> NDArray[np.int64]:
     return x
 
 
-@lru_cache(maxsize=None)
+@cache
 def _pss_x() -> NDArray[np.int64]:
     # TS 38.211 prints [x(6) ... x(0)] = [1 1 1 0 1 1 0]
     return _m_sequence([0, 1, 1, 0, 1, 1, 1], (4, 0))
 
 
-@lru_cache(maxsize=None)
+@cache
 def _sss_x() -> tuple[NDArray[np.int64], NDArray[np.int64]]:
     init = [1, 0, 0, 0, 0, 0, 0]
     return _m_sequence(init, (4, 0)), _m_sequence(init, (1, 0))

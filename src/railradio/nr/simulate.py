@@ -109,9 +109,16 @@ class Synthesis:
         if d_s > d_fe or d_fe % d_s:
             raise ValueError(f"synthesis_decimation must divide the front end's decimation {d_fe}, got {d_s!r}")
         self.down = d_fe // d_s  # synthesis rate -> the front end's
-        self.syn = Synthesizer(dataclasses.replace(scn.receiver, decimation=d_s), scn.profile, pool, scn.n_sinusoids,
-                               scn.full_channel_range_m,
-                               scn.data_beam, scn.load, exact_spill=scn.exact_spill)
+        self.syn = Synthesizer(
+            dataclasses.replace(scn.receiver, decimation=d_s),
+            scn.profile,
+            pool,
+            scn.n_sinusoids,
+            scn.full_channel_range_m,
+            scn.data_beam,
+            scn.load,
+            exact_spill=scn.exact_spill,
+        )
         self.network = ServingCell(scn.serving)
         self.next_epoch: int | None = None
 
@@ -124,16 +131,20 @@ class Synthesis:
         self.next_epoch = int(epoch) + 1
         t = epoch * scn.trajectory.dt_s
         x, v, a = (float(u[0]) for u in scn.trajectory.state(np.array([t])))
-        lb = link_budget(x, v, scn.deployment, scn.radio, scn.rrh_array, scn.train_array, self.shadow,
-                         scn.shadowing)
+        lb = link_budget(x, v, scn.deployment, scn.radio, scn.rrh_array, scn.train_array, self.shadow, scn.shadowing)
         return x, v, a, lb, self.network.update(epoch, lb.rrh, lb.rx_power_dbm)
 
     def __call__(self, epoch: int) -> Burst:
         x, v, a, lb, serving = self.advance(epoch)
         t = epoch * self.scn.trajectory.dt_s
         link_rrh = lb.rrh if lb.link_rrh is None else lb.link_rrh
-        z, s_min = self.syn(lb.links, make_rng(self.seed, self.key + (KEY_EPOCH, int(epoch))), t0_s=t,
-                            d2d_m=lb.link_d2d_m, serving=np.asarray(link_rrh) == serving)
+        z, s_min = self.syn(
+            lb.links,
+            make_rng(self.seed, self.key + (KEY_EPOCH, int(epoch))),
+            t0_s=t,
+            d2d_m=lb.link_d2d_m,
+            serving=np.asarray(link_rrh) == serving,
+        )
         z = project(z, self.down)  # the receiver's front end
         return Burst(z, s_min, x, v, a, lb, serving)
 
@@ -181,8 +192,9 @@ class Estimator:
         cs = scn.cell_search
         cs_rc = cs.receiver_config(scn.receiver)
         cs_key = correlation_key(cs_rc, cs.detector, cs.pfa)
-        self.cs_shared = next((j for j, (_, rc, det) in enumerate(self.receivers)
-                               if correlation_key(rc, det, scn.pfa) == cs_key), None)
+        self.cs_shared = next(
+            (j for j, (_, rc, det) in enumerate(self.receivers) if correlation_key(rc, det, scn.pfa) == cs_key), None
+        )
         cs_cor = self.cors[self.cs_shared] if self.cs_shared is not None else cor(cs_rc, cs.detector, cs.pfa)
         self.search = CellSearch(cs, scn.deployment, cs_cor)
         self.n_id1, self.n_id2 = scn.deployment.n_id()
@@ -191,15 +203,17 @@ class Estimator:
     def start(self, epoch: int) -> int:
         """The first epoch to process before reporting ``epoch`` (state reset there when a
         fixed acquisition epoch lies between the last processed epoch and ``epoch``)."""
-        w = min(warmup_start(epoch, self.scn.cell_search.acquire_every),
-                warmup_start(epoch, self.scn.serving.reset_every))
+        w = min(
+            warmup_start(epoch, self.scn.cell_search.acquire_every), warmup_start(epoch, self.scn.serving.reset_every)
+        )
         if self.next_epoch is None or w >= self.next_epoch or epoch < self.next_epoch:
             self.search.reset()
             return w
         return self.next_epoch
 
-    def __call__(self, epoch: int, z: np.ndarray, s_min: int, report: bool = True,
-                 keep_corr: bool = False) -> EpochEstimates | None:
+    def __call__(
+        self, epoch: int, z: np.ndarray, s_min: int, report: bool = True, keep_corr: bool = False
+    ) -> EpochEstimates | None:
         """Measure one epoch; ``report=False`` (a replayed warm-up epoch) runs the cell
         search only."""
         if self.next_epoch is not None and epoch != self.next_epoch:
@@ -229,8 +243,9 @@ class Estimator:
         if not report:
             return None
         n_r, n_c = len(self.cors), cand.size
-        out = EpochEstimates(cand, acquired, rsrp, *(np.full((n_r, n_c), np.nan) for _ in range(4)),
-                             np.zeros((n_r, n_c), dtype=np.int64))
+        out = EpochEstimates(
+            cand, acquired, rsrp, *(np.full((n_r, n_c), np.nan) for _ in range(4)), np.zeros((n_r, n_c), dtype=np.int64)
+        )
         for j, res in results.items():
             out.aod_rad[j] = res.aod_rad
             out.toa_s[j] = res.toa_samples / SAMPLE_RATE_HZ
@@ -243,8 +258,9 @@ class Estimator:
         return out
 
 
-def simulate_epochs(scn: Scenario, epochs: np.ndarray, seed: int, key: tuple[int, ...],
-                    keep_corr_epochs: tuple[int, ...] = ()) -> xr.Dataset:
+def simulate_epochs(
+    scn: Scenario, epochs: np.ndarray, seed: int, key: tuple[int, ...], keep_corr_epochs: tuple[int, ...] = ()
+) -> xr.Dataset:
     """Simulate the given epochs of one realization.
 
     Synthesis (:class:`Synthesis`, truth -> burst) and estimation (:class:`Estimator`,
@@ -326,36 +342,114 @@ def simulate_epochs(scn: Scenario, epochs: np.ndarray, seed: int, key: tuple[int
             "x_true": (("epoch",), truth["x"], {"units": "m", "long_name": "true train position along the track"}),
             "v_true": (("epoch",), truth["v"], {"units": "m s-1", "long_name": "true train speed"}),
             "a_true": (("epoch",), truth["a"], {"units": "m s-2", "long_name": "true train acceleration"}),
-            "serving_true": (("epoch",), serving, {"units": "1", "long_name": "the network's serving RRH (truth; -1: none in range)"}),
-            "rrh": (cd, out["rrh"], {"units": "1", "long_name": "candidate RRH index: the cell search's neighbour list, its anchor cell first"}),
-            "acquired": (("epoch",), acquired, {"units": "1", "long_name": "a blind acquisition (every PCI searched) ran at this epoch"}),
-            "ss_rsrp": (cd, out["ss_rsrp"], {"units": "dB", "long_name": "SS-RSRP of the cell search (SSS despread, best detected block; arbitrary reference common to all cells), NaN if not detected"}),
+            "serving_true": (
+                ("epoch",),
+                serving,
+                {"units": "1", "long_name": "the network's serving RRH (truth; -1: none in range)"},
+            ),
+            "rrh": (
+                cd,
+                out["rrh"],
+                {
+                    "units": "1",
+                    "long_name": "candidate RRH index: the cell search's neighbour list, its anchor cell first",
+                },
+            ),
+            "acquired": (
+                ("epoch",),
+                acquired,
+                {"units": "1", "long_name": "a blind acquisition (every PCI searched) ran at this epoch"},
+            ),
+            "ss_rsrp": (
+                cd,
+                out["ss_rsrp"],
+                {
+                    "units": "dB",
+                    "long_name": (
+                        "SS-RSRP of the cell search (SSS despread, best detected block; arbitrary reference "
+                        "common to all cells), NaN if not detected"
+                    ),
+                },
+            ),
             "d3d": (cd, out["d3d_m"], {"units": "m", "long_name": "true 3-D train-RRH distance"}),
             "toa_true": (cd, out["d3d_m"] / SPEED_OF_LIGHT_M_S, {"units": "s", "long_name": "true propagation delay"}),
-            "aod_true": (cd, out["aod_true_rad"], {"units": "rad", "long_name": "true azimuth of departure at the RRH"}),
-            "rx_power": (cd, out["rx_power_dbm"], {"units": "dBm", "long_name": "true received power with the best beam"}),
-            "panel": (cd, out["panel"], {"units": "1", "long_name": "train panel receiving the RRH more strongly (0 head, 1 tail); distance, delay and angles are to it"}),
-            "train_panel_x": (("panel_id",), np.asarray(scn.train_array.panel_x_m, float),
-                              {"units": "m", "long_name": "along-track position of the head (0) and tail (1) panels from the train's reference point"}),
-            "aod_hat": (rd, meas["aod_rad"], {"units": "rad", "long_name": "AOD estimate (seed eq. 7), NaN if nothing detected"}),
-            "toa_hat": (rd, meas["toa_s"], {"units": "s", "long_name": "TOA estimate (seed eq. 9), NaN if nothing detected"}),
+            "aod_true": (
+                cd,
+                out["aod_true_rad"],
+                {"units": "rad", "long_name": "true azimuth of departure at the RRH"},
+            ),
+            "rx_power": (
+                cd,
+                out["rx_power_dbm"],
+                {"units": "dBm", "long_name": "true received power with the best beam"},
+            ),
+            "panel": (
+                cd,
+                out["panel"],
+                {
+                    "units": "1",
+                    "long_name": (
+                        "train panel receiving the RRH more strongly (0 head, 1 tail); distance, delay and "
+                        "angles are to it"
+                    ),
+                },
+            ),
+            "train_panel_x": (
+                ("panel_id",),
+                np.asarray(scn.train_array.panel_x_m, float),
+                {
+                    "units": "m",
+                    "long_name": (
+                        "along-track position of the head (0) and tail (1) panels from the train's reference point"
+                    ),
+                },
+            ),
+            "aod_hat": (
+                rd,
+                meas["aod_rad"],
+                {"units": "rad", "long_name": "AOD estimate (seed eq. 7), NaN if nothing detected"},
+            ),
+            "toa_hat": (
+                rd,
+                meas["toa_s"],
+                {"units": "s", "long_name": "TOA estimate (seed eq. 9), NaN if nothing detected"},
+            ),
             "peak": (rd, meas["peak"], {"units": "1", "long_name": "combined correlation peak (decimated-rate units)"}),
-            "best_score": (rd, meas["best_score"], {"units": "1", "long_name": "largest (eta - mu)/sigma over detected blocks"}),
+            "best_score": (
+                rd,
+                meas["best_score"],
+                {"units": "1", "long_name": "largest (eta - mu)/sigma over detected blocks"},
+            ),
             "n_detected": (rd, meas["n_detected"], {"units": "1", "long_name": "SS blocks detected (seed eq. 6)"}),
-            "sir_best": (("epoch",), truth["sir"], {"units": "dB", "long_name": "true strongest RRH power over the sum of the others"}),
+            "sir_best": (
+                ("epoch",),
+                truth["sir"],
+                {"units": "dB", "long_name": "true strongest RRH power over the sum of the others"},
+            ),
         },
         coords={
             "epoch": ("epoch", epochs, {"units": "1", "long_name": "measurement epoch index (dt apart)"}),
-            "cand": ("cand", np.arange(n_c), {"units": "1", "long_name": "place in the neighbour list (0: the anchor cell)"}),
-            "receiver": ("receiver", [name for name, _, _ in est.receivers], {"units": "1", "long_name": "receiver variant"}),
+            "cand": (
+                "cand",
+                np.arange(n_c),
+                {"units": "1", "long_name": "place in the neighbour list (0: the anchor cell)"},
+            ),
+            "receiver": (
+                "receiver",
+                [name for name, _, _ in est.receivers],
+                {"units": "1", "long_name": "receiver variant"},
+            ),
             "panel_id": ("panel_id", [0, 1], {"units": "1", "long_name": "train panel: 0 head, 1 tail"}),
         },
     )
     if corr_keep:
         e0 = sorted(corr_keep)[0]
         corr, cand = corr_keep[e0]
-        ds["corr_sample"] = (("cand", "block", "lag"), corr,
-                             {"units": "1", "long_name": f"|r_i[k]| of epoch {e0} (decimated lags)"})
+        ds["corr_sample"] = (
+            ("cand", "block", "lag"),
+            corr,
+            {"units": "1", "long_name": f"|r_i[k]| of epoch {e0} (decimated lags)"},
+        )
         ds["corr_sample_epoch"] = ((), e0, {"units": "1", "long_name": "epoch of corr_sample"})
     return ds
 
@@ -366,35 +460,59 @@ def scenario_from_config(c: dict) -> Scenario:
 
     rx = c["receiver"]
     # [ours] search window bounded by the geometry: lags covering delays up to range / c
-    search_lags = (None if rx.get("search_range_m") is None
-                   else int(np.ceil(rx["search_range_m"] / SPEED_OF_LIGHT_M_S * SAMPLE_RATE_HZ)))
+    search_lags = (
+        None
+        if rx.get("search_range_m") is None
+        else int(np.ceil(rx["search_range_m"] / SPEED_OF_LIGHT_M_S * SAMPLE_RATE_HZ))
+    )
     return Scenario(
         trajectory=_trajectory(c["trajectory"]["phases"], c["trajectory"]["dt_s"]),
         deployment=Deployment(**{k: float(v) for k, v in c["deployment"].items()}),
         radio=RadioParams(**{k: float(v) for k, v in c["radio"].items()}),
         rrh_array=RrhArray(n_elements=int(c["antenna"]["rrh_elements"]), n_beams=int(c["antenna"]["n_beams"])),
-        train_array=TrainArray(n_elements=int(c["antenna"]["train_elements"]),
-                               panel_x_m=tuple(float(v) for v in c["antenna"].get("train_panels_x_m", (0.0, 0.0)))),
-        receiver=ReceiverConfig(decimation=int(rx["decimation"]), ssb_pattern=rx["ssb_pattern"],
-                                n_blocks=int(c["antenna"]["n_beams"]), toa_blocks=rx["toa_blocks"],
-                                subsample=bool(rx["subsample"]), template=rx["template"],
-                                search_lags=search_lags),
-        tdl=c["channel"]["tdl"], delay_spread_s=float(c["channel"]["delay_spread_s"]),
-        detector=rx["detector"], pfa=float(rx["pfa"]),
+        train_array=TrainArray(
+            n_elements=int(c["antenna"]["train_elements"]),
+            panel_x_m=tuple(float(v) for v in c["antenna"].get("train_panels_x_m", (0.0, 0.0))),
+        ),
+        receiver=ReceiverConfig(
+            decimation=int(rx["decimation"]),
+            ssb_pattern=rx["ssb_pattern"],
+            n_blocks=int(c["antenna"]["n_beams"]),
+            toa_blocks=rx["toa_blocks"],
+            subsample=bool(rx["subsample"]),
+            template=rx["template"],
+            search_lags=search_lags,
+        ),
+        tdl=c["channel"]["tdl"],
+        delay_spread_s=float(c["channel"]["delay_spread_s"]),
+        detector=rx["detector"],
+        pfa=float(rx["pfa"]),
         cell_search=CellSearchConfig(**c.get("cell_search", {})),
         variants=tuple(
-            (name, ReceiverConfig(decimation=int(rx["decimation"]), ssb_pattern=rx["ssb_pattern"],
-                                  n_blocks=int(c["antenna"]["n_beams"]), toa_blocks=v["toa_blocks"],
-                                  subsample=bool(v["subsample"]), template=v["template"],
-                                  search_lags=search_lags), v["detector"])
-            for name, v in c.get("receiver_variants", {}).items()),
-        full_channel_range_m=(np.inf if c["channel"]["full_channel_range_m"] is None
-                              else float(c["channel"]["full_channel_range_m"])),
+            (
+                name,
+                ReceiverConfig(
+                    decimation=int(rx["decimation"]),
+                    ssb_pattern=rx["ssb_pattern"],
+                    n_blocks=int(c["antenna"]["n_beams"]),
+                    toa_blocks=v["toa_blocks"],
+                    subsample=bool(v["subsample"]),
+                    template=v["template"],
+                    search_lags=search_lags,
+                ),
+                v["detector"],
+            )
+            for name, v in c.get("receiver_variants", {}).items()
+        ),
+        full_channel_range_m=(
+            np.inf if c["channel"]["full_channel_range_m"] is None else float(c["channel"]["full_channel_range_m"])
+        ),
         synthesis_decimation=int(c["channel"].get("synthesis_decimation", rx["decimation"])),
         exact_spill=bool(c["channel"].get("exact_spill", False)),
         search_decimation=int(rx.get("search_decimation", rx["decimation"])),
         n_sinusoids=int(c["channel"]["n_sinusoids"]),
-        data_beam=c["traffic"]["data_beam"], load=float(c["traffic"]["load"]),
+        data_beam=c["traffic"]["data_beam"],
+        load=float(c["traffic"]["load"]),
         serving=ServingRule(float(c["traffic"]["serving_hysteresis_db"]), int(c["traffic"]["serving_reset_every"])),
     )
 

@@ -37,8 +37,7 @@ def _ranges() -> dict:
     sym2_pbch = carrier_k(np.r_[0:48, 192:240])
     sym0_zero = carrier_k(np.r_[0:56, 183:240])
     sym2_zero = carrier_k(np.r_[48:56, 183:192])
-    return {"seq": pss_k, "block": block_k, "sym2_pbch": sym2_pbch, "sym0_zero": sym0_zero,
-            "sym2_zero": sym2_zero}
+    return {"seq": pss_k, "block": block_k, "sym2_pbch": sym2_pbch, "sym0_zero": sym0_zero, "sym2_zero": sym2_zero}
 
 
 RANGES = _ranges()
@@ -112,8 +111,9 @@ def burst_grid(
     return grid, block_of
 
 
-def reference_waveform(num: Numerology, n_id1: int, n_id2: int, first_symbol: int,
-                       template: str = "pss_sss") -> NDArray[np.complex64]:
+def reference_waveform(
+    num: Numerology, n_id1: int, n_id2: int, first_symbol: int, template: str = "pss_sss"
+) -> NDArray[np.complex64]:
     """The correlator's reference b of one SS block (seed eq. 4): PSS in the block's symbol 0
     and SSS in its symbol 2 (with their CPs), every other subcarrier and symbol empty;
     time samples from the CP start of symbol 0 to the end of symbol 2, unit EPRE.
@@ -132,5 +132,5 @@ def reference_waveform(num: Numerology, n_id1: int, n_id2: int, first_symbol: in
             x[kbin(RANGES["seq"], n)] = sss(n_id1, n_id2)
         y = n * np.fft.ifft(x)
         cp = int(num.cp_length(sym))
-        out.append(np.concatenate([y[n - cp:], y]))
+        out.append(np.concatenate([y[n - cp :], y]))
     return np.concatenate(out).astype(np.complex64)

@@ -142,16 +142,17 @@ class TrackerConfig:
         """The calibrated quantities as stored in ``calibration.json``."""
         out = {"q": self.q, "sigma_aod_rad": self.sigma_aod_rad, "sigma_toa_s": self.sigma_toa_s}
         if self.distance_edges_m:
-            out |= {"distance_edges_m": list(self.distance_edges_m),
-                    "sigma_aod_bins_rad": list(self.sigma_aod_bins_rad),
-                    "sigma_toa_bins_s": list(self.sigma_toa_bins_s)}
+            out |= {
+                "distance_edges_m": list(self.distance_edges_m),
+                "sigma_aod_bins_rad": list(self.sigma_aod_bins_rad),
+                "sigma_toa_bins_s": list(self.sigma_toa_bins_s),
+            }
         return out
 
     @classmethod
     def from_record(cls, rec: dict, **kw) -> TrackerConfig:
         """Inverse of :meth:`record` (``kw``: variant, gate, gate_prob)."""
-        bins = {k: tuple(rec[k]) for k in ("distance_edges_m", "sigma_aod_bins_rad", "sigma_toa_bins_s")
-                if k in rec}
+        bins = {k: tuple(rec[k]) for k in ("distance_edges_m", "sigma_aod_bins_rad", "sigma_toa_bins_s") if k in rec}
         return cls(q=rec["q"], sigma_aod_rad=rec["sigma_aod_rad"], sigma_toa_s=rec["sigma_toa_s"], **bins, **kw)
 
     def noise(self, n: int, dist_m: NDArray | None = None) -> NDArray[np.float64]:
@@ -170,8 +171,9 @@ class TrackerConfig:
             return np.broadcast_to(self._variances, d.shape + self._variances.shape)
         use_aod, use_toa = VARIANTS[self.variant]
         b = np.searchsorted(self.distance_edges_m, d)
-        sig = (([np.asarray(self.sigma_aod_bins_rad)[b]] if use_aod else [])
-               + ([np.asarray(self.sigma_toa_bins_s)[b]] if use_toa else []))
+        sig = ([np.asarray(self.sigma_aod_bins_rad)[b]] if use_aod else []) + (
+            [np.asarray(self.sigma_toa_bins_s)[b]] if use_toa else []
+        )
         return np.stack(sig, axis=-1) ** 2
 
     @cached_property
@@ -199,20 +201,35 @@ def distances_m(s: NDArray, rrh_xy: NDArray) -> NDArray[np.float64]:
     return np.hypot(s[0] - rrh_xy[:, 0], s[1] - rrh_xy[:, 1])
 
 
-def snapshot_ls(rrh_xy: NDArray, aod: NDArray, toa: NDArray, dh_m: float, cfg: TrackerConfig,
-                x_init: NDArray, n_iter: int = 20) -> tuple[NDArray, NDArray]:
+def snapshot_ls(
+    rrh_xy: NDArray, aod: NDArray, toa: NDArray, dh_m: float, cfg: TrackerConfig, x_init: NDArray, n_iter: int = 20
+) -> tuple[NDArray, NDArray]:
     """Weighted Gauss–Newton position fix [x, y] from one epoch and its covariance [m²]
     (:func:`snapshot_ls_batch` for one epoch)."""
     rrh_xy = np.asarray(rrh_xy, float).reshape(-1, 2)
-    p, cov = snapshot_ls_batch(rrh_xy[None], np.asarray(aod, float).reshape(1, -1),
-                               np.asarray(toa, float).reshape(1, -1), dh_m, cfg,
-                               np.asarray(x_init, float).reshape(1, 2), n_iter, with_cov=True)
+    p, cov = snapshot_ls_batch(
+        rrh_xy[None],
+        np.asarray(aod, float).reshape(1, -1),
+        np.asarray(toa, float).reshape(1, -1),
+        dh_m,
+        cfg,
+        np.asarray(x_init, float).reshape(1, 2),
+        n_iter,
+        with_cov=True,
+    )
     return p[0], cov[0]
 
 
-def snapshot_ls_batch(rrh_xy: NDArray, aod: NDArray, toa: NDArray, dh_m: float, cfg: TrackerConfig,
-                      x_init: NDArray, n_iter: int = 20, with_cov: bool = False
-                      ) -> tuple[NDArray, NDArray | None]:
+def snapshot_ls_batch(
+    rrh_xy: NDArray,
+    aod: NDArray,
+    toa: NDArray,
+    dh_m: float,
+    cfg: TrackerConfig,
+    x_init: NDArray,
+    n_iter: int = 20,
+    with_cov: bool = False,
+) -> tuple[NDArray, NDArray | None]:
     """Weighted Gauss–Newton position fixes of independent epochs, all at once.
 
     ``rrh_xy`` [E, m, 2], ``aod``/``toa`` [E, m] (NaN RRH positions pad epochs with fewer
@@ -234,8 +251,7 @@ def snapshot_ls_batch(rrh_xy: NDArray, aod: NDArray, toa: NDArray, dh_m: float, 
     dist0 = np.hypot(p[:, :1] - xy[..., 0], p[:, 1:] - xy[..., 1])
     var = cfg.variances(dist0)
     w = np.where(valid[..., None], 1.0 / var, 0.0)
-    z = np.stack(([np.asarray(aod, float)] if use_aod else [])
-                 + ([np.asarray(toa, float)] if use_toa else []), axis=-1)
+    z = np.stack(([np.asarray(aod, float)] if use_aod else []) + ([np.asarray(toa, float)] if use_toa else []), axis=-1)
     z = np.where(valid[..., None], z, 0.0)
 
     def lin(idx):
@@ -265,8 +281,13 @@ def snapshot_ls_batch(rrh_xy: NDArray, aod: NDArray, toa: NDArray, dh_m: float, 
         det = info[:, 0, 0] * info[:, 1, 1] - info[:, 0, 1] * info[:, 1, 0]
         ok = det != 0
         det = np.where(ok, det, 1.0)
-        step = np.stack([info[:, 1, 1] * g[:, 0] - info[:, 0, 1] * g[:, 1],
-                         info[:, 0, 0] * g[:, 1] - info[:, 1, 0] * g[:, 0]], axis=1) / det[:, None]
+        step = (
+            np.stack(
+                [info[:, 1, 1] * g[:, 0] - info[:, 0, 1] * g[:, 1], info[:, 0, 0] * g[:, 1] - info[:, 1, 0] * g[:, 0]],
+                axis=1,
+            )
+            / det[:, None]
+        )
         p[idx[ok]] += step[ok]
         done = ~ok | (np.linalg.norm(step, axis=1) < 1e-6)
         active[idx[done]] = False
@@ -277,9 +298,19 @@ def snapshot_ls_batch(rrh_xy: NDArray, aod: NDArray, toa: NDArray, dh_m: float, 
     return p, np.linalg.pinv(normal(idx, jac)[0])
 
 
-def run_ekf(rrh_xy, aod, toa, dt_s: float, dh_m: float,
-            cfg: TrackerConfig, s0: NDArray, p0: NDArray, n_epochs: int | None = None,
-            reacquire=None, reacquire_after: int = 10) -> dict[str, NDArray]:
+def run_ekf(
+    rrh_xy,
+    aod,
+    toa,
+    dt_s: float,
+    dh_m: float,
+    cfg: TrackerConfig,
+    s0: NDArray,
+    p0: NDArray,
+    n_epochs: int | None = None,
+    reacquire=None,
+    reacquire_after: int = 10,
+) -> dict[str, NDArray]:
     """Run the EKF over epochs; epoch n has measurements from RRHs ``rrh_xy[n]`` [m_n, 2]
     (possibly none: prediction only). ``rrh_xy`` may instead be a callable
     ``select(n, x_pred) -> (rrh_xy, aod, toa)`` choosing the measurements from the
@@ -370,8 +401,15 @@ def anchor_x(cand_rrh: NDArray, cand_ok: NDArray, cand_strength: NDArray, rrh_x:
     return float(rrh_x[cand_rrh[j]])
 
 
-def select_measurements(cand_rrh: NDArray, cand_ok: NDArray, cand_strength: NDArray, rrh_x: NDArray,
-                        x_pred: float, n_nearest: int = 6, n_use: int = 3) -> NDArray[np.int64]:
+def select_measurements(
+    cand_rrh: NDArray,
+    cand_ok: NDArray,
+    cand_strength: NDArray,
+    rrh_x: NDArray,
+    x_pred: float,
+    n_nearest: int = 6,
+    n_use: int = 3,
+) -> NDArray[np.int64]:
     """Candidate columns to use at one epoch: among the detected candidates that are also
     among the ``n_nearest`` RRHs to the predicted position, the ``n_use`` strongest
     (seed §4: the 3 strongest of the audible RRHs) [ours: the nearest-to-prediction rule].
@@ -380,7 +418,7 @@ def select_measurements(cand_rrh: NDArray, cand_ok: NDArray, cand_strength: NDAr
         # insertion point (the same set and tie-breaking as a stable argsort over all RRHs)
         i = int(np.searchsorted(rrh_x, x_pred))
         lo = max(i - n_nearest, 0)
-        win = np.abs(rrh_x[lo:i + n_nearest] - x_pred)
+        win = np.abs(rrh_x[lo : i + n_nearest] - x_pred)
         near = lo + np.argsort(win, kind="stable")[:n_nearest]
     else:  # a lost filter (far off, or NaN): the order rounding gives over all RRHs
         near = np.argsort(np.abs(rrh_x - x_pred), kind="stable")[:n_nearest]
@@ -389,8 +427,9 @@ def select_measurements(cand_rrh: NDArray, cand_ok: NDArray, cand_strength: NDAr
     return cols[np.argsort(-cand_strength[cols], kind="stable")[:n_use]].astype(np.int64)
 
 
-def track_setup(ds, rrh_x: NDArray, rrh_y: float, dh_m: float, cfg: TrackerConfig, strength: str, n_use: int,
-                lever_arm: bool = True):
+def track_setup(
+    ds, rrh_x: NDArray, rrh_y: float, dh_m: float, cfg: TrackerConfig, strength: str, n_use: int, lever_arm: bool = True
+):
     """Measurement selection ``pick(k, x_pred)``, the snapshot re-acquisition fix
     ``snapshot_fix(k, x_pred)``, the first epoch with measurements k0, the initial state and
     P0 (snapshot LS position at rest; speed and acceleration σ 1 m/s and 1 m/s² [ours]) and
@@ -403,8 +442,7 @@ def track_setup(ds, rrh_x: NDArray, rrh_y: float, dh_m: float, cfg: TrackerConfi
     ignores it: the seed's point model [ours]."""
     from railradio.nr.antenna import facing_panel
 
-    panel_x = (tuple(float(v) for v in ds["train_panel_x"].values)
-               if lever_arm and "train_panel_x" in ds else (0.0, 0.0))
+    panel_x = tuple(float(v) for v in ds["train_panel_x"].values) if lever_arm and "train_panel_x" in ds else (0.0, 0.0)
     rrh = ds["rrh"].values
     aod = ds["aod_hat"].values
     toa = ds["toa_hat"].values
@@ -430,8 +468,7 @@ def track_setup(ds, rrh_x: NDArray, rrh_y: float, dh_m: float, cfg: TrackerConfi
         rho = np.sqrt(max((SPEED_OF_LIGHT_M_S * t_k[0]) ** 2 - dh_m**2, 1.0))
         guess = np.array([xy[0, 0] + rho * np.cos(a_k[0]), xy[0, 1] + rho * np.sin(a_k[0])])
         fix, cov = snapshot_ls(xy, a_k, t_k, dh_m, cfg, guess)
-        if not (np.all(np.isfinite(fix)) and np.all(np.isfinite(cov))
-                and np.hypot(*(fix - xy[0])) <= rho + 1000.0):
+        if not (np.all(np.isfinite(fix)) and np.all(np.isfinite(cov)) and np.hypot(*(fix - xy[0])) <= rho + 1000.0):
             return None
         return fix, cov
 
@@ -453,9 +490,18 @@ def track_setup(ds, rrh_x: NDArray, rrh_y: float, dh_m: float, cfg: TrackerConfi
     return pick, snapshot_fix, k0, s0, p0, rrh.shape[0]
 
 
-def track(ds, rrh_x: NDArray, rrh_y: float, dh_m: float, dt_s: float, cfg: TrackerConfig,
-          strength: str = "peak", n_use: int = 3, snapshot: bool = True,
-          lever_arm: bool = True) -> dict[str, NDArray]:
+def track(
+    ds,
+    rrh_x: NDArray,
+    rrh_y: float,
+    dh_m: float,
+    dt_s: float,
+    cfg: TrackerConfig,
+    strength: str = "peak",
+    n_use: int = 3,
+    snapshot: bool = True,
+    lever_arm: bool = True,
+) -> dict[str, NDArray]:
     """Track one realization from a :func:`railradio.nr.simulate.simulate_epochs` dataset.
 
     The first epoch with measurements gives the initial state (snapshot LS position, at
@@ -472,8 +518,18 @@ def track(ds, rrh_x: NDArray, rrh_y: float, dh_m: float, dt_s: float, cfg: Track
         state_now["x"] = float(s[0])
         return pick(k + k0, float(s[0]))
 
-    out = run_ekf(select, None, None, dt_s, dh_m, cfg, s0, p0, n_epochs=n - k0,
-                  reacquire=lambda k: snapshot_fix(k + k0, state_now["x"]) if cfg.gate else None)
+    out = run_ekf(
+        select,
+        None,
+        None,
+        dt_s,
+        dh_m,
+        cfg,
+        s0,
+        p0,
+        n_epochs=n - k0,
+        reacquire=lambda k: snapshot_fix(k + k0, state_now["x"]) if cfg.gate else None,
+    )
     state = np.full((n, 6), np.nan)
     state[k0:] = out["state"]
     cov = np.full((n, 6, 6), np.nan)
@@ -506,8 +562,7 @@ def track(ds, rrh_x: NDArray, rrh_y: float, dh_m: float, dt_s: float, cfg: Track
             snap[has], _ = snapshot_ls_batch(xy_all[has], a_all[has], t_all[has], dh_m, cfg, guess)
     reac = np.zeros(n, dtype=bool)
     reac[k0:] = out["reacquired"]
-    return {"state": state, "cov": cov, "nis": nis, "n_used": used, "snapshot": snap, "k0": k0,
-            "reacquired": reac}
+    return {"state": state, "cov": cov, "nis": nis, "n_used": used, "snapshot": snap, "k0": k0, "reacquired": reac}
 
 
 def nees_position(state: NDArray, cov: NDArray, x_true: NDArray) -> NDArray[np.float64]:
@@ -532,8 +587,9 @@ def selected(ds, strength: str = "peak", n_use: int = 3) -> tuple[NDArray, NDArr
     return order, np.take_along_axis(ok, order, axis=1)
 
 
-def measurement_errors(ds, strength: str = "peak", n_use: int = 3, flat: bool = True,
-                       with_distance: bool = False) -> tuple[NDArray, ...]:
+def measurement_errors(
+    ds, strength: str = "peak", n_use: int = 3, flat: bool = True, with_distance: bool = False
+) -> tuple[NDArray, ...]:
     """AOD [rad, wrapped] and TOA range [m] errors of the measurements the tracker would use
     (the ``n_use`` strongest detected candidates per epoch); ``flat=False`` returns
     [epoch, n_use] arrays with NaN where fewer were detected. ``with_distance`` also
@@ -580,13 +636,20 @@ def inlier_sigma(e: NDArray, gate_prob: float = 0.99, n_iter: int = 50) -> tuple
     return sig, float(inl.mean())
 
 
-def robust_sigmas(e_aod_rad: NDArray, e_range_m: NDArray, dist_m: NDArray,
-                  distance_edges_m: tuple[float, ...] = (), min_per_bin: int = 50,
-                  fs_hz: float = 245.76e6, gate_prob: float = 0.99) -> tuple[float, float, dict]:
+def robust_sigmas(
+    e_aod_rad: NDArray,
+    e_range_m: NDArray,
+    dist_m: NDArray,
+    distance_edges_m: tuple[float, ...] = (),
+    min_per_bin: int = 50,
+    fs_hz: float = 245.76e6,
+    gate_prob: float = 0.99,
+) -> tuple[float, float, dict]:
     """σ_AOD [rad] and σ_TOA [s] of the calibration errors' inliers (:func:`inlier_sigma`
     at ``gate_prob``), σ_TOA floored at the integer-sample quantization 1/(√12 F_s); with
     ``distance_edges_m`` also per bin of ``dist_m`` (a bin with fewer than ``min_per_bin``
     errors takes the overall values), returned as :class:`TrackerConfig` keyword arguments."""
+
     def spread(e):
         return inlier_sigma(e, gate_prob)[0] if e.size else np.nan
 
@@ -605,8 +668,15 @@ def robust_sigmas(e_aod_rad: NDArray, e_range_m: NDArray, dist_m: NDArray,
         else:
             a_bins.append(max(spread(e_aod_rad[m]), 1e-4))
             t_bins.append(max(spread(e_range_m[m]) / SPEED_OF_LIGHT_M_S, floor))
-    return s_aod, s_toa, dict(distance_edges_m=tuple(float(x) for x in distance_edges_m),
-                              sigma_aod_bins_rad=tuple(a_bins), sigma_toa_bins_s=tuple(t_bins))
+    return (
+        s_aod,
+        s_toa,
+        dict(
+            distance_edges_m=tuple(float(x) for x in distance_edges_m),
+            sigma_aod_bins_rad=tuple(a_bins),
+            sigma_toa_bins_s=tuple(t_bins),
+        ),
+    )
 
 
 Q_SEARCH_LIMITS = (1e-6, 1e6)
@@ -623,11 +693,23 @@ def _nees_cost(ds, out) -> float:
     return abs(float(np.log(np.median(nees) / chi2.median(2))))
 
 
-def calibrate(ds, variant: str, rrh_x: NDArray, rrh_y: float, dh_m: float, dt_s: float,
-              q_grid: NDArray, gate: bool, strength: str = "peak", fs_hz: float = 245.76e6,
-              distance_edges_m: tuple[float, ...] = (), min_per_bin: int = 50,
-              gate_prob: float = 0.99, search: dict | None = None,
-              start_speed_sigma_m_s: float = 1.0) -> TrackerConfig:
+def calibrate(
+    ds,
+    variant: str,
+    rrh_x: NDArray,
+    rrh_y: float,
+    dh_m: float,
+    dt_s: float,
+    q_grid: NDArray,
+    gate: bool,
+    strength: str = "peak",
+    fs_hz: float = 245.76e6,
+    distance_edges_m: tuple[float, ...] = (),
+    min_per_bin: int = 50,
+    gate_prob: float = 0.99,
+    search: dict | None = None,
+    start_speed_sigma_m_s: float = 1.0,
+) -> TrackerConfig:
     """Measurement and process noise from a calibration run (never the evaluation run).
 
     W: σ_AOD, σ_TOA of the inliers of the selected measurements' errors, those a χ² gate
@@ -651,13 +733,20 @@ def calibrate(ds, variant: str, rrh_x: NDArray, rrh_y: float, dh_m: float, dt_s:
     cost: dict[float, float] = {}
 
     def cfg_of(q):
-        return TrackerConfig(variant=variant, q=q, sigma_aod_rad=s_aod, sigma_toa_s=s_toa, gate=gate,
-                             gate_prob=gate_prob, start_speed_sigma_m_s=start_speed_sigma_m_s, **bins)
+        return TrackerConfig(
+            variant=variant,
+            q=q,
+            sigma_aod_rad=s_aod,
+            sigma_toa_s=s_toa,
+            gate=gate,
+            gate_prob=gate_prob,
+            start_speed_sigma_m_s=start_speed_sigma_m_s,
+            **bins,
+        )
 
     def run(q):
         if q not in cost:
-            cost[q] = _nees_cost(ds, track(ds, rrh_x, rrh_y, dh_m, dt_s, cfg_of(q), strength=strength,
-                                           snapshot=False))
+            cost[q] = _nees_cost(ds, track(ds, rrh_x, rrh_y, dh_m, dt_s, cfg_of(q), strength=strength, snapshot=False))
         return cost[q]
 
     for q in qs:
@@ -683,9 +772,12 @@ def calibrate(ds, variant: str, rrh_x: NDArray, rrh_y: float, dh_m: float, dt_s:
             toward = c[np.asarray(tried) <= qs[0]][::-1]
         else:
             toward = np.array([])
-        search.update(q=tried, cost=[float(v) if np.isfinite(v) else None for v in c],
-                      at_edge=bool(best in (tried[0], tried[-1])),
-                      monotone=bool(toward.size > 1 and np.all(np.isfinite(toward)) and np.all(np.diff(toward) < 0)))
+        search.update(
+            q=tried,
+            cost=[float(v) if np.isfinite(v) else None for v in c],
+            at_edge=bool(best in (tried[0], tried[-1])),
+            monotone=bool(toward.size > 1 and np.all(np.isfinite(toward)) and np.all(np.diff(toward) < 0)),
+        )
     return cfg_of(best)
 
 
@@ -710,8 +802,7 @@ def clock_offsets_s(seed: int, key: tuple[int, ...], rrh: NDArray, rrh_sigma_s: 
     return (rrh_sigma_s * off)[inv].reshape(rrh.shape)
 
 
-def apply_clock_errors(ds, seed: int, key: tuple[int, ...], rrh_sigma_s: float = 0.0,
-                       train_bias_s: float = 0.0):
+def apply_clock_errors(ds, seed: int, key: tuple[int, ...], rrh_sigma_s: float = 0.0, train_bias_s: float = 0.0):
     """The estimates ``ds`` as measured with imperfect clocks: every TOA of RRH k is late by
     its offset δ_k (:func:`clock_offsets_s`) plus the train clock's bias b, which the tracker
     does not know (its calibration run has its own offsets, so the calibrated σ_TOA holds

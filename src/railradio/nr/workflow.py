@@ -3,8 +3,7 @@ fingerprint: a change here re-runs nothing by itself)."""
 
 from __future__ import annotations
 
-SIM_KEYS = ("trajectory", "deployment", "radio", "antenna", "channel", "receiver",
-            "receiver_variants", "traffic")
+SIM_KEYS = ("trajectory", "deployment", "radio", "antenna", "channel", "receiver", "receiver_variants", "traffic")
 """The sections of the ``nr`` config that define the simulated bursts."""
 
 
@@ -16,11 +15,19 @@ def sim_config(c: dict) -> dict:
 def receiver_selection(c: dict) -> dict[str, str]:
     """Receiver name -> the strength measure choosing its 3 measured RRHs."""
     return {"seed": c["receiver"]["selection"]} | {
-        name: v["selection"] for name, v in c.get("receiver_variants", {}).items()}
+        name: v["selection"] for name, v in c.get("receiver_variants", {}).items()
+    }
 
 
-def case_shard_paths(case: str, case_cfg: dict, main_cfg: dict, real: str, n_cal_shards: int,
-                     n_case_shards: int, cases: dict | None = None) -> list[str]:
+def case_shard_paths(
+    case: str,
+    case_cfg: dict,
+    main_cfg: dict,
+    real: str,
+    n_cal_shards: int,
+    n_case_shards: int,
+    cases: dict | None = None,
+) -> list[str]:
     """Estimate shards a sensitivity case's calibration (``real="cal"``) or track
     (``real="r0"``) reads: the main run's own when the case changes nothing that the
     bursts or the calibration run depend on (a tracker-only case), else those of the first

@@ -78,7 +78,7 @@ def moving_mean(a: np.ndarray, n: int, mirror_start: bool = False) -> np.ndarray
     if a.shape[0] == 0 or half == 0:
         return a.astype(float if not np.iscomplexobj(a) else complex)
     if mirror_start:
-        pre = a[1:half + 1][::-1]
+        pre = a[1 : half + 1][::-1]
         ext = np.concatenate([pre, a], axis=0)
         lead = pre.shape[0]
     else:
@@ -149,24 +149,43 @@ def _scaled_product_grid(fam: Families, eps: complex, polarization: str, n_sin_g
     return np.ascontiguousarray(g * (fam.spread * np.exp(1j * fam.caustic_phase_rad))[:, None])
 
 
-def coherent_gain_by_order(fam: Families, offsets_m: np.ndarray, wavelength_m: float, eps: complex,
-                           polarization: str, n_sin_grid: int = 513) -> np.ndarray:
+def coherent_gain_by_order(
+    fam: Families, offsets_m: np.ndarray, wavelength_m: float, eps: complex, polarization: str, n_sin_grid: int = 513
+) -> np.ndarray:
     """Narrowband gain of one slot (unit EIRP) at ``offsets_m``, the sum of each reflection
     order apart [order 0..max, offset] (its cumulative sum over orders: the gain truncated
     at each order), with the reflection product interpolated as :func:`tabulate` does."""
     g = _scaled_product_grid(fam, eps, polarization, n_sin_grid) * (wavelength_m / (4.0 * math.pi))
     dx = np.ascontiguousarray(np.abs(np.asarray(offsets_m, dtype=float)).ravel())
     out = np.zeros((int(fam.n_refl.max(initial=0)) + 1, dx.size), dtype=complex)
-    _gain_by_order(np.ascontiguousarray(fam.ell_m, dtype=float), np.ascontiguousarray(fam.n_refl, dtype=np.int64),
-                   g, dx, 2.0 * math.pi / wavelength_m, out)
+    _gain_by_order(
+        np.ascontiguousarray(fam.ell_m, dtype=float),
+        np.ascontiguousarray(fam.n_refl, dtype=np.int64),
+        g,
+        dx,
+        2.0 * math.pi / wavelength_m,
+        out,
+    )
     return out
 
 
-def tabulate(fam: Families, tunnel: Tunnel, cable: Cable, offsets_m: np.ndarray, *,
-             eps: complex, polarization: str, propagation: str = "physical",
-             seed_model: SeedModel | None = None, rng: np.random.Generator | None = None,
-             delay_bin_s: float = 10e-9, n_delay_bins: int = 64, n_sin_grid: int = 513,
-             chunk: int = 256, local_mean_window_m: float | None = None) -> xr.Dataset:
+def tabulate(
+    fam: Families,
+    tunnel: Tunnel,
+    cable: Cable,
+    offsets_m: np.ndarray,
+    *,
+    eps: complex,
+    polarization: str,
+    propagation: str = "physical",
+    seed_model: SeedModel | None = None,
+    rng: np.random.Generator | None = None,
+    delay_bin_s: float = 10e-9,
+    n_delay_bins: int = 64,
+    n_sin_grid: int = 513,
+    chunk: int = 256,
+    local_mean_window_m: float | None = None,
+) -> xr.Dataset:
     """Tabulate the slot-to-receiver channel over ``offsets_m`` (see the module docstring).
 
     The local mean of the physical channel is what a receiver moving along the tunnel
@@ -204,31 +223,47 @@ def tabulate(fam: Families, tunnel: Tunnel, cable: Cable, offsets_m: np.ndarray,
     m1 = np.zeros(n_d)
     m2 = np.zeros(n_d)
     if propagation == "physical":  # compiled; its moments come from the local mean below
-        _physical_taps(np.ascontiguousarray(fam.ell_m, dtype=float), g_grid, np.ascontiguousarray(offsets),
-                       k, h, SPEED_OF_LIGHT_M_S, delay_bin_s, taps, p_mean)
+        _physical_taps(
+            np.ascontiguousarray(fam.ell_m, dtype=float),
+            g_grid,
+            np.ascontiguousarray(offsets),
+            k,
+            h,
+            SPEED_OF_LIGHT_M_S,
+            delay_bin_s,
+            taps,
+            p_mean,
+        )
     else:
         ell = fam.ell_m[:, None]
         for a in range(0, n_d, chunk):
-            dx = offsets[a:a + chunk][None, :]
+            dx = offsets[a : a + chunk][None, :]
             d = np.sqrt(ell**2 + dx**2)
             d_direct = np.sqrt(h * h + dx**2)
             # the seed's random 0-10 dB multipath loss, drawn per reflected ray and per offset,
             # i.e. independently for every slot-receiver pair (seed 2.4.2)
             mp_db = np.where(fam.n_refl[:, None] > 0, rng.uniform(0.0, sm.multipath_max_db, d.shape), 0.0)
-            loss_db = (cable.coupling_loss_at_db(d_direct) + 20.0 * np.log10(4.0 * math.pi * d / lam)
-                       + sm.tunnel_att_db_per_m * d) - fixed_db[:, None] + mp_db
+            loss_db = (
+                (
+                    cable.coupling_loss_at_db(d_direct)
+                    + 20.0 * np.log10(4.0 * math.pi * d / lam)
+                    + sm.tunnel_att_db_per_m * d
+                )
+                - fixed_db[:, None]
+                + mp_db
+            )
             amp = 10.0 ** (-loss_db / 20.0) * np.exp(-1j * k * d)
             tau = d / SPEED_OF_LIGHT_M_S
             pw = np.abs(amp) ** 2
-            p_mean[a:a + chunk] = pw.sum(axis=0)
-            m1[a:a + chunk] = (pw * tau).sum(axis=0)
-            m2[a:a + chunk] = (pw * tau**2).sum(axis=0)
+            p_mean[a : a + chunk] = pw.sum(axis=0)
+            m1[a : a + chunk] = (pw * tau).sum(axis=0)
+            m2[a : a + chunk] = (pw * tau**2).sum(axis=0)
             b = np.clip(np.rint((tau - d_direct / SPEED_OF_LIGHT_M_S) / delay_bin_s), 0, n_delay_bins - 1)
             nd = dx.shape[1]
             flat = (np.arange(nd)[None, :] * n_delay_bins + b.astype(np.int64)).ravel()
             re = np.bincount(flat, weights=amp.real.ravel(), minlength=nd * n_delay_bins)
             im = np.bincount(flat, weights=amp.imag.ravel(), minlength=nd * n_delay_bins)
-            taps[a:a + chunk] = (re + 1j * im).reshape(nd, n_delay_bins)
+            taps[a : a + chunk] = (re + 1j * im).reshape(nd, n_delay_bins)
     los = np.sqrt(h * h + offsets**2) / SPEED_OF_LIGHT_M_S
     p_incoherent = p_mean
     lm_desc = "local-mean power gain (incoherent sum over rays, the seed's model) "
@@ -243,32 +278,54 @@ def tabulate(fam: Families, tunnel: Tunnel, cable: Cable, offsets_m: np.ndarray,
         p_pdp = pdp.sum(axis=1)
         m1 = (pdp * tau_b).sum(axis=1) * (p_mean / p_pdp)
         m2 = (pdp * tau_b**2).sum(axis=1) * (p_mean / p_pdp)
-        lm_desc = (f"local-mean power gain (coherent ray sum, power averaged over {local_mean_window_m:g} m) ")
+        lm_desc = f"local-mean power gain (coherent ray sum, power averaged over {local_mean_window_m:g} m) "
     mean_tau = m1 / p_mean
     rms = np.sqrt(np.maximum(m2 / p_mean - mean_tau**2, 0.0))
     ds = xr.Dataset(
         {
-            "taps": (("offset_m", "excess_delay_s"), taps,
-                     {"units": "1", "long_name": "slot-to-receiver channel taps (amplitude gain "
-                      "relative to the cable power at the slot, binned by excess delay)"}),
-            "power_mean": ("offset_m", p_mean, {"units": "1", "long_name": lm_desc +
-                           "relative to the cable power at the slot"}),
-            "power_incoherent": ("offset_m", p_incoherent, {"units": "1", "long_name": "incoherent sum of the "
-                                 "rays' powers relative to the cable power at the slot"}),
+            "taps": (
+                ("offset_m", "excess_delay_s"),
+                taps,
+                {
+                    "units": "1",
+                    "long_name": "slot-to-receiver channel taps (amplitude gain "
+                    "relative to the cable power at the slot, binned by excess delay)",
+                },
+            ),
+            "power_mean": (
+                "offset_m",
+                p_mean,
+                {"units": "1", "long_name": lm_desc + "relative to the cable power at the slot"},
+            ),
+            "power_incoherent": (
+                "offset_m",
+                p_incoherent,
+                {
+                    "units": "1",
+                    "long_name": "incoherent sum of the rays' powers relative to the cable power at the slot",
+                },
+            ),
             "delay_mean_s": ("offset_m", mean_tau, {"units": "s", "long_name": "power-weighted mean delay"}),
             "delay_rms_s": ("offset_m", rms, {"units": "s", "long_name": "RMS delay spread of one slot"}),
             "los_delay_s": ("offset_m", los, {"units": "s", "long_name": "line-of-sight delay"}),
         },
         coords={
             "offset_m": ("offset_m", offsets, {"units": "m", "long_name": "along-axis offset |x_rx - x_slot|"}),
-            "excess_delay_s": ("excess_delay_s", np.arange(n_delay_bins) * delay_bin_s,
-                               {"units": "s", "long_name": "excess delay over the line of sight "
-                                "(last bin collects everything later)"}),
+            "excess_delay_s": (
+                "excess_delay_s",
+                np.arange(n_delay_bins) * delay_bin_s,
+                {"units": "s", "long_name": "excess delay over the line of sight (last bin collects everything later)"},
+            ),
         },
-        attrs={"engine": fam.engine, "propagation": propagation, "polarization": polarization,
-               "n_families": n_f, "max_reflections": int(fam.n_refl.max(initial=0)),
-               "local_mean_window_m": float(local_mean_window_m or 0.0),
-               "shape": tunnel.shape},
+        attrs={
+            "engine": fam.engine,
+            "propagation": propagation,
+            "polarization": polarization,
+            "n_families": n_f,
+            "max_reflections": int(fam.n_refl.max(initial=0)),
+            "local_mean_window_m": float(local_mean_window_m or 0.0),
+            "shape": tunnel.shape,
+        },
     )
     return ds
 
@@ -312,8 +369,9 @@ def window_slots(tunnel: Tunnel, x_rx_m: np.ndarray, half_width_m: float) -> tup
     return idx_c, ok
 
 
-def received(table: xr.Dataset, tunnel: Tunnel, cable: Cable, x_rx_m: np.ndarray,
-             strong_dbm: float = -100.0, chunk: int = 2048) -> Received:
+def received(
+    table: xr.Dataset, tunnel: Tunnel, cable: Cable, x_rx_m: np.ndarray, strong_dbm: float = -100.0, chunk: int = 2048
+) -> Received:
     """RSSI (coherent and local mean), RMS delay spread and the number of rays (taps of
     one slot in one 10-ns delay bin) above ``strong_dbm`` at receiver positions ``x_rx_m``;
     every slot within the table's range contributes."""
@@ -331,7 +389,7 @@ def received(table: xr.Dataset, tunnel: Tunnel, cable: Cable, x_rx_m: np.ndarray
     thr_w = 10.0 ** ((strong_dbm - 30.0) / 10.0)
     max_off = float(table["offset_m"].values[-1])
     for a in range(0, x_rx.size, chunk):
-        x = x_rx[a:a + chunk]
+        x = x_rx[a : a + chunk]
         sl, ok = window_slots(tunnel, x, max_off)
         idx, inside = offset_index(table, x[:, None] - xs[sl])
         w = (ok & inside).astype(float)
@@ -346,8 +404,8 @@ def received(table: xr.Dataset, tunnel: Tunnel, cable: Cable, x_rx_m: np.ndarray
         pc = np.abs(ac) ** 2
         r, c = np.nonzero((pc * tap_w_max[idx] > thr_w) & (w > 0))
         n_strong = (tap_w[idx[r, c]] * pc[r, c][:, None] > thr_w).sum(axis=1)
-        out[0][a:a + chunk] = 10.0 * np.log10(np.abs(field) ** 2) + 30.0
-        out[1][a:a + chunk] = 10.0 * np.log10(ptot) + 30.0
-        out[2][a:a + chunk] = np.sqrt(np.maximum(m2 / ptot - (m1 / ptot) ** 2, 0.0))
-        out[3][a:a + chunk] = np.bincount(r, weights=n_strong, minlength=x.size)
+        out[0][a : a + chunk] = 10.0 * np.log10(np.abs(field) ** 2) + 30.0
+        out[1][a : a + chunk] = 10.0 * np.log10(ptot) + 30.0
+        out[2][a : a + chunk] = np.sqrt(np.maximum(m2 / ptot - (m1 / ptot) ** 2, 0.0))
+        out[3][a : a + chunk] = np.bincount(r, weights=n_strong, minlength=x.size)
     return Received(*out)

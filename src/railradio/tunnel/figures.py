@@ -12,8 +12,7 @@ TRAINS = ("metro", "hst", "freight")
 
 def rssi_map(maps: dict[str, xr.Dataset], coverage_dbm: float, blind_dbm: float, pdf, png) -> None:
     fig, (ax, az) = figure(nrows=2, figsize=(7.0, 5.6))
-    labels = {"image": "physical, image method (square)", "sbr": "physical, SBR (circle)",
-              "seed": "seed's model"}
+    labels = {"image": "physical, image method (square)", "sbr": "physical, SBR (circle)", "seed": "seed's model"}
     for name, ds in maps.items():
         ax.plot(ds["x_m"], ds["rssi_mean_dbm"], lw=0.8, label=labels.get(name, name))
     for a in (ax, az):
@@ -57,8 +56,7 @@ def gdop(run: xr.Dataset, pdf, png, span_m: float = 200.0) -> None:
     x = run["x_rx_true"].values[:, 0]
     sel = (x >= 2000) & (x <= 2000 + span_m)
     ax.plot(x[sel], run["gdop_seed"].values[sel, 0], ".", ms=2, label="seed's 2-D GDOP (4.1.1)")
-    ax.plot(x[sel], run["gdop_tdoa"].values[sel, 0], ".", ms=2,
-            label=r"along-track TDOA: $\sigma_x / c\sigma_\tau$")
+    ax.plot(x[sel], run["gdop_tdoa"].values[sel, 0], ".", ms=2, label=r"along-track TDOA: $\sigma_x / c\sigma_\tau$")
     ax.set_yscale("log")
     ax.set_xlabel("head receiver position x [m] (HST run)")
     ax.set_ylabel("dilution of precision")
@@ -77,15 +75,22 @@ def position_error_cdf(runs: dict[tuple[str, str], xr.Dataset], pdf, png) -> Non
         ds = runs[(tr, "physical_separable")]
         _cdf(ax, ds["kf_err_head"], label="head, KF (white delay errors [ours])")
         _cdf(ax, ds["kf_err_tail"], label="tail, KF (white)")
-        for v, lab, st in (("physical_separable_ar1", "train, KF, AR(1) delay errors", (0, (5, 1))),
-                           ("physical_separable_slot_bias", "train, KF, per-slot delay bias", (0, (3, 1, 1, 1)))):
+        for v, lab, st in (
+            ("physical_separable_ar1", "train, KF, AR(1) delay errors", (0, (5, 1))),
+            ("physical_separable_slot_bias", "train, KF, per-slot delay bias", (0, (3, 1, 1, 1))),
+        ):
             if (tr, v) in runs:
                 _cdf(ax, runs[(tr, v)]["kf_err"], label=lab, ls=st, lw=1.4)
         _cdf(ax, ds["rigid_err"], label="rigid train, KF")
         _cdf(ax, ds["pf_err"], label="train, PF", ls=":")
         _cdf(ax, ds["snapshot_err"].values[:, 0], label="head, snapshot", ls="--")
         if (tr, "physical_wideband") in runs:
-            _cdf(ax, runs[(tr, "physical_wideband")]["kf_err"], label="train, KF, wideband (errors from the channel)", ls="-.")
+            _cdf(
+                ax,
+                runs[(tr, "physical_wideband")]["kf_err"],
+                label="train, KF, wideband (errors from the channel)",
+                ls="-.",
+            )
         if (tr, "seed_separable") in runs:
             _cdf(ax, runs[(tr, "seed_separable")]["kf_err"], label="train, KF, seed's channel", ls=(0, (1, 3)))
         ax.set_xscale("log")
@@ -108,8 +113,12 @@ def ray_engines(eng: xr.Dataset, pdf, png) -> None:
     ref = eng["power_mean_db"].sel(model="image_rect")
     for m in ("sbr_rect", "sbr_rect_vector"):
         ad.plot(off, eng["power_mean_db"].sel(model=m) - ref, label=f"{m} - image (sum of ray powers)")
-    ad.plot(off, eng["power_coherent_db"].sel(model="sbr_rect") - eng["power_coherent_db"].sel(model="image_rect"),
-            lw=0.6, label="sbr_rect - image (coherent)")
+    ad.plot(
+        off,
+        eng["power_coherent_db"].sel(model="sbr_rect") - eng["power_coherent_db"].sel(model="image_rect"),
+        lw=0.6,
+        label="sbr_rect - image (coherent)",
+    )
     ax.set_xscale("log")
     ax.set_ylabel("path gain of one slot [dB]")
     ax.legend(fontsize=6)
@@ -119,8 +128,15 @@ def ray_engines(eng: xr.Dataset, pdf, png) -> None:
     save(fig, pdf, png)
 
 
-def seed_vs_physical(tables: dict[str, xr.Dataset], maps: dict[str, xr.Dataset], h_m: float,
-                     coupling_db: float, coverage_dbm: float, pdf, png) -> None:
+def seed_vs_physical(
+    tables: dict[str, xr.Dataset],
+    maps: dict[str, xr.Dataset],
+    h_m: float,
+    coupling_db: float,
+    coverage_dbm: float,
+    pdf,
+    png,
+) -> None:
     fig, (ax, ac) = figure(ncols=2, figsize=(8.0, 3.4))
     labels = {"image": "physical (image, square)", "sbr": "physical (SBR, circle)", "seed": "seed's model"}
     for name, t in tables.items():
@@ -129,8 +145,13 @@ def seed_vs_physical(tables: dict[str, xr.Dataset], maps: dict[str, xr.Dataset],
         ax.plot(off[sel], 10 * np.log10(t["power_mean"].values[sel]), label=labels.get(name, name))
     off = tables["image"]["offset_m"].values
     sel = off >= 0.5
-    ax.plot(off[sel], -(coupling_db + 10 * np.log10(np.hypot(off[sel], h_m))), "k--", lw=0.8,
-            label="coupling loss alone (85 + 10 lg d)")
+    ax.plot(
+        off[sel],
+        -(coupling_db + 10 * np.log10(np.hypot(off[sel], h_m))),
+        "k--",
+        lw=0.8,
+        label="coupling loss alone (85 + 10 lg d)",
+    )
     ax.set_xscale("log")
     ax.set_xlabel("offset from the slot [m]")
     ax.set_ylabel("gain re cable power [dB]")
@@ -167,8 +188,17 @@ def sensitivity(sens: dict[str, xr.Dataset], shadow_sigma_db, delay_sigma_ns, de
         for e in delay_errors:
             suffix = "" if e == "white" else f"_{e}"
             y, se = curve(ds, [f"delay_sigma_ns_{_label(v)}{suffix}" for v in delay_sigma_ns])
-            a_d.errorbar(delay_sigma_ns, y, yerr=se, color=f"C{c}", ls=styles.get(e, "-."), marker="o", ms=3,
-                         capsize=2, label=f"{tr}, {names.get(e, e)}")
+            a_d.errorbar(
+                delay_sigma_ns,
+                y,
+                yerr=se,
+                color=f"C{c}",
+                ls=styles.get(e, "-."),
+                marker="o",
+                ms=3,
+                capsize=2,
+                label=f"{tr}, {names.get(e, e)}",
+            )
     a_s.set_xlabel("shadowing sigma [dB] (delay error white)")
     a_d.set_xlabel("delay-error sigma [ns]")
     for a in (a_s, a_d):

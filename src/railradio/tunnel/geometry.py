@@ -17,7 +17,8 @@ specified coupling loss L_c(d_ref) = 85 + 10 log10(d_ref / 1 m) dB [seed 2.2.2]:
 lambda^2 / (16 pi d_ref s) for a long chain).  G_ref = 2.15 dBi is the gain of the
 lambda/2 dipole with which IEC 61196-4 measures the coupling loss: the received power
 P_c - L_c includes that gain, so the slot EIRP is G_ref below the isotropic-receiver value,
-and the train antenna (0 dBi in this study) then reads P_c - L_c - G_ref at d_ref.  The coupling loss is thereby used once, to
+and the train antenna (0 dBi in this study) then reads P_c - L_c - G_ref at d_ref.  The
+coupling loss is thereby used once, to
 set the slot power; every ray then carries free-space spreading and wall reflections only,
 never coupling loss *and* free-space loss (the seed's eq. 2.4.1 applies both).
 """
@@ -72,8 +73,10 @@ class Tunnel:
             raise ValueError(f"slot_height_frac must be in (0, 1), got {self.slot_height_frac!r}")
         for name, (y, z) in (("slot", self.slot_yz), ("rx", self.rx_yz)):
             if not self.inside(y, z, margin_m=0.05):
-                raise ValueError(f"{name} position (y={y}, z={z}) m lies outside the {self.shape} "
-                                 f"cross-section (or within 5 cm of the wall)")
+                raise ValueError(
+                    f"{name} position (y={y}, z={z}) m lies outside the {self.shape} "
+                    f"cross-section (or within 5 cm of the wall)"
+                )
 
     @property
     def height_m(self) -> float:
@@ -127,8 +130,16 @@ class Tunnel:
 
     def with_shape(self, shape: str) -> Tunnel:
         """The same tunnel with another cross-section (slot at 10 % of *its* height)."""
-        return Tunnel(self.length_m, self.diameter_m, shape, self.slot_spacing_m,
-                      self.slot_height_frac, self.slot_z_m, self.rx_y_m, self.rx_z_m)
+        return Tunnel(
+            self.length_m,
+            self.diameter_m,
+            shape,
+            self.slot_spacing_m,
+            self.slot_height_frac,
+            self.slot_z_m,
+            self.rx_y_m,
+            self.rx_z_m,
+        )
 
 
 @dataclass(frozen=True)
@@ -168,8 +179,12 @@ class Cable:
         (calibrated for the IEC reference dipole of ``coupling_ref_gain_dbi``)."""
         d = self.coupling_ref_m
         lam = self.wavelength_m
-        return float(-self.coupling_loss_at_db(d) + 10.0 * math.log10(d * slot_spacing_m / math.pi)
-                     + 20.0 * math.log10(4.0 * math.pi / lam) - self.coupling_ref_gain_dbi)
+        return float(
+            -self.coupling_loss_at_db(d)
+            + 10.0 * math.log10(d * slot_spacing_m / math.pi)
+            + 20.0 * math.log10(4.0 * math.pi / lam)
+            - self.coupling_ref_gain_dbi
+        )
 
     def feed_x_m(self, length_m: float) -> np.ndarray:
         """Feed/amplifier points: one in the middle of every ``feed_spacing_m`` section [ours]."""
@@ -179,8 +194,7 @@ class Cable:
     def nearest_feed_m(self, x_m, length_m: float) -> np.ndarray:
         """The feed point that powers the cable at x (its own section) [m]."""
         feeds = self.feed_x_m(length_m)
-        idx = np.clip(np.floor(np.asarray(x_m, dtype=float) / self.feed_spacing_m).astype(int),
-                      0, feeds.size - 1)
+        idx = np.clip(np.floor(np.asarray(x_m, dtype=float) / self.feed_spacing_m).astype(int), 0, feeds.size - 1)
         return feeds[idx]
 
     def cable_distance_m(self, x_m, length_m: float) -> np.ndarray:

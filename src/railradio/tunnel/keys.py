@@ -25,12 +25,25 @@ def _specs() -> dict[str, KeySpec]:
 
     for tr in TRAINS:
         tot, head, tail = SOURCE_P95[tr]
-        add(f"tunnel.{tr}.err_m.p95", "m", f"{tr}: 95th pct of the train error sqrt((e_h^2+e_t^2)/2), KF, "
-            "separable receiver, delay errors white in time [ours: the source gives no time structure]", tot, "=")
-        add(f"tunnel.{tr}.ar1.err_m.p95", "m", f"{tr}: the same with an AR(1) delay error along the track "
-            "(measurement.delay_corr_m), same sigma")
-        add(f"tunnel.{tr}.slot_bias.err_m.p95", "m", f"{tr}: the same with one constant delay bias per slot "
-            "(the source's systematic per-slot errors), same sigma")
+        add(
+            f"tunnel.{tr}.err_m.p95",
+            "m",
+            f"{tr}: 95th pct of the train error sqrt((e_h^2+e_t^2)/2), KF, "
+            "separable receiver, delay errors white in time [ours: the source gives no time structure]",
+            tot,
+            "=",
+        )
+        add(
+            f"tunnel.{tr}.ar1.err_m.p95",
+            "m",
+            f"{tr}: the same with an AR(1) delay error along the track (measurement.delay_corr_m), same sigma",
+        )
+        add(
+            f"tunnel.{tr}.slot_bias.err_m.p95",
+            "m",
+            f"{tr}: the same with one constant delay bias per slot "
+            "(the source's systematic per-slot errors), same sigma",
+        )
         add(f"tunnel.{tr}.head_err_m.p95", "m", f"{tr}: 95th pct of the head error, KF", head, "=")
         add(f"tunnel.{tr}.tail_err_m.p95", "m", f"{tr}: 95th pct of the tail error, KF", tail, "=")
         add(f"tunnel.{tr}.rigid.err_m.p95", "m", f"{tr}: 95th pct, rigid-train KF on all receivers")
@@ -39,10 +52,13 @@ def _specs() -> dict[str, KeySpec]:
         add(f"tunnel.{tr}.rssi.err_m.p95", "m", f"{tr}: 95th pct of the head receiver's RSSI-ranging LS error")
         add(f"tunnel.{tr}.wideband.err_m.p95", "m", f"{tr}: 95th pct of the train error, KF, wideband receiver")
         add(f"tunnel.{tr}.seed_channel.err_m.p95", "m", f"{tr}: 95th pct of the train error, KF, the seed's channel")
-        add(f"tunnel.{tr}.length_err_m.p95", "m",
+        add(
+            f"tunnel.{tr}.length_err_m.p95",
+            "m",
             f"{tr}: 95th pct of |estimated head-tail distance - train length|, KF (the observable "
             "part of the attitude: with collinear slots the lateral offset, hence the seed's "
-            "attitude angle, is not observable)")
+            "attitude angle, is not observable)",
+        )
     add("tunnel.coverage_frac", "1", "share of the tunnel with local-mean RSSI >= -95 dBm (physical, image)", 0.96, "≥")
     add("tunnel.coverage_frac.coherent", "1", "same with the coherent RSSI (fading included)")
     add("tunnel.coverage_frac.sbr_circle", "1", "same, SBR in the circular cross-section")
@@ -52,12 +68,20 @@ def _specs() -> dict[str, KeySpec]:
     add("tunnel.availability.err_lt_5m", "1", "share of epochs with train error < 5 m (KF, all trains)", 0.95, "≥")
     add("tunnel.availability.err_lt_2m", "1", "share of epochs with train error < 2 m (KF, all trains)", 0.85, "≥")
     add("tunnel.availability.wideband.err_lt_5m", "1", "same, < 5 m, wideband receiver")
-    add("tunnel.wideband.ambiguity_wrong_frac", "1",
+    add(
+        "tunnel.wideband.ambiguity_wrong_frac",
+        "1",
         "share of wideband snapshot fixes (all trains and receivers) whose side of the feed (or feed) "
-        "the measurements resolved wrongly (chosen candidate > one slot spacing from the right one)", digits=4)
+        "the measurements resolved wrongly (chosen candidate > one slot spacing from the right one)",
+        digits=4,
+    )
     add("tunnel.wideband.snapshot.err_m.p95", "m", "95th pct of the wideband snapshot error (all trains and receivers)")
-    add("tunnel.wideband.peak_bias_ns", "ns",
-        "median CIR-peak delay minus the cable-point model delay on the calibration runs (mean over trains)", digits=2)
+    add(
+        "tunnel.wideband.peak_bias_ns",
+        "ns",
+        "median CIR-peak delay minus the cable-point model delay on the calibration runs (mean over trains)",
+        digits=2,
+    )
     add("tunnel.delay_spread_ns.median", "ns", "median RMS delay spread along the tunnel (physical, image)")
     add("tunnel.delay_spread_ns.median.seed_model", "ns", "median RMS delay spread, the seed's model")
     add("tunnel.rssi_dbm.median", "dBm", "median local-mean RSSI (physical, image)")
@@ -66,8 +90,18 @@ def _specs() -> dict[str, KeySpec]:
     add("tunnel.rays.families_image", "1", "image-method rays (families) per slot")
     add("tunnel.rays.families_sbr_circle", "1", "SBR ray families per slot, circular cross-section")
     add("tunnel.engines.rect_max_diff_db", "dB", "largest |SBR - image| local-mean gain in the square tunnel", digits=2)
-    add("tunnel.engines.test_tol_mean_db", "dB", "tolerance of the engine cross-validation test, local-mean gain", digits=2)
-    add("tunnel.engines.test_tol_coherent_db", "dB", "tolerance of the engine cross-validation test, coherent gain", digits=2)
+    add(
+        "tunnel.engines.test_tol_mean_db",
+        "dB",
+        "tolerance of the engine cross-validation test, local-mean gain",
+        digits=2,
+    )
+    add(
+        "tunnel.engines.test_tol_coherent_db",
+        "dB",
+        "tolerance of the engine cross-validation test, coherent gain",
+        digits=2,
+    )
     add("tunnel.hst.cep_m", "m", "HST: CEP = 0.59 sigma_x (seed 4.3.2) of the TDOA snapshot, sigma_y = 0")
     add("tunnel.hst.snapshot.err_m.p50", "m", "HST: median TDOA snapshot error (the CEP's empirical counterpart)")
     add("tunnel.hst.gdop_seed.median", "1", "HST head receiver: median of the seed's 2-D GDOP")
@@ -76,48 +110,125 @@ def _specs() -> dict[str, KeySpec]:
     add("tunnel.fresnel.te_loss_db.graze1deg", "dB", "TE reflection loss at 1 degree grazing", digits=2)
     add("tunnel.fresnel.te_loss_db.graze10deg", "dB", "TE reflection loss at 10 degrees grazing", digits=2)
     add("tunnel.fresnel.tm_loss_db.graze10deg", "dB", "TM reflection loss at 10 degrees grazing", digits=2)
-    add("tunnel.modal_att_db_per_m", "dB/m", "EH11 modal attenuation of the square tunnel (Emslie, Lagace & "
-        "Strong 1975), a theoretical value with no counterpart in the source", digits=2)
-    add("tunnel.rays.local_mean_slope_db_per_km.1500_5000", "dB/km",
+    add(
+        "tunnel.modal_att_db_per_m",
+        "dB/m",
+        "EH11 modal attenuation of the square tunnel (Emslie, Lagace & "
+        "Strong 1975), a theoretical value with no counterpart in the source",
+        digits=2,
+    )
+    add(
+        "tunnel.rays.local_mean_slope_db_per_km.1500_5000",
+        "dB/km",
         "decay of one slot's local mean (coherent power averaged over one EH11-EH12 beat length) fitted over "
         "rays.far_decay_m, image method at rays.max_order (test: within -0.5/+1.0 dB/km of the EH11 attenuation)",
-        digits=2)
-    add("tunnel.rays.far_converged_order", "1", "lowest order whose far local means lie within 0.1 dB of the "
-        "max_order ones (the slope key's order is converged when this is below rays.max_order)")
-    add("tunnel.rays.table_extent_m", "m", "largest slot-receiver offset of the image-method table (rays.max_offset_m; "
-        "null: the whole tunnel)", digits=0)
-    add("tunnel.rays.power_beyond_cutoff_frac.p95", "1", "95th pct along the tunnel of the local-mean power share "
-        "from slots beyond the table's extent (the criterion: at most rays.cutoff_power_frac)", digits=2)
-    add("tunnel.delay_spread_ns.cutoff_sensitivity", "1", "relative change of the median RMS delay spread when "
-        "the table's extent doubles (image method, receivers every 2 m; test: at most 0.05)", digits=2)
-    add("tunnel.delay_spread_ns.half_extent_change", "1", "relative change of the median RMS delay spread when "
-        "the table's extent halves (how much the far slots count)", digits=2)
-    add("tunnel.wideband.delay_error_ns.robust_sigma", "ns", "the wideband receiver's own delay error (peak "
+        digits=2,
+    )
+    add(
+        "tunnel.rays.far_converged_order",
+        "1",
+        "lowest order whose far local means lie within 0.1 dB of the "
+        "max_order ones (the slope key's order is converged when this is below rays.max_order)",
+    )
+    add(
+        "tunnel.rays.table_extent_m",
+        "m",
+        "largest slot-receiver offset of the image-method table (rays.max_offset_m; null: the whole tunnel)",
+        digits=0,
+    )
+    add(
+        "tunnel.rays.power_beyond_cutoff_frac.p95",
+        "1",
+        "95th pct along the tunnel of the local-mean power share "
+        "from slots beyond the table's extent (the criterion: at most rays.cutoff_power_frac)",
+        digits=2,
+    )
+    add(
+        "tunnel.delay_spread_ns.cutoff_sensitivity",
+        "1",
+        "relative change of the median RMS delay spread when "
+        "the table's extent doubles (image method, receivers every 2 m; test: at most 0.05)",
+        digits=2,
+    )
+    add(
+        "tunnel.delay_spread_ns.half_extent_change",
+        "1",
+        "relative change of the median RMS delay spread when the table's extent halves (how much the far slots count)",
+        digits=2,
+    )
+    add(
+        "tunnel.wideband.delay_error_ns.robust_sigma",
+        "ns",
+        "the wideband receiver's own delay error (peak "
         "delay minus the calibrated model at the true position): 1.4826 x median absolute deviation, all trains "
-        "and receivers", digits=1)
-    add("tunnel.wideband.delay_error_ns.p99", "ns", "99th pct of the absolute wideband delay error (its heavy tail)", digits=0)
-    add("tunnel.wideband.delay_error.lag1_autocorr", "1", "correlation of the wideband delay error between "
-        "consecutive epochs of one receiver (rank correlation, all trains): its time structure", digits=2)
-    add("tunnel.rays.sbr_circle.local_mean_slope_db_per_km", "dB/km", "the circular engine (SBR): one slot's far "
-        "local-mean decay over rays.far_decay_m at rays.max_order, as for the square", digits=2)
-    add("tunnel.rays.circle_eh11_db_per_km", "dB/km", "EH11 attenuation of a lossy circular guide of the tunnel's "
-        "diameter (Marcatili & Schmeltzer 1964)", digits=2)
-    add("tunnel.rays.circle_te01_db_per_km", "dB/km", "TE01 attenuation of the same guide, the lowest of any mode "
-        "(Marcatili & Schmeltzer 1964)", digits=2)
+        "and receivers",
+        digits=1,
+    )
+    add(
+        "tunnel.wideband.delay_error_ns.p99",
+        "ns",
+        "99th pct of the absolute wideband delay error (its heavy tail)",
+        digits=0,
+    )
+    add(
+        "tunnel.wideband.delay_error.lag1_autocorr",
+        "1",
+        "correlation of the wideband delay error between "
+        "consecutive epochs of one receiver (rank correlation, all trains): its time structure",
+        digits=2,
+    )
+    add(
+        "tunnel.rays.sbr_circle.local_mean_slope_db_per_km",
+        "dB/km",
+        "the circular engine (SBR): one slot's far "
+        "local-mean decay over rays.far_decay_m at rays.max_order, as for the square",
+        digits=2,
+    )
+    add(
+        "tunnel.rays.circle_eh11_db_per_km",
+        "dB/km",
+        "EH11 attenuation of a lossy circular guide of the tunnel's diameter (Marcatili & Schmeltzer 1964)",
+        digits=2,
+    )
+    add(
+        "tunnel.rays.circle_te01_db_per_km",
+        "dB/km",
+        "TE01 attenuation of the same guide, the lowest of any mode (Marcatili & Schmeltzer 1964)",
+        digits=2,
+    )
     add("tunnel.rays.beat_length_m", "m", "EH11-EH12 beat length 8a^2/(3 lambda) of the square tunnel", digits=0)
-    add("tunnel.rays.incoherent_excess_db.1000", "dB", "one slot's incoherent ray-power sum above its local mean "
-        "(the coherent power averaged over 40 wavelengths) at 1000 m: the error of the incoherent local mean", digits=1)
+    add(
+        "tunnel.rays.incoherent_excess_db.1000",
+        "dB",
+        "one slot's incoherent ray-power sum above its local mean "
+        "(the coherent power averaged over 40 wavelengths) at 1000 m: the error of the incoherent local mean",
+        digits=1,
+    )
     add("tunnel.slot_eirp_db_re_cable", "dB", "slot EIRP relative to the cable power (slot-chain calibration)")
-    for case, what in (("single_slot", "the nearest slot's line-of-sight ray alone"),
-                       ("los_slots", "every slot's line-of-sight ray in the receiver's window (absorbing walls)"),
-                       ("full", "the full channel in the receiver's window"),
-                       ("full_all_slots", "the full channel of every tabulated slot")):
-        add(f"tunnel.wideband.peak_bias_ns.{case}.median", "ns",
-            f"median noiseless CIR-peak delay minus the cable-point model delay along the tunnel: {what}", digits=2)
-    add("tunnel.sens.slot_side_wall.delay_spread_ns.median", "ns",
-        "median RMS delay spread along the tunnel, cable on the side wall (physical, positioning engine)")
+    for case, what in (
+        ("single_slot", "the nearest slot's line-of-sight ray alone"),
+        ("los_slots", "every slot's line-of-sight ray in the receiver's window (absorbing walls)"),
+        ("full", "the full channel in the receiver's window"),
+        ("full_all_slots", "the full channel of every tabulated slot"),
+    ):
+        add(
+            f"tunnel.wideband.peak_bias_ns.{case}.median",
+            "ns",
+            f"median noiseless CIR-peak delay minus the cable-point model delay along the tunnel: {what}",
+            digits=2,
+        )
+    add(
+        "tunnel.sens.slot_side_wall.delay_spread_ns.median",
+        "ns",
+        "median RMS delay spread along the tunnel, cable on the side wall (physical, positioning engine)",
+    )
     add("tunnel.sens.slot_side_wall.rssi_dbm.median", "dBm", "median local-mean RSSI, cable on the side wall")
-    add("tunnel.sens.slot_side_wall.cross_distance_m", "m", "slot-line-to-antenna distance in the cross-section, side wall", digits=2)
+    add(
+        "tunnel.sens.slot_side_wall.cross_distance_m",
+        "m",
+        "slot-line-to-antenna distance in the cross-section, side wall",
+        digits=2,
+    )
     add("tunnel.wideband.peak_bias_ns.full.p5", "ns", "5th pct of the same, full channel in the window", digits=1)
     add("tunnel.wideband.peak_bias_ns.full.p95", "ns", "95th pct of the same, full channel in the window", digits=1)
     return s
@@ -128,8 +239,11 @@ SPECS = _specs()
 
 def sens_spec(case: str, train: str) -> KeySpec:
     """Key of one sensitivity case and train type (names follow the config's cases)."""
-    return KeySpec(f"tunnel.sens.{case}.{train}.err_m.p95", "m",
-                   f"{train}: 95th pct of the train error, KF, sensitivity case {case} (pooled over realizations)")
+    return KeySpec(
+        f"tunnel.sens.{case}.{train}.err_m.p95",
+        "m",
+        f"{train}: 95th pct of the train error, KF, sensitivity case {case} (pooled over realizations)",
+    )
 
 
 def length_error_m(ds: xr.Dataset) -> np.ndarray:
@@ -162,13 +276,22 @@ def pooled_share(reps: list[np.ndarray], limit_m: float) -> tuple[float, float |
     return value, float(np.std(per, ddof=1) / np.sqrt(n_r))
 
 
-def key_numbers(runs: dict[tuple[str, str], xr.Dataset], maps: dict[str, xr.Dataset],
-                tables: dict[str, xr.Dataset], engines: xr.Dataset, coverage_dbm: float,
-                blind_dbm: float, min_rays: int, wavelength_m: float, side_m: float,
-                eps: complex, sens: dict[str, xr.Dataset] | None = None,
-                peak_bias: xr.Dataset | None = None, side_wall_map: xr.Dataset | None = None) -> dict[str, Any]:
-    from railradio.tunnel.materials import (eh11_attenuation_db_per_m, fresnel_te, fresnel_tm,
-                                            reflection_loss_db)
+def key_numbers(
+    runs: dict[tuple[str, str], xr.Dataset],
+    maps: dict[str, xr.Dataset],
+    tables: dict[str, xr.Dataset],
+    engines: xr.Dataset,
+    coverage_dbm: float,
+    blind_dbm: float,
+    min_rays: int,
+    wavelength_m: float,
+    side_m: float,
+    eps: complex,
+    sens: dict[str, xr.Dataset] | None = None,
+    peak_bias: xr.Dataset | None = None,
+    side_wall_map: xr.Dataset | None = None,
+) -> dict[str, Any]:
+    from railradio.tunnel.materials import eh11_attenuation_db_per_m, fresnel_te, fresnel_tm, reflection_loss_db
 
     out: dict[str, Any] = {}
 
@@ -217,8 +340,10 @@ def key_numbers(runs: dict[tuple[str, str], xr.Dataset], maps: dict[str, xr.Data
     put("tunnel.availability.wideband.err_lt_5m", np.mean(cat("kf_err") < 5.0) if cat else None)
     put("tunnel.wideband.ambiguity_wrong_frac", np.mean(cat("ambiguity_wrong")) if cat else None)
     put("tunnel.wideband.snapshot.err_m.p95", p95(cat("snapshot_err")) if cat else None)
-    put("tunnel.wideband.peak_bias_ns",
-        np.mean([w.attrs["wideband_bias_s"] for w in pooled_wb]) * 1e9 if pooled_wb else None)
+    put(
+        "tunnel.wideband.peak_bias_ns",
+        np.mean([w.attrs["wideband_bias_s"] for w in pooled_wb]) * 1e9 if pooled_wb else None,
+    )
 
     def blind(m):  # seed 5.1.2: RSSI_max < -100 dBm or fewer than 3 usable rays
         return np.mean((m["rssi_mean_dbm"].values < blind_dbm) | (m["n_strong_rays"].values < min_rays))
@@ -241,7 +366,7 @@ def key_numbers(runs: dict[tuple[str, str], xr.Dataset], maps: dict[str, xr.Data
     put("tunnel.engines.test_tol_mean_db", ENGINE_TOL_MEAN_DB)
     put("tunnel.engines.test_tol_coherent_db", ENGINE_TOL_COHERENT_DB)
     hst = runs[("hst", "physical_separable")]
-    e = (hst["snapshot"].values[:, 0] - hst["x_rx_true"].values[:, 0])
+    e = hst["snapshot"].values[:, 0] - hst["x_rx_true"].values[:, 0]
     put("tunnel.hst.cep_m", 0.59 * np.std(e))
     put("tunnel.hst.snapshot.err_m.p50", np.median(np.abs(e)))
     put("tunnel.hst.gdop_seed.median", np.median(hst["gdop_seed"].values[:, 0]))
@@ -266,8 +391,10 @@ def key_numbers(runs: dict[tuple[str, str], xr.Dataset], maps: dict[str, xr.Data
     put("tunnel.delay_spread_ns.half_extent_change", ds_med["halved"] / ds_med["cutoff"] - 1.0)
     if off[-1] >= 1000.0:
         i = int(np.argmin(np.abs(off - 1000.0)))
-        put("tunnel.rays.incoherent_excess_db.1000",
-            10 * np.log10(t["power_incoherent"].values[i] / t["power_mean"].values[i]))
+        put(
+            "tunnel.rays.incoherent_excess_db.1000",
+            10 * np.log10(t["power_incoherent"].values[i] / t["power_mean"].values[i]),
+        )
     else:
         put("tunnel.rays.incoherent_excess_db.1000", None)
     put("tunnel.slot_eirp_db_re_cable", t.attrs["slot_eirp_offset_db"])

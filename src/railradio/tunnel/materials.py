@@ -67,8 +67,9 @@ def reflection_loss_db(gamma) -> np.ndarray:
     return -20.0 * np.log10(np.abs(gamma))
 
 
-def eh11_attenuation_db_per_m(wavelength_m: float, width_m: float, height_m: float,
-                              eps: complex = CONCRETE_900MHZ) -> float:
+def eh11_attenuation_db_per_m(
+    wavelength_m: float, width_m: float, height_m: float, eps: complex = CONCRETE_900MHZ
+) -> float:
     """Attenuation of the dominant vertically polarized mode EH11 of a rectangular tunnel
     (Emslie, Lagace & Strong 1975, eq. 7 with the polarizations swapped) [dB/m]:
 
@@ -82,13 +83,17 @@ def eh11_attenuation_db_per_m(wavelength_m: float, width_m: float, height_m: flo
     return float(4.343 * wavelength_m**2 * np.real(1.0 / (width_m**3 * root) + eps / (height_m**3 * root)))
 
 
-CIRCULAR_MODES = {"EH11": (2.404825557695773, "hybrid"), "TE01": (3.831705970207512, "te"),
-                  "TM01": (3.831705970207512, "tm")}
+CIRCULAR_MODES = {
+    "EH11": (2.404825557695773, "hybrid"),
+    "TE01": (3.831705970207512, "te"),
+    "TM01": (3.831705970207512, "tm"),
+}
 """u_nm (the m-th zero of J_{n-1}) and the mode family of the lowest circular-guide modes."""
 
 
-def circular_attenuation_db_per_m(wavelength_m: float, radius_m: float, mode: str = "EH11",
-                                  eps: complex = CONCRETE_900MHZ) -> float:
+def circular_attenuation_db_per_m(
+    wavelength_m: float, radius_m: float, mode: str = "EH11", eps: complex = CONCRETE_900MHZ
+) -> float:
     """Attenuation of a mode of a hollow circular guide in a lossy dielectric (Marcatili &
     Schmeltzer 1964, eq. 35): alpha = (u_nm / 2 pi)^2 lambda^2 / a^3 Re(nu_n) [Np/m] with
     nu = 1/sqrt(eps - 1) (TE0m), eps/sqrt(eps - 1) (TM0m), (eps + 1)/(2 sqrt(eps - 1))

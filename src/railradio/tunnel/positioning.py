@@ -61,8 +61,15 @@ def _rho(x: np.ndarray, xs: np.ndarray, h: float) -> np.ndarray:
     return np.sqrt((x[:, None] - xs) ** 2 + h * h)
 
 
-def tdoa_gauss_newton(x0_m: np.ndarray, x_slot_m: np.ndarray, range_diff_m: np.ndarray, h_m: float,
-                      sigma_m: float, n_iter: int = 20, max_step_m: float = 25.0):
+def tdoa_gauss_newton(
+    x0_m: np.ndarray,
+    x_slot_m: np.ndarray,
+    range_diff_m: np.ndarray,
+    h_m: float,
+    sigma_m: float,
+    n_iter: int = 20,
+    max_step_m: float = 25.0,
+):
     """Weighted Gauss-Newton on the TDOA equations [seed 3.2.2] along the track.
 
     ``range_diff_m[:, i-1]`` = c (tau_i - tau_0) for slots i = 1..n-1 against column 0.

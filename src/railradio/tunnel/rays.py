@@ -78,9 +78,17 @@ class Families:
 
     def subset(self, mask: np.ndarray) -> Families:
         m = np.asarray(mask)
-        return Families(self.ell_m[m], self.n_refl[m], self.normal[m], self.direction[m],
-                        self.final_direction[m], self.spread[m], self.caustic_phase_rad[m],
-                        self.engine, dict(self.stats))
+        return Families(
+            self.ell_m[m],
+            self.n_refl[m],
+            self.normal[m],
+            self.direction[m],
+            self.final_direction[m],
+            self.spread[m],
+            self.caustic_phase_rad[m],
+            self.engine,
+            dict(self.stats),
+        )
 
 
 # --------------------------------------------------------------------------- image method
@@ -156,9 +164,17 @@ def image_families(tunnel: Tunnel, order: int) -> Families:
     direction = np.stack([d_y, d_z], axis=-1)
     final = np.stack([uy * (-1.0) ** n_y, uz * (-1.0) ** n_z], axis=-1)
     srt = np.lexsort((ell, n_tot))
-    fam = Families(ell[srt], n_tot[srt], normal[srt], direction[srt], final[srt],
-                   np.ones(ell.size), np.zeros(ell.size), "image",
-                   {"order": int(order), "n_families": int(ell.size)})
+    fam = Families(
+        ell[srt],
+        n_tot[srt],
+        normal[srt],
+        direction[srt],
+        final[srt],
+        np.ones(ell.size),
+        np.zeros(ell.size),
+        "image",
+        {"order": int(order), "n_families": int(ell.size)},
+    )
     return fam
 
 
@@ -176,10 +192,10 @@ def _wall_hit(tunnel: Tunnel, p: np.ndarray, u: np.ndarray):
         return t, normal
     h, w = tunnel.height_m, tunnel.width_m
     with np.errstate(divide="ignore", invalid="ignore"):
-        ty = np.where(u[:, 0] > 0, (h - p[:, 0]) / u[:, 0],
-                      np.where(u[:, 0] < 0, -p[:, 0] / u[:, 0], np.inf))
-        tz = np.where(u[:, 1] > 0, (w / 2 - p[:, 1]) / u[:, 1],
-                      np.where(u[:, 1] < 0, (-w / 2 - p[:, 1]) / u[:, 1], np.inf))
+        ty = np.where(u[:, 0] > 0, (h - p[:, 0]) / u[:, 0], np.where(u[:, 0] < 0, -p[:, 0] / u[:, 0], np.inf))
+        tz = np.where(
+            u[:, 1] > 0, (w / 2 - p[:, 1]) / u[:, 1], np.where(u[:, 1] < 0, (-w / 2 - p[:, 1]) / u[:, 1], np.inf)
+        )
     use_y = ty <= tz
     t = np.maximum(np.where(use_y, ty, tz), 0.0)
     normal = np.zeros_like(p)
@@ -192,8 +208,7 @@ def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
 
 
-def trace_2d(tunnel: Tunnel, phi: np.ndarray, max_refl: int, rx_radius_m: float,
-             history: bool = False):
+def trace_2d(tunnel: Tunnel, phi: np.ndarray, max_refl: int, rx_radius_m: float, history: bool = False):
     """Trace 2-D rays launched from the slot at angles ``phi`` (from +y toward +z).
 
     Returns the captures (ray index, reflections so far, path length at the closest
@@ -237,8 +252,9 @@ def sbr_families(tunnel: Tunnel, n_rays: int, max_refl: int, rx_radius_m: float)
         raise ValueError(f"max_refl must be a non-negative integer, got {max_refl!r}")
     wall = tunnel.wall_distance_m(*tunnel.rx_yz)
     if not 0 < rx_radius_m < wall:
-        raise ValueError(f"rx_radius_m must be in (0, {wall:.3g}) (the receiver's distance "
-                         f"to the wall), got {rx_radius_m!r}")
+        raise ValueError(
+            f"rx_radius_m must be in (0, {wall:.3g}) (the receiver's distance to the wall), got {rx_radius_m!r}"
+        )
     dphi = 2.0 * math.pi / n_rays
     phi = (np.arange(n_rays) + 0.5) * dphi
     (j, nb, ell, miss), _ = trace_2d(tunnel, phi, max_refl, rx_radius_m)
@@ -298,8 +314,7 @@ def sbr_families(tunnel: Tunnel, n_rays: int, max_refl: int, rx_radius_m: float)
     # interpolation misses (at caustics m is not linear in phi) keep the closest captured ray
     best = None
     for cand in (phi0, phi_best):
-        (cj, cb, cell, cmiss), (normals, dirs) = trace_2d(tunnel, cand, max_refl, rx_radius_m,
-                                                            history=True)
+        (cj, cb, cell, cmiss), (normals, dirs) = trace_2d(tunnel, cand, max_refl, rx_radius_m, history=True)
         ell_c = np.full(n_f, np.nan)
         miss_c = np.full(n_f, np.inf)
         mine = cb == fam_b[cj]
@@ -330,13 +345,19 @@ def sbr_families(tunnel: Tunnel, n_rays: int, max_refl: int, rx_radius_m: float)
     spread = np.sqrt(np.where(ok, ell_f, 1.0) / jac)
     sel = np.nonzero(ok)[0]
     srt = sel[np.lexsort((ell_f[sel], fam_b[sel]))]
-    stats = {"n_rays": int(n_rays), "max_refl": int(max_refl), "rx_radius_m": float(rx_radius_m),
-             "n_captures": int(j.size), "n_families": int(srt.size),
-             "n_single_ray_families": int(np.sum(run_len[srt] == 1)),
-             "n_lost_families": int(np.sum(~ok)),
-             "max_central_miss_m": float(np.max(miss_f[srt], initial=0.0))}
-    return Families(ell_f[srt], fam_b[srt], normals[srt], dirs[srt], final[srt], spread[srt],
-                    caustic[srt], "sbr", stats)
+    stats = {
+        "n_rays": int(n_rays),
+        "max_refl": int(max_refl),
+        "rx_radius_m": float(rx_radius_m),
+        "n_captures": int(j.size),
+        "n_families": int(srt.size),
+        "n_single_ray_families": int(np.sum(run_len[srt] == 1)),
+        "n_lost_families": int(np.sum(~ok)),
+        "max_central_miss_m": float(np.max(miss_f[srt], initial=0.0)),
+    }
+    return Families(
+        ell_f[srt], fam_b[srt], normals[srt], dirs[srt], final[srt], spread[srt], caustic[srt], "sbr", stats
+    )
 
 
 # ---------------------------------------------------------------------------- 3-D lifting
@@ -353,8 +374,9 @@ def _perp_vertical(k: np.ndarray) -> np.ndarray:
     return np.where(nrm > 1e-9, e / np.maximum(nrm, 1e-300), fallback)
 
 
-def reflection_product(fam: Families, sin_b: np.ndarray, eps: complex | None, polarization: str,
-                       return_history: bool = False):
+def reflection_product(
+    fam: Families, sin_b: np.ndarray, eps: complex | None, polarization: str, return_history: bool = False
+):
     """Product of the reflection coefficients G[f, s] at elevations with sin b = ``sin_b``.
 
     ``paraxial``: prod_k Gamma_{TM or TE}(sin b |u_k . n_k|).  ``vector``: the vertical
@@ -381,8 +403,10 @@ def reflection_product(fam: Families, sin_b: np.ndarray, eps: complex | None, po
         # in the rectangle all floor/ceiling (TM) reflections of a family share one incidence
         # cosine, and all side-wall (TE) ones another: the product is two powers
         n_tm, c_tm, n_te, c_te = image_power_form(fam)
-        return (fresnel_tm(np.clip(s2 * c_tm[:, None], 0.0, 1.0), eps) ** n_tm[:, None]
-                * fresnel_te(np.clip(s2 * c_te[:, None], 0.0, 1.0), eps) ** n_te[:, None])
+        return (
+            fresnel_tm(np.clip(s2 * c_tm[:, None], 0.0, 1.0), eps) ** n_tm[:, None]
+            * fresnel_te(np.clip(s2 * c_te[:, None], 0.0, 1.0), eps) ** n_te[:, None]
+        )
     if polarization == "paraxial":
         g = np.ones((n_f, n_s), dtype=complex)
         for k in range(r_max):
@@ -451,17 +475,31 @@ def lift(fam: Families, dx_m, wavelength_m: float, eps: complex, polarization: s
     d = np.sqrt(ell**2 + dx**2)
     out = reflection_product(fam, ell / d, eps, polarization)
     k = 2.0 * math.pi / wavelength_m
-    amp = out * fam.spread[:, None] * np.exp(1j * fam.caustic_phase_rad[:, None]) \
-        * wavelength_m / (4.0 * math.pi * d) * np.exp(-1j * k * d)
+    amp = (
+        out
+        * fam.spread[:, None]
+        * np.exp(1j * fam.caustic_phase_rad[:, None])
+        * wavelength_m
+        / (4.0 * math.pi * d)
+        * np.exp(-1j * k * d)
+    )
     return Rays(amp, d / SPEED_OF_LIGHT_M_S, fam.n_refl.copy())
 
 
 ENGINES = ("image", "sbr")
 
 
-def trace(engine: str, tunnel: Tunnel, dx_m, wavelength_m: float, eps: complex,
-          order: int, polarization: str | None = None, n_rays: int = 100_000,
-          rx_radius_m: float = 0.1) -> Rays:
+def trace(
+    engine: str,
+    tunnel: Tunnel,
+    dx_m,
+    wavelength_m: float,
+    eps: complex,
+    order: int,
+    polarization: str | None = None,
+    n_rays: int = 100_000,
+    rx_radius_m: float = 0.1,
+) -> Rays:
     """One interface to both engines: rays from a slot to the receiver at offsets dx.
 
     ``image`` needs a rectangular tunnel; ``sbr`` takes either cross-section.  The
@@ -475,7 +513,6 @@ def trace(engine: str, tunnel: Tunnel, dx_m, wavelength_m: float, eps: complex,
         raise ValueError(f"engine must be one of {ENGINES}, got {engine!r}")
     pol = polarization or ("paraxial" if engine == "image" else "vector")
     return lift(fam, dx_m, wavelength_m, eps, pol)
-
 
 
 @njit(cache=True, nogil=True)
@@ -505,12 +542,15 @@ def image_power_form(fam: Families) -> tuple[np.ndarray, np.ndarray, np.ndarray,
     on_floor = valid & (np.abs(fam.normal[..., 0]) >= np.abs(fam.normal[..., 1]))
     n_tm = on_floor.sum(axis=1).astype(np.int64)
     n_te = (fam.n_refl - n_tm).astype(np.int64)
-    return (n_tm, np.abs(fam.final_direction[:, 0]).astype(float), n_te,
-            np.abs(fam.final_direction[:, 1]).astype(float))
+    return (
+        n_tm,
+        np.abs(fam.final_direction[:, 0]).astype(float),
+        n_te,
+        np.abs(fam.final_direction[:, 1]).astype(float),
+    )
 
 
-def image_coherent_gain(fam: Families, dx_m, wavelength_m: float, eps: complex,
-                        by_order: bool = False) -> np.ndarray:
+def image_coherent_gain(fam: Families, dx_m, wavelength_m: float, eps: complex, by_order: bool = False) -> np.ndarray:
     """Coherent (narrowband) gain of one slot in the rectangular tunnel, the sum of every
     image family's ray, at offsets ``dx_m`` (complex, relative to unit EIRP): exactly
     :func:`lift` (paraxial rule) summed over rays, without its [ray, offset] arrays.  In the
@@ -525,7 +565,16 @@ def image_coherent_gain(fam: Families, dx_m, wavelength_m: float, eps: complex,
     dx = np.ascontiguousarray(np.abs(np.asarray(dx_m, dtype=float)).ravel())
     n_tm, c_tm, n_te, c_te = image_power_form(fam)
     out = np.zeros((int(fam.n_refl.max(initial=0)) + 1, dx.size), dtype=complex)
-    _image_sum(np.ascontiguousarray(fam.ell_m, dtype=float), n_tm, c_tm, n_te, c_te, dx,
-               2.0 * math.pi / wavelength_m, complex(eps), out)
+    _image_sum(
+        np.ascontiguousarray(fam.ell_m, dtype=float),
+        n_tm,
+        c_tm,
+        n_te,
+        c_te,
+        dx,
+        2.0 * math.pi / wavelength_m,
+        complex(eps),
+        out,
+    )
     out *= wavelength_m / (4.0 * math.pi)
     return out if by_order else out.sum(axis=0)

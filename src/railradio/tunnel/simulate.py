@@ -14,7 +14,8 @@ Measurement models (docs/model/tunnel.md §3, both reported):
   changes with position) or ``slot_bias`` (per slot one constant bias: a calibration error
   of the slot's delay); same sigma in all three.
 * ``wideband`` - what a receiver of bandwidth B actually sees: the sum of all slots'
-  rays (every slot of the table, :func:`wideband_view`) with their cable delays (velocity factor v), sampled on ``n_tones`` tones across
+  rays (every slot of the table, :func:`wideband_view`) with their cable delays (velocity
+  factor v), sampled on ``n_tones`` tones across
   B with thermal noise, transformed to a channel impulse response; its strongest peak
   gives a delay that maps to the cable distance from the feed, x = x_feed +- v c (tau - h/c).
   The +- is resolved from the measurements (:func:`resolve_ambiguity`: the K receivers sit
@@ -44,16 +45,26 @@ from railradio.constants import SPEED_OF_LIGHT_M_S
 from railradio.rng import make_rng, spawn_key
 from railradio.tunnel.channel import offset_index, slot_powers, window_slots
 from railradio.tunnel.geometry import Cable, Tunnel
-from railradio.tunnel.positioning import (gain_to_offset_m, gdop_seed, gdop_tdoa_along,
-                                          monotone_gain_db, range_diff_from_delays, rssi_ls,
-                                          tdoa_gauss_newton)
+from railradio.tunnel.positioning import (
+    gain_to_offset_m,
+    gdop_seed,
+    gdop_tdoa_along,
+    monotone_gain_db,
+    range_diff_from_delays,
+    rssi_ls,
+    tdoa_gauss_newton,
+)
 from railradio.tunnel.tracking import kf_track, kf_track_batch, pf_track, robust_variance
 
 BOLTZMANN_DBM_HZ = -174.0
 TRAIN_IDS = {"metro": 1, "hst": 2, "freight": 3}
 MEASUREMENTS = ("separable", "wideband")
-VARIANT_IDS = {("physical", "separable"): 1, ("physical", "wideband"): 2, ("seed", "separable"): 3,
-               ("seed", "wideband"): 4}
+VARIANT_IDS = {
+    ("physical", "separable"): 1,
+    ("physical", "wideband"): 2,
+    ("seed", "separable"): 3,
+    ("seed", "wideband"): 4,
+}
 SHADOW_KEY = {"evaluation": 100, "calibration": 101}
 DELAY_KEY = {"evaluation": 102, "calibration": 103}
 DELAY_ERRORS = ("white", "ar1", "slot_bias")
@@ -105,8 +116,9 @@ class Train:
         return np.arange(self.n_receivers) * self.length_m / (self.n_receivers - 1)
 
 
-def shadow_field(rng: np.random.Generator, n_slots: int, length_m: float, sigma_db: float,
-                 corr_m: float, step_m: float = 1.0) -> np.ndarray:
+def shadow_field(
+    rng: np.random.Generator, n_slots: int, length_m: float, sigma_db: float, corr_m: float, step_m: float = 1.0
+) -> np.ndarray:
     """Per-slot shadowing along the tunnel [slot, x on a ``step_m`` grid] [dB], AR(1) with
     correlation exp(-dx / corr_m) (Gudmundson)."""
     n = int(math.ceil(length_m / step_m)) + 1
@@ -116,8 +128,9 @@ def shadow_field(rng: np.random.Generator, n_slots: int, length_m: float, sigma_
     return sigma_db * lfilter([1.0], [1.0, -rho], w, axis=1)
 
 
-def delay_error_field(rng: np.random.Generator, n_slots: int, length_m: float,
-                      mm: MeasurementModel) -> np.ndarray | None:
+def delay_error_field(
+    rng: np.random.Generator, n_slots: int, length_m: float, mm: MeasurementModel
+) -> np.ndarray | None:
     """Per-slot delay error along the tunnel [slot, x on a 1 m grid] [s]; None if white."""
     if mm.delay_error == "white":
         return None
@@ -134,9 +147,17 @@ def _field_at(field: np.ndarray, slots: np.ndarray, x_m: np.ndarray, step_m: flo
     return field[slots, i0] * (1 - fr) + field[slots, i0 + 1] * fr
 
 
-def separable_measurements(table: xr.Dataset, tunnel: Tunnel, cable: Cable, x_rx_m: np.ndarray,
-                           shadow: np.ndarray, rng: np.random.Generator, mm: MeasurementModel,
-                           propagation: str, delay_field: np.ndarray | None = None) -> dict[str, np.ndarray]:
+def separable_measurements(
+    table: xr.Dataset,
+    tunnel: Tunnel,
+    cable: Cable,
+    x_rx_m: np.ndarray,
+    shadow: np.ndarray,
+    rng: np.random.Generator,
+    mm: MeasurementModel,
+    propagation: str,
+    delay_field: np.ndarray | None = None,
+) -> dict[str, np.ndarray]:
     """Per-slot RSSI and delay of the ``n_slots`` strongest measured slots [epoch, n];
     the delay error is white from ``rng`` or read from ``delay_field`` (see
     :func:`delay_error_field`)."""
@@ -161,8 +182,7 @@ def separable_measurements(table: xr.Dataset, tunnel: Tunnel, cable: Cable, x_rx
         delay = delay + mm.delay_sigma_s * rng.standard_normal(pick.shape)
     else:
         delay = delay + _field_at(delay_field, pick, np.broadcast_to(x[:, None], pick.shape))
-    return {"slot": pick, "slot_x_m": xs[pick], "rssi_dbm": rssi, "cable_power_dbm": pc_dbm[pick],
-            "delay_s": delay}
+    return {"slot": pick, "slot_x_m": xs[pick], "rssi_dbm": rssi, "cable_power_dbm": pc_dbm[pick], "delay_s": delay}
 
 
 def separable_fix(meas: dict, table: xr.Dataset, tunnel: Tunnel, mm: MeasurementModel):
@@ -190,9 +210,18 @@ def tone_response(table: xr.Dataset, mm: MeasurementModel) -> tuple[np.ndarray, 
     return f, los * (table["taps"].values @ excess)
 
 
-def wideband_delays(table: xr.Dataset, tunnel: Tunnel, cable: Cable, x_rx_m: np.ndarray,
-                    rng: np.random.Generator | None, mm: MeasurementModel, tones=None, chunk: int = 1024,
-                    oversample: int = 16, thermal_noise: bool = True) -> np.ndarray:
+def wideband_delays(
+    table: xr.Dataset,
+    tunnel: Tunnel,
+    cable: Cable,
+    x_rx_m: np.ndarray,
+    rng: np.random.Generator | None,
+    mm: MeasurementModel,
+    tones=None,
+    chunk: int = 1024,
+    oversample: int = 16,
+    thermal_noise: bool = True,
+) -> np.ndarray:
     """Delay of the strongest peak of the band-limited CIR at each receiver position [s]:
     ``n_tones`` tones across the bandwidth, thermal noise kT F B (``rng``; none without
     ``thermal_noise``), zero-padded IFFT (``oversample`` times), parabolic refinement of the
@@ -210,7 +239,7 @@ def wideband_delays(table: xr.Dataset, tunnel: Tunnel, cable: Cable, x_rx_m: np.
     # receivers per pass: the [receiver, slot, tone] arrays stay near chunk x 20 x 64 elements
     chunk = max(16, chunk * 1280 // (f.size * (2 * int(mm.window_m // tunnel.slot_spacing_m) + 2)))
     for a in range(0, x_all.size, chunk):
-        x = x_all[a:a + chunk]
+        x = x_all[a : a + chunk]
         sl, ok = window_slots(tunnel, x, mm.window_m)
         idx, inside = offset_index(table, x[:, None] - xs[sl])
         w = (ok & inside)[..., None]
@@ -224,7 +253,7 @@ def wideband_delays(table: xr.Dataset, tunnel: Tunnel, cable: Cable, x_rx_m: np.
         y0, y1, y2 = cir[rows, (k - 1) % n_fft], cir[rows, k], cir[rows, (k + 1) % n_fft]
         den = y0 - 2 * y1 + y2
         frac = np.where(den < 0, 0.5 * (y0 - y2) / np.where(den < 0, den, -1.0), 0.0)
-        out[a:a + chunk] = (k + frac) / (n_fft * df)
+        out[a : a + chunk] = (k + frac) / (n_fft * df)
     return out
 
 
@@ -259,15 +288,19 @@ def wideband_candidates(tau_s: np.ndarray, tunnel: Tunnel, cable: Cable, bias_s:
     which one is right the tracker decides (nearest its prediction)."""
     feeds = cable.feed_x_m(tunnel.length_m)
     half = cable.feed_spacing_m / 2.0
-    r = cable.velocity_factor * SPEED_OF_LIGHT_M_S * (
-        np.asarray(tau_s) - bias_s - tunnel.cross_distance_m / SPEED_OF_LIGHT_M_S)
+    r = (
+        cable.velocity_factor
+        * SPEED_OF_LIGHT_M_S
+        * (np.asarray(tau_s) - bias_s - tunnel.cross_distance_m / SPEED_OF_LIGHT_M_S)
+    )
     r = np.clip(r, 0.0, half)
     cand = np.concatenate([feeds[None, :] - r[:, None], feeds[None, :] + r[:, None]], axis=1)
     return np.clip(cand, 0.0, tunnel.length_m)
 
 
-def resolve_ambiguity(cand_m: np.ndarray, offsets_m: np.ndarray, feed_spacing_m: float,
-                      start_m: tuple[float, float], gate_m: float) -> tuple[np.ndarray, np.ndarray]:
+def resolve_ambiguity(
+    cand_m: np.ndarray, offsets_m: np.ndarray, feed_spacing_m: float, start_m: tuple[float, float], gate_m: float
+) -> tuple[np.ndarray, np.ndarray]:
     """Resolve the wideband fixes' +- / which-feed ambiguity from the measurements [seed-free].
 
     ``cand_m`` [epoch, receiver, candidate]: every receiver's cable-ranging candidates
@@ -311,14 +344,14 @@ def resolve_ambiguity(cand_m: np.ndarray, offsets_m: np.ndarray, feed_spacing_m:
     return head, fix
 
 
-def ambiguity_wrong(cand_m: np.ndarray, fix_m: np.ndarray, x_true_m: np.ndarray,
-                    separation_m: float) -> np.ndarray:
+def ambiguity_wrong(cand_m: np.ndarray, fix_m: np.ndarray, x_true_m: np.ndarray, separation_m: float) -> np.ndarray:
     """Whether each fix took the wrong candidate [epoch, receiver]: not the candidate nearest
     the truth, while that one lies more than ``separation_m`` away from the chosen one (near
     a feed or a section end the two sides coincide and the choice does not matter)."""
     c = np.asarray(cand_m, dtype=float)
-    best = np.take_along_axis(c, np.argmin(np.abs(c - np.asarray(x_true_m)[..., None]), axis=2)[..., None],
-                              axis=2)[..., 0]
+    best = np.take_along_axis(c, np.argmin(np.abs(c - np.asarray(x_true_m)[..., None]), axis=2)[..., None], axis=2)[
+        ..., 0
+    ]
     return np.abs(best - np.asarray(fix_m)) > separation_m
 
 
@@ -331,8 +364,22 @@ def epochs(tunnel: Tunnel, train: Train, rate_hz: float, head_range_m: tuple[flo
     return t, lo + v * t
 
 
-def snapshot_fixes(table, tunnel, cable, train, x_head, mm, propagation, measurement, shadow, rng,
-                   tones=None, bias_s: float = 0.0, delay_field=None, cols=None):
+def snapshot_fixes(
+    table,
+    tunnel,
+    cable,
+    train,
+    x_head,
+    mm,
+    propagation,
+    measurement,
+    shadow,
+    rng,
+    tones=None,
+    bias_s: float = 0.0,
+    delay_field=None,
+    cols=None,
+):
     """Per receiver snapshot measurements and fixes [epoch, receiver].
 
     ``fix`` is the snapshot position (separable: TDOA from the RSSI fix; wideband: the
@@ -345,15 +392,18 @@ def snapshot_fixes(table, tunnel, cable, train, x_head, mm, propagation, measure
     """
     x_rx = x_head[:, None] - train.receiver_offsets_m[None, :]
     n_e, k = x_rx.shape
-    res = {n: np.full((n_e, k), np.nan) for n in
-           ("fix", "fix_rssi", "sigma_tdoa", "gdop_seed", "gdop_tdoa", "tau", "scale")}
+    res = {
+        n: np.full((n_e, k), np.nan)
+        for n in ("fix", "fix_rssi", "sigma_tdoa", "gdop_seed", "gdop_tdoa", "tau", "scale")
+    }
     res["candidates"] = None
     cands = []
     rngs = rng.spawn(k)
-    for j in (range(k) if cols is None else cols):
+    for j in range(k) if cols is None else cols:
         if measurement == "separable":
-            meas = separable_measurements(table, tunnel, cable, x_rx[:, j], shadow, rngs[j], mm, propagation,
-                                          delay_field)
+            meas = separable_measurements(
+                table, tunnel, cable, x_rx[:, j], shadow, rngs[j], mm, propagation, delay_field
+            )
             xr_, xt, st, gs, gt = separable_fix(meas, table, tunnel, mm)
             res["fix"][:, j], res["fix_rssi"][:, j], res["sigma_tdoa"][:, j] = xt, xr_, st
             res["gdop_seed"][:, j], res["gdop_tdoa"][:, j] = gs, gt
@@ -371,8 +421,12 @@ def snapshot_fixes(table, tunnel, cable, train, x_head, mm, propagation, measure
         if cols is not None and len(cols) != k:
             raise ValueError("the wideband ambiguity is resolved with all receivers: cols must be None")
         res["head"], res["fix"] = resolve_ambiguity(
-            res["candidates"], train.receiver_offsets_m, cable.feed_spacing_m,
-            (0.0, cable.feed_spacing_m), tunnel.slot_spacing_m)
+            res["candidates"],
+            train.receiver_offsets_m,
+            cable.feed_spacing_m,
+            (0.0, cable.feed_spacing_m),
+            tunnel.slot_spacing_m,
+        )
         res["ambiguity_wrong"] = ambiguity_wrong(res["candidates"], res["fix"], x_rx, tunnel.slot_spacing_m)
     return x_rx, res
 
@@ -381,33 +435,42 @@ def environment(seed: int, which: str, realization: int, tunnel: Tunnel, mm: Mea
     """The place's shadowing field and delay-error field (None if white) of one Monte Carlo
     realization; ``which`` is 'evaluation' or 'calibration'.  The same for every train."""
     n_sl = tunnel.slot_x_m.size
-    shadow = shadow_field(make_rng(seed, spawn_key("tunnel", SHADOW_KEY[which], realization)),
-                          n_sl, tunnel.length_m, mm.shadow_sigma_db, mm.shadow_corr_m)
-    delay = delay_error_field(make_rng(seed, spawn_key("tunnel", DELAY_KEY[which], realization)),
-                              n_sl, tunnel.length_m, mm)
+    shadow = shadow_field(
+        make_rng(seed, spawn_key("tunnel", SHADOW_KEY[which], realization)),
+        n_sl,
+        tunnel.length_m,
+        mm.shadow_sigma_db,
+        mm.shadow_corr_m,
+    )
+    delay = delay_error_field(
+        make_rng(seed, spawn_key("tunnel", DELAY_KEY[which], realization)), n_sl, tunnel.length_m, mm
+    )
     return shadow, delay
 
 
 def _noise_rng(seed: int, train: Train, propagation: str, measurement: str, realization: int):
-    return make_rng(seed, spawn_key("tunnel", 200, TRAIN_IDS.get(train.name, 9),
-                                    VARIANT_IDS[(propagation, measurement)], realization))
+    return make_rng(
+        seed,
+        spawn_key("tunnel", 200, TRAIN_IDS.get(train.name, 9), VARIANT_IDS[(propagation, measurement)], realization),
+    )
 
 
 def calibrate_separable(table, tunnel, cable, train, mm, propagation, tracking, seed) -> float:
     """r0 of a separable receiver from its calibration run (see :func:`run_train`) [m^2]."""
     vid = VARIANT_IDS[(propagation, "separable")]
     lo = train.length_m
-    _, xh_cal = epochs(tunnel, train, tracking["rate_hz"],
-                       (lo, min(tunnel.length_m, lo + tracking["calibration_m"])))
+    _, xh_cal = epochs(tunnel, train, tracking["rate_hz"], (lo, min(tunnel.length_m, lo + tracking["calibration_m"])))
     shadow, delay = environment(seed, "calibration", 0, tunnel, mm)
     rng_cal = make_rng(seed, spawn_key("tunnel", 300, TRAIN_IDS.get(train.name, 9), vid))
-    xrx_cal, cal = snapshot_fixes(table, tunnel, cable, train, xh_cal, mm, propagation, "separable",
-                                  shadow, rng_cal, delay_field=delay)
+    xrx_cal, cal = snapshot_fixes(
+        table, tunnel, cable, train, xh_cal, mm, propagation, "separable", shadow, rng_cal, delay_field=delay
+    )
     return robust_variance(((cal["fix"] - xrx_cal) / cal["scale"]).ravel())
 
 
-def kf_realizations(table, tunnel, cable, train, mm, propagation, tracking, seed, r0: float,
-                    realizations) -> tuple[np.ndarray, np.ndarray]:
+def kf_realizations(
+    table, tunnel, cable, train, mm, propagation, tracking, seed, r0: float, realizations
+) -> tuple[np.ndarray, np.ndarray]:
     """Head and tail errors of the head and tail receivers' KF [realization, epoch] [m] for
     the given Monte Carlo realizations of a separable receiver (each its own shadowing,
     delay-error field and noise); the vectorized KF, equal to :func:`kf_track`."""
@@ -417,23 +480,50 @@ def kf_realizations(table, tunnel, cable, train, mm, propagation, tracking, seed
     z, r_t, truth = [], [], []
     for r in realizations:
         shadow, delay = environment(seed, "evaluation", r, tunnel, mm)
-        x_rx, res = snapshot_fixes(table, tunnel, cable, train, x_head, mm, propagation, "separable",
-                                   shadow, _noise_rng(seed, train, propagation, "separable", r),
-                                   delay_field=delay, cols=ends)
+        x_rx, res = snapshot_fixes(
+            table,
+            tunnel,
+            cable,
+            train,
+            x_head,
+            mm,
+            propagation,
+            "separable",
+            shadow,
+            _noise_rng(seed, train, propagation, "separable", r),
+            delay_field=delay,
+            cols=ends,
+        )
         for j in ends:
             z.append(res["fix"][:, j])
             r_t.append(r0 * res["scale"][:, j] ** 2)
             truth.append(x_rx[:, j])
     z, r_t, truth = np.stack(z, 1), np.stack(r_t, 1), np.stack(truth, 1)
-    est = kf_track_batch(z, r_t, 1.0 / tracking["rate_hz"], tracking["accel_sigma_m_s2"], z[0],
-                         (r_t[0], tracking["max_speed_m_s"] ** 2), start_at_first=True)  # start: the first fix
+    est = kf_track_batch(
+        z,
+        r_t,
+        1.0 / tracking["rate_hz"],
+        tracking["accel_sigma_m_s2"],
+        z[0],
+        (r_t[0], tracking["max_speed_m_s"] ** 2),
+        start_at_first=True,
+    )  # start: the first fix
     err = np.abs(est - truth)
     return err[:, 0::2].T, err[:, 1::2].T
 
 
-def run_train(table: xr.Dataset, tunnel: Tunnel, cable: Cable, train: Train, mm: MeasurementModel,
-              propagation: str, measurement: str, tracking: dict, seed: int,
-              realizations: int = 1) -> xr.Dataset:
+def run_train(
+    table: xr.Dataset,
+    tunnel: Tunnel,
+    cable: Cable,
+    train: Train,
+    mm: MeasurementModel,
+    propagation: str,
+    measurement: str,
+    tracking: dict,
+    seed: int,
+    realizations: int = 1,
+) -> xr.Dataset:
     """Calibration run, then the evaluation run: snapshot fixes, KF on the head and on
     the tail receiver, rigid-train KF on all receivers, PF on head and tail; errors.
 
@@ -459,23 +549,55 @@ def run_train(table: xr.Dataset, tunnel: Tunnel, cable: Cable, train: Train, mm:
     shadow_eval, delay_eval = environment(seed, "evaluation", 0, tunnel, mm)
     tones = tone_response(table, mm) if measurement == "wideband" else None
     lo = train.length_m
-    _, xh_cal = epochs(tunnel, train, tracking["rate_hz"],
-                       (lo, min(tunnel.length_m, lo + tracking["calibration_m"])))
+    _, xh_cal = epochs(tunnel, train, tracking["rate_hz"], (lo, min(tunnel.length_m, lo + tracking["calibration_m"])))
     rng_cal = make_rng(seed, spawn_key("tunnel", 300, tid, vid))
-    xrx_cal, cal = snapshot_fixes(table, tunnel, cable, train, xh_cal, mm, propagation, measurement,
-                                  shadow_cal, rng_cal, tones, delay_field=delay_cal)
+    xrx_cal, cal = snapshot_fixes(
+        table,
+        tunnel,
+        cable,
+        train,
+        xh_cal,
+        mm,
+        propagation,
+        measurement,
+        shadow_cal,
+        rng_cal,
+        tones,
+        delay_field=delay_cal,
+    )
     bias_s = 0.0
     if measurement == "wideband":
         bias_s = float(np.median(cal["tau"] - cable_model_delay_s(xrx_cal, tunnel, cable)))
-        cal["fix"] = np.stack([wideband_candidates(cal["tau"][:, j], tunnel, cable, bias_s)[
-            np.arange(xrx_cal.shape[0]), np.argmin(np.abs(wideband_candidates(
-                cal["tau"][:, j], tunnel, cable, bias_s) - xrx_cal[:, j:j + 1]), axis=1)]
-            for j in range(xrx_cal.shape[1])], axis=1)
+        cal["fix"] = np.stack(
+            [
+                wideband_candidates(cal["tau"][:, j], tunnel, cable, bias_s)[
+                    np.arange(xrx_cal.shape[0]),
+                    np.argmin(
+                        np.abs(wideband_candidates(cal["tau"][:, j], tunnel, cable, bias_s) - xrx_cal[:, j : j + 1]),
+                        axis=1,
+                    ),
+                ]
+                for j in range(xrx_cal.shape[1])
+            ],
+            axis=1,
+        )
     r0 = robust_variance(((cal["fix"] - xrx_cal) / cal["scale"]).ravel())
     t, x_head = epochs(tunnel, train, tracking["rate_hz"])
-    x_rx, res = snapshot_fixes(table, tunnel, cable, train, x_head, mm, propagation, measurement,
-                               shadow_eval, _noise_rng(seed, train, propagation, measurement, 0), tones,
-                               bias_s, delay_field=delay_eval)
+    x_rx, res = snapshot_fixes(
+        table,
+        tunnel,
+        cable,
+        train,
+        x_head,
+        mm,
+        propagation,
+        measurement,
+        shadow_eval,
+        _noise_rng(seed, train, propagation, measurement, 0),
+        tones,
+        bias_s,
+        delay_field=delay_eval,
+    )
     meas = res["candidates"] if res["candidates"] is not None else res["fix"][..., None]
     r_t = r0 * res["scale"] ** 2
     q = tracking["accel_sigma_m_s2"]
@@ -489,16 +611,34 @@ def run_train(table: xr.Dataset, tunnel: Tunnel, cable: Cable, train: Train, mm:
     # every filter starts from the first snapshot fix with its variance (not the truth)
     z0, p0 = res["fix"][0], r_t[0]
     for c, j in enumerate(ends):
-        kf[:, c], _, kf_var[:, c], nis[:, c] = kf_track(meas[:, j:j + 1], r_t[:, j:j + 1], dt, q,
-                                                        (z0[j], 0.0), (p0[j], vmax**2), start_at_first=True)
+        kf[:, c], _, kf_var[:, c], nis[:, c] = kf_track(
+            meas[:, j : j + 1], r_t[:, j : j + 1], dt, q, (z0[j], 0.0), (p0[j], vmax**2), start_at_first=True
+        )
     w0 = 1.0 / p0  # rigid train: the precision-weighted head from all receivers' first fixes
-    rigid, _, rigid_var, _ = kf_track(meas, r_t, dt, q, (float(np.sum(w0 * (z0 + offs)) / np.sum(w0)), 0.0),
-                                      (float(1.0 / np.sum(w0)), vmax**2), offsets_m=offs, start_at_first=True)
+    rigid, _, rigid_var, _ = kf_track(
+        meas,
+        r_t,
+        dt,
+        q,
+        (float(np.sum(w0 * (z0 + offs)) / np.sum(w0)), 0.0),
+        (float(1.0 / np.sum(w0)), vmax**2),
+        offsets_m=offs,
+        start_at_first=True,
+    )
     rng_pf = make_rng(seed, spawn_key("tunnel", 400, tid, vid))
     pf = np.empty((t.size, 2))
     for c, j in enumerate(ends):
-        pf[:, c], _ = pf_track(meas[:, j], r_t[:, j], dt, q, (z0[j], 0.0), (p0[j], vmax**2),
-                               tracking["n_particles"], rng_pf, start_at_first=True)
+        pf[:, c], _ = pf_track(
+            meas[:, j],
+            r_t[:, j],
+            dt,
+            q,
+            (z0[j], 0.0),
+            (p0[j], vmax**2),
+            tracking["n_particles"],
+            rng_pf,
+            start_at_first=True,
+        )
     head, tail = x_head, x_head - train.length_m
     m = {"units": "m"}
     tr = ("time_s", "receiver")
@@ -509,12 +649,26 @@ def run_train(table: xr.Dataset, tunnel: Tunnel, cable: Cable, train: Train, mm:
             "snapshot": (tr, res["fix"], {**m, "long_name": f"snapshot fix ({measurement})"}),
             "snapshot_rssi": (tr, res["fix_rssi"], {**m, "long_name": "RSSI-ranging LS fix (separable only)"}),
             "sigma_tdoa": (tr, res["sigma_tdoa"], {**m, "long_name": "TDOA fix standard deviation from its geometry"}),
-            "gdop_seed": (tr, res["gdop_seed"], {"units": "1", "long_name": "GDOP, the seed's 2-D formula (seed 4.1.1)"}),
-            "gdop_tdoa": (tr, res["gdop_tdoa"], {"units": "1", "long_name": "along-track TDOA dilution (sigma_x / c sigma_tau)"}),
+            "gdop_seed": (
+                tr,
+                res["gdop_seed"],
+                {"units": "1", "long_name": "GDOP, the seed's 2-D formula (seed 4.1.1)"},
+            ),
+            "gdop_tdoa": (
+                tr,
+                res["gdop_tdoa"],
+                {"units": "1", "long_name": "along-track TDOA dilution (sigma_x / c sigma_tau)"},
+            ),
             "wideband_delay": (tr, res["tau"], {"units": "s", "long_name": "CIR peak delay (wideband only)"}),
-            "wideband_delay_error": (tr, res["tau"] - bias_s - cable_model_delay_s(x_rx, tunnel, cable),
-                                     {"units": "s", "long_name": "CIR peak delay minus the calibrated cable-point "
-                                      "model delay at the true position (wideband only): the channel's delay error"}),
+            "wideband_delay_error": (
+                tr,
+                res["tau"] - bias_s - cable_model_delay_s(x_rx, tunnel, cable),
+                {
+                    "units": "s",
+                    "long_name": "CIR peak delay minus the calibrated cable-point "
+                    "model delay at the true position (wideband only): the channel's delay error",
+                },
+            ),
             "kf_head": ("time_s", kf[:, 0], {**m, "long_name": "Kalman-filtered head position (head receiver)"}),
             "kf_tail": ("time_s", kf[:, 1], {**m, "long_name": "Kalman-filtered tail position (tail receiver)"}),
             "kf_head_var": ("time_s", kf_var[:, 0], {"units": "m2", "long_name": "KF head position variance"}),
@@ -529,31 +683,45 @@ def run_train(table: xr.Dataset, tunnel: Tunnel, cable: Cable, train: Train, mm:
             "receiver": ("receiver", np.arange(k), {"units": "1", "long_name": "receiver index from the head"}),
             "receiver_offset_m": ("receiver", offs, {**m, "long_name": "receiver distance behind the head"}),
         },
-        attrs={"train": train.name, "length_m": train.length_m, "speed_kmh": train.speed_kmh,
-               "propagation": propagation, "measurement": measurement,
-               "r0_m2": r0, "wideband_bias_s": bias_s},
+        attrs={
+            "train": train.name,
+            "length_m": train.length_m,
+            "speed_kmh": train.speed_kmh,
+            "propagation": propagation,
+            "measurement": measurement,
+            "r0_m2": r0,
+            "wideband_bias_s": bias_s,
+        },
     )
     for est in ("kf", "rigid", "pf"):
         eh = np.abs(ds[f"{est}_head"].values - head)
         et = np.abs(ds[f"{est}_tail"].values - tail)
         ds[f"{est}_err_head"] = ("time_s", eh, {**m, "long_name": f"{est} head error"})
         ds[f"{est}_err_tail"] = ("time_s", et, {**m, "long_name": f"{est} tail error"})
-        ds[f"{est}_err"] = ("time_s", np.sqrt((eh**2 + et**2) / 2.0),
-                            {**m, "long_name": f"{est} train error sqrt((e_head^2 + e_tail^2)/2) (seed 4.4.3)"})
+        ds[f"{est}_err"] = (
+            "time_s",
+            np.sqrt((eh**2 + et**2) / 2.0),
+            {**m, "long_name": f"{est} train error sqrt((e_head^2 + e_tail^2)/2) (seed 4.4.3)"},
+        )
     rep_h, rep_t = ds["kf_err_head"].values[None, :], ds["kf_err_tail"].values[None, :]
     if measurement == "separable" and realizations > 1:
-        eh, et = kf_realizations(table, tunnel, cable, train, mm, propagation, tracking, seed, r0,
-                                 range(1, realizations))
+        eh, et = kf_realizations(
+            table, tunnel, cable, train, mm, propagation, tracking, seed, r0, range(1, realizations)
+        )
         rep_h, rep_t = np.concatenate([rep_h, eh]), np.concatenate([rep_t, et])
     rt = ("realization", "time_s")
-    ds = ds.assign_coords(realization=("realization", np.arange(rep_h.shape[0]),
-                                       {"units": "1", "long_name": "Monte Carlo realization"}))
+    ds = ds.assign_coords(
+        realization=("realization", np.arange(rep_h.shape[0]), {"units": "1", "long_name": "Monte Carlo realization"})
+    )
     ds["rep_err_head"] = (rt, rep_h, {**m, "long_name": "KF head error per realization"})
     ds["rep_err_tail"] = (rt, rep_t, {**m, "long_name": "KF tail error per realization"})
     ds["rep_err"] = (rt, np.sqrt((rep_h**2 + rep_t**2) / 2.0), {**m, "long_name": "KF train error per realization"})
     if measurement == "wideband":
-        ds["ambiguity_wrong"] = (tr, res["ambiguity_wrong"].astype(np.int8),
-                                 {"units": "1", "long_name": "1 where the snapshot fix took the wrong side of the feed (or feed)"})
+        ds["ambiguity_wrong"] = (
+            tr,
+            res["ambiguity_wrong"].astype(np.int8),
+            {"units": "1", "long_name": "1 where the snapshot fix took the wrong side of the feed (or feed)"},
+        )
     ds["snapshot_err"] = (tr, np.abs(res["fix"] - x_rx), {**m, "long_name": "snapshot error"})
     ds["snapshot_rssi_err"] = (tr, np.abs(res["fix_rssi"] - x_rx), {**m, "long_name": "RSSI-LS snapshot error"})
     return ds

@@ -33,9 +33,17 @@ def _as_candidates(z_m) -> np.ndarray:
     raise ValueError("z_m must be [T], [T, K] or [T, K, C]")
 
 
-def kf_track(z_m: np.ndarray, r_m2, dt_s: float, accel_sigma: float,
-             x0: tuple[float, float], p0: tuple[float, float], offsets_m: np.ndarray | None = None,
-             gate_sigma: float | None = 4.0, start_at_first: bool = False):
+def kf_track(
+    z_m: np.ndarray,
+    r_m2,
+    dt_s: float,
+    accel_sigma: float,
+    x0: tuple[float, float],
+    p0: tuple[float, float],
+    offsets_m: np.ndarray | None = None,
+    gate_sigma: float | None = 4.0,
+    start_at_first: bool = False,
+):
     """Kalman filter (filterpy) over snapshot fixes.
 
     ``z_m``: [T] (one receiver), [T, K] (rigid train: column k measures x - ``offsets_m[k]``)
@@ -55,8 +63,13 @@ def kf_track(z_m: np.ndarray, r_m2, dt_s: float, accel_sigma: float,
     if offs.shape != (k,):
         raise ValueError("offsets_m must have one entry per measurement column")
     r_arr = np.asarray(r_m2, dtype=float)
-    r = (np.full((n, k), float(r_arr)) if r_arr.ndim == 0
-         else np.repeat(r_arr[:, None], k, axis=1) if r_arr.ndim == 1 else r_arr)
+    r = (
+        np.full((n, k), float(r_arr))
+        if r_arr.ndim == 0
+        else np.repeat(r_arr[:, None], k, axis=1)
+        if r_arr.ndim == 1
+        else r_arr
+    )
     if r.shape != (n, k):
         raise ValueError(f"r_m2 must be a scalar, [T] or [T, K]; got shape {r_arr.shape}")
     if np.any(r <= 0):
@@ -91,14 +104,22 @@ def kf_track(z_m: np.ndarray, r_m2, dt_s: float, accel_sigma: float,
     return out[:, 0], out[:, 1], out[:, 2], nis
 
 
-def kf_track_batch(z_m: np.ndarray, r_m2: np.ndarray, dt_s: float, accel_sigma: float,
-                   x0_m: np.ndarray, p0: tuple[float, float], gate_sigma: float | None = 4.0,
-                   start_at_first: bool = False) -> np.ndarray:
+def kf_track_batch(
+    z_m: np.ndarray,
+    r_m2: np.ndarray,
+    dt_s: float,
+    accel_sigma: float,
+    x0_m: np.ndarray,
+    p0: tuple[float, float],
+    gate_sigma: float | None = 4.0,
+    start_at_first: bool = False,
+) -> np.ndarray:
     """The single-receiver :func:`kf_track` (initial speed 0, one candidate per epoch) for B
     independent tracks at once, vectorized over the batch: ``z_m``, ``r_m2`` [T, B],
     ``x0_m`` [B].  Same model, same gate, same NaN handling; covariance update in the
     standard form (filterpy uses Joseph's, equal for the optimal gain; the test checks the
-    two agree); ``p0`` = (position variance, scalar or [B], speed variance).  Used for the Monte Carlo realizations and the sensitivity sweeps.
+    two agree); ``p0`` = (position variance, scalar or [B], speed variance).  Used for the
+    Monte Carlo realizations and the sensitivity sweeps.
     Returns the position estimates [T, B]."""
     z = np.asarray(z_m, dtype=float)
     if z.ndim != 2:
@@ -119,8 +140,7 @@ def kf_track_batch(z_m: np.ndarray, r_m2: np.ndarray, dt_s: float, accel_sigma: 
             out[t] = x
             continue
         x = x + dt * v
-        p00, p01, p11 = (p00 + 2.0 * dt * p01 + dt * dt * p11 + q[0, 0], p01 + dt * p11 + q[0, 1],
-                         p11 + q[1, 1])
+        p00, p01, p11 = (p00 + 2.0 * dt * p01 + dt * dt * p11 + q[0, 0], p01 + dt * p11 + q[0, 1], p11 + q[1, 1])
         s = p00 + r[t]
         y = z[t] - x
         use = np.isfinite(y)
@@ -135,10 +155,20 @@ def kf_track_batch(z_m: np.ndarray, r_m2: np.ndarray, dt_s: float, accel_sigma: 
     return out
 
 
-def pf_track(z_m: np.ndarray, r_m2, dt_s: float, accel_sigma: float,
-             x0: tuple[float, float], p0: tuple[float, float], n_particles: int,
-             rng: np.random.Generator, outlier_prob: float = 0.02, outlier_width_m: float = 200.0,
-             inject_frac: float = 0.01, start_at_first: bool = False):
+def pf_track(
+    z_m: np.ndarray,
+    r_m2,
+    dt_s: float,
+    accel_sigma: float,
+    x0: tuple[float, float],
+    p0: tuple[float, float],
+    n_particles: int,
+    rng: np.random.Generator,
+    outlier_prob: float = 0.02,
+    outlier_width_m: float = 200.0,
+    inject_frac: float = 0.01,
+    start_at_first: bool = False,
+):
     """Bootstrap particle filter with systematic resampling (:func:`systematic_resample_with`).
 
     ``z_m`` [T] or [T, C] candidate fixes; likelihood: the sum over candidates of
@@ -157,8 +187,12 @@ def pf_track(z_m: np.ndarray, r_m2, dt_s: float, accel_sigma: float,
     r = np.broadcast_to(np.asarray(r_m2, dtype=float), (z.shape[0],))
     f, q = _cv_model(dt_s, accel_sigma)
     lq = np.linalg.cholesky(q + 1e-12 * np.eye(2))
-    parts = np.column_stack([x0[0] + np.sqrt(p0[0]) * rng.standard_normal(n_particles),
-                             x0[1] + np.sqrt(p0[1]) * rng.standard_normal(n_particles)])
+    parts = np.column_stack(
+        [
+            x0[0] + np.sqrt(p0[0]) * rng.standard_normal(n_particles),
+            x0[1] + np.sqrt(p0[1]) * rng.standard_normal(n_particles),
+        ]
+    )
     w = np.full(n_particles, 1.0 / n_particles)
     out = np.empty((z.shape[0], 2))
     n_inj = int(round(inject_frac * n_particles))

@@ -31,6 +31,7 @@ Usage (from the repository root)::
 ``tests/test_scale.py`` checks that the profile's set-resources equal ``derive()`` of the
 committed table and that every rule that runs a job is covered.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -76,7 +77,7 @@ def _benchmark_regex(body: str) -> re.Pattern | None:
                 pass
     pattern, pos = "", 0
     for w in re.finditer(r"\{(\w+)\}", m.group(1)):
-        pattern += re.escape(m.group(1)[pos:w.start()])
+        pattern += re.escape(m.group(1)[pos : w.start()])
         pattern += f"(?P<{w.group(1)}>{constraints.get(w.group(1), '.+')})"
         pos = w.end()
     return re.compile(pattern + re.escape(m.group(1)[pos:]) + "$")
@@ -103,22 +104,35 @@ def measure(root: Path = ROOT, extra: Path | None = None) -> list[dict]:
             rss = max(rec["maxrss_mb"], rec.get("child_maxrss_mb", 0.0))
             per_rule.setdefault(rec["rule"], []).append((rec["wall_s"], rss))
             source[rec["rule"]] = "rerun"
-    return [{"rule": r, "jobs": len(v), "wall_s_max": round(max(x[0] for x in v), 1),
-             "max_rss_mb_max": round(max(x[1] for x in v), 1), "source": source[r]}
-            for r, v in sorted(per_rule.items())]
+    return [
+        {
+            "rule": r,
+            "jobs": len(v),
+            "wall_s_max": round(max(x[0] for x in v), 1),
+            "max_rss_mb_max": round(max(x[1] for x in v), 1),
+            "source": source[r],
+        }
+        for r, v in sorted(per_rule.items())
+    ]
 
 
 def read_table(path: Path = TABLE) -> list[dict]:
     with path.open() as fh:
         rows = list(csv.DictReader((ln for ln in fh if not ln.startswith("#")), delimiter="\t"))
-    return [{**r, "jobs": int(r["jobs"]), "wall_s_max": float(r["wall_s_max"]),
-             "max_rss_mb_max": float(r["max_rss_mb_max"])} for r in rows]
+    return [
+        {
+            **r,
+            "jobs": int(r["jobs"]),
+            "wall_s_max": float(r["wall_s_max"]),
+            "max_rss_mb_max": float(r["max_rss_mb_max"]),
+        }
+        for r in rows
+    ]
 
 
 def write_table(rows: list[dict], path: Path = TABLE) -> None:
     with path.open("w") as fh:
-        fh.write("# Largest wall time [s] and peak RSS [MB] per rule, paper-scale run; "
-                 "see derive_resources.py\n")
+        fh.write("# Largest wall time [s] and peak RSS [MB] per rule, paper-scale run; see derive_resources.py\n")
         w = csv.DictWriter(fh, COLUMNS, delimiter="\t", lineterminator="\n")
         w.writeheader()
         w.writerows(rows)
@@ -137,8 +151,7 @@ def derive(rows: list[dict]) -> dict[str, dict[str, int]]:
 def set_resources_yaml(res: dict[str, dict[str, int]]) -> str:
     lines = ["set-resources:"]
     for rule, v in res.items():
-        lines += [f"  {rule}:", f'    mem_mb: "{v["mem_mb"]} * attempt"',
-                  f'    runtime: "{v["runtime"]} * attempt"']
+        lines += [f"  {rule}:", f'    mem_mb: "{v["mem_mb"]} * attempt"', f'    runtime: "{v["runtime"]} * attempt"']
     return "\n".join(lines)
 
 

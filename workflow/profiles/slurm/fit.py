@@ -14,6 +14,7 @@ a dry run and a cluster run are undone: the dry run is given an unbounded core c
 cluster run has no ``--cores`` limit), and a group's request is computed as for a submitted
 group (the dry run, a local execution, adds up the group's successive levels).
 """
+
 from __future__ import annotations
 
 import argparse
@@ -41,19 +42,42 @@ def requests(targets: list[str], extra: list[str]) -> list[dict]:
     def run_job(self, job):
         res = job.resources
         if job.is_group():  # as a submitted group computes it (a dry run is a local execution)
-            res = GroupResources.basic_layered(toposorted_jobs=job.toposorted, constraints=job.global_resources,
-                                               run_local=False, additive_resources=["runtime"], sortby=["runtime"])
+            res = GroupResources.basic_layered(
+                toposorted_jobs=job.toposorted,
+                constraints=job.global_resources,
+                run_local=False,
+                additive_resources=["runtime"],
+                sortby=["runtime"],
+            )
         cpus = res.get("cpus_per_task") or res.get("_cores") or 1
-        seen.append({"name": job.groupid if job.is_group() else job.rule.name, "group": job.is_group(),
-                     "jobs": len(job.jobs) if job.is_group() else 1, "cpus": int(cpus),
-                     "mem_mb": int(res.get("mem_mb", 0)), "runtime_min": int(res.get("runtime", 0))})
+        seen.append(
+            {
+                "name": job.groupid if job.is_group() else job.rule.name,
+                "group": job.is_group(),
+                "jobs": len(job.jobs) if job.is_group() else 1,
+                "cpus": int(cpus),
+                "mem_mb": int(res.get("mem_mb", 0)),
+                "runtime_min": int(res.get("runtime", 0)),
+            }
+        )
         return orig(self, job)
 
     orig = dryrun.Executor.run_job
     dryrun.Executor.run_job = run_job
     try:
-        main([*targets, "-n", "-q", "all", "--cores", str(UNBOUNDED_CORES),
-              "--workflow-profile", "workflow/profiles/slurm", *extra])
+        main(
+            [
+                *targets,
+                "-n",
+                "-q",
+                "all",
+                "--cores",
+                str(UNBOUNDED_CORES),
+                "--workflow-profile",
+                "workflow/profiles/slurm",
+                *extra,
+            ]
+        )
     except SystemExit as exc:
         if exc.code:
             raise
@@ -82,9 +106,11 @@ def main() -> None:
             json.dump(subs, fh, indent=1)
     bad = misfits(subs, args.cpus, args.mem_mb)
     groups = [s for s in subs if s["group"]]
-    print(f"{len(subs)} submissions ({len(groups)} group jobs); largest: "
-          f"{max(s['cpus'] for s in subs)} CPUs, {max(s['mem_mb'] for s in subs)} MB; "
-          f"node: {args.cpus} CPUs, {args.mem_mb} MB")
+    print(
+        f"{len(subs)} submissions ({len(groups)} group jobs); largest: "
+        f"{max(s['cpus'] for s in subs)} CPUs, {max(s['mem_mb'] for s in subs)} MB; "
+        f"node: {args.cpus} CPUs, {args.mem_mb} MB"
+    )
     for s in bad:
         print(f"does not fit: {s['name']} ({s['jobs']} jobs): {s['cpus']} CPUs, {s['mem_mb']} MB", file=sys.stderr)
     sys.exit(1 if bad else 0)

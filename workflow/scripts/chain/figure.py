@@ -1,4 +1,5 @@
 """Adapter: chain summary -> chain_success_vs_sigma (PDF + PNG)."""
+
 from railradio.chain.figures import plot_success_vs_sigma
 from railradio.io import read_dataset
 from railradio.workflow import setup_script

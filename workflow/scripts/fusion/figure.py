@@ -1,4 +1,5 @@
 """Adapter: one fusion sweep -> its RMSE figure (PDF + PNG)."""
+
 from railradio.fusion.figures import plot_sweep
 from railradio.fusion.montecarlo import SWEEP_PARAMETER
 from railradio.io import read_dataset

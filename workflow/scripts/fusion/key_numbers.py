@@ -1,4 +1,5 @@
 """Adapter: reference point + sweeps -> results/fusion/key_numbers.json."""
+
 from railradio.fusion.keys import key_numbers
 from railradio.io import read_dataset, write_json
 from railradio.workflow import setup_script

@@ -1,4 +1,5 @@
 """Adapter: one fusion sweep point -> results/fusion/points/{sweep}/p{point}.nc."""
+
 from railradio.fusion.montecarlo import point_params, simulate_point
 from railradio.io import write_dataset
 from railradio.rng import spawn_key, stable_id
@@ -12,7 +13,12 @@ params = point_params(point)
 key = spawn_key("fusion", stable_id(point))
 log.info("point %s, spawn key %s", point, key)
 ds = simulate_point(params, smk.params.seed, key, smk.params.chunk_positions)
-write_dataset(ds, smk.output[0], point, key,
-              title=f"fusion Monte Carlo point: d={params.d_m} m, "
-                    f"sigma_tdoa={point['sigma_tdoa_us']} us, sigma_aoa={params.sigma_aoa_rad} rad")
+write_dataset(
+    ds,
+    smk.output[0],
+    point,
+    key,
+    title=f"fusion Monte Carlo point: d={params.d_m} m, "
+    f"sigma_tdoa={point['sigma_tdoa_us']} us, sigma_aoa={params.sigma_aoa_rad} rad",
+)
 log.info("wrote %s", smk.output[0])

@@ -1,4 +1,5 @@
 """Adapter: the two sensitivity sweeps -> figure fusion_sensitivity (PDF + PNG)."""
+
 from railradio.fusion.sensitivity_figures import plot_sensitivity
 from railradio.io import read_dataset
 from railradio.workflow import setup_script

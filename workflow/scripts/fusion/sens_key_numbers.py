@@ -1,4 +1,5 @@
 """Adapter: the two sensitivity sweeps -> results/sens/fusion/key_numbers.json (sens.fusion.*)."""
+
 from railradio.fusion.sensitivity_keys import key_numbers
 from railradio.io import read_dataset, write_json
 from railradio.workflow import setup_script

@@ -1,4 +1,5 @@
 """Adapter: one handover figure (PDF + PNG)."""
+
 from railradio.handover.figures import FIGURES
 from railradio.io import read_dataset
 from railradio.workflow import setup_script

@@ -1,4 +1,5 @@
 """Adapter: shards -> rates and means per policy and speed (or per sensitivity variant)."""
+
 import numpy as np
 import xarray as xr
 
@@ -19,8 +20,9 @@ for key, parts in groups.items():
     metrics[key] = {pol: policy_metrics(ds, pol) for pol in pols}
 coords = list(groups)
 if p.dim == "speed_kmh":
-    out = metrics_dataset(metrics, "speed_kmh", {"units": "km/h", "long_name": "train speed"},
-                          [float(c) for c in coords])
+    out = metrics_dataset(
+        metrics, "speed_kmh", {"units": "km/h", "long_name": "train speed"}, [float(c) for c in coords]
+    )
 else:  # sensitivity: policies not affected by a variant are NaN there
     allp = list(p.policies)
     for key in coords:
@@ -30,14 +32,27 @@ else:  # sensitivity: policies not affected by a variant are NaN there
         metrics[key] = {pol: metrics[key][pol] for pol in allp}
     out = metrics_dataset(metrics, "variant", {"units": "1", "long_name": "sensitivity variant"}, coords)
     info = dict(p.variants)
-    out["switch"] = ("variant", [info[c].get("switch", "none") for c in coords],
-                     {"units": "1", "long_name": "config switch changed"})
-    out["value"] = ("variant", [str(info[c].get("value", "reference")) for c in coords],
-                    {"units": "1", "long_name": "its value"})
-    out["affected"] = (("variant", "policy"),
-                       np.array([[np.isfinite(metrics[c][pol]["success"]) for pol in allp] for c in coords]),
-                       {"units": "1", "long_name": "the switch can change this policy"})
+    out["switch"] = (
+        "variant",
+        [info[c].get("switch", "none") for c in coords],
+        {"units": "1", "long_name": "config switch changed"},
+    )
+    out["value"] = (
+        "variant",
+        [str(info[c].get("value", "reference")) for c in coords],
+        {"units": "1", "long_name": "its value"},
+    )
+    out["affected"] = (
+        ("variant", "policy"),
+        np.array([[np.isfinite(metrics[c][pol]["success"]) for pol in allp] for c in coords]),
+        {"units": "1", "long_name": "the switch can change this policy"},
+    )
     out["speed_kmh"] = ((), float(p.speed_kmh), {"units": "km/h", "long_name": "train speed"})
-write_dataset(out, smk.output[0], {"dim": p.dim, "keys": list(p.groups)}, None,
-              title=f"handover: rates and means per policy and {p.dim}")
+write_dataset(
+    out,
+    smk.output[0],
+    {"dim": p.dim, "keys": list(p.groups)},
+    None,
+    title=f"handover: rates and means per policy and {p.dim}",
+)
 log.info("wrote %s", smk.output[0])

@@ -1,4 +1,5 @@
 """Adapter: one realization's geometry and link budget -> results/nr/bounds/{real}.nc."""
+
 import json
 import sys
 
@@ -6,16 +7,15 @@ import numpy as np
 import xarray as xr
 
 sys.path.insert(0, str(__import__("pathlib").Path(__file__).parent))
-from common import scenario  # noqa: E402
+from common import scenario
 
-from railradio.constants import SPEED_OF_LIGHT_M_S  # noqa: E402
-from railradio.io import write_dataset  # noqa: E402
-from railradio.nr.bounds import (INTEGER_SAMPLE_SIGMA_M, burst_e_over_n0, change_epochs, pcrb_m,  # noqa: E402
-                                 peb_m, toa_crb_s)
-from railradio.nr.link import ShadowingMap, link_budget  # noqa: E402
-from railradio.nr.simulate import KEY_SHADOWING  # noqa: E402
-from railradio.rng import spawn_key  # noqa: E402
-from railradio.workflow import setup_script  # noqa: E402
+from railradio.constants import SPEED_OF_LIGHT_M_S
+from railradio.io import write_dataset
+from railradio.nr.bounds import INTEGER_SAMPLE_SIGMA_M, burst_e_over_n0, change_epochs, pcrb_m, peb_m, toa_crb_s
+from railradio.nr.link import ShadowingMap, link_budget
+from railradio.nr.simulate import KEY_SHADOWING
+from railradio.rng import spawn_key
+from railradio.workflow import setup_script
 
 smk = snakemake  # noqa: F821
 log = setup_script(smk.log[0])
@@ -45,19 +45,95 @@ for k in range(n):
     peb[k] = peb_m(xy, float(x[k]), dh, s_r_q, cal["sigma_aod_rad"])
     xy_seq.append(xy)
     s_seq.append(s_r_q / SPEED_OF_LIGHT_M_S)
-pcrb = pcrb_m(xy_seq, x, dh, s_seq, cal["sigma_aod_rad"], scn.trajectory.dt_s, cal["q"],
-              np.diag([100.0, 100.0, 1.0, 1.0, 1.0, 1.0]))
+pcrb = pcrb_m(
+    xy_seq,
+    x,
+    dh,
+    s_seq,
+    cal["sigma_aod_rad"],
+    scn.trajectory.dt_s,
+    cal["q"],
+    np.diag([100.0, 100.0, 1.0, 1.0, 1.0, 1.0]),
+)
 # the true motion: constant acceleration within phases, unknown jumps at the changes
-pcrb_true = pcrb_m(xy_seq, x, dh, s_seq, cal["sigma_aod_rad"], scn.trajectory.dt_s, 0.0,
-                   np.diag([100.0, 100.0, 1.0, 1.0, 1.0, 1.0]), reset_epochs=change_epochs(scn.trajectory.phases, scn.trajectory.dt_s))
-log.info("median TOA CRB %.4f m, median PEB prediction %.3f m, mean PCRB prediction %.3f m (true motion %.3f m)",
-         np.median(crb_best), np.median(peb), np.mean(pcrb), np.mean(pcrb_true))
+pcrb_true = pcrb_m(
+    xy_seq,
+    x,
+    dh,
+    s_seq,
+    cal["sigma_aod_rad"],
+    scn.trajectory.dt_s,
+    0.0,
+    np.diag([100.0, 100.0, 1.0, 1.0, 1.0, 1.0]),
+    reset_epochs=change_epochs(scn.trajectory.phases, scn.trajectory.dt_s),
+)
+log.info(
+    "median TOA CRB %.4f m, median PEB prediction %.3f m, mean PCRB prediction %.3f m (true motion %.3f m)",
+    np.median(crb_best),
+    np.median(peb),
+    np.mean(pcrb),
+    np.mean(pcrb_true),
+)
 ds = xr.Dataset(
-    {"toa_crb": (("t",), crb_best, {"units": "m", "long_name": "TOA range CRB of the best RRH: its detected blocks against noise and the other RRHs' SS blocks"}),
-     "peb_crb": (("t",), peb_crb, {"units": "m", "long_name": "snapshot position error predicted from the TOA CRB and the calibration run's AOD spread"}),
-     "peb": (("t",), peb, {"units": "m", "long_name": "snapshot position error predicted with the integer-sample TOA floor and the calibration run's AOD spread"}),
-     "pcrb": (("t",), pcrb, {"units": "m", "long_name": "PCRB recursion of the tracked 2-D position with the measured error levels (white-jerk model, calibrated q): a prediction"}),
-     "pcrb_true_motion": (("t",), pcrb_true, {"units": "m", "long_name": "PCRB recursion for the true motion (constant acceleration, unknown jumps at the known phase changes, genie) with the measured error levels: a prediction"})},
-    coords={"t": ("t", t, {"units": "s", "long_name": "time"})})
-write_dataset(ds, smk.output[0], {"sim": dict(smk.params.sim), "calibration": cal}, key,
-              title=f"nr physical limits, realization {smk.wildcards.real}")
+    {
+        "toa_crb": (
+            ("t",),
+            crb_best,
+            {
+                "units": "m",
+                "long_name": (
+                    "TOA range CRB of the best RRH: its detected blocks against noise and the other RRHs' SS blocks"
+                ),
+            },
+        ),
+        "peb_crb": (
+            ("t",),
+            peb_crb,
+            {
+                "units": "m",
+                "long_name": "snapshot position error predicted from the TOA CRB and the calibration run's AOD spread",
+            },
+        ),
+        "peb": (
+            ("t",),
+            peb,
+            {
+                "units": "m",
+                "long_name": (
+                    "snapshot position error predicted with the integer-sample TOA floor and the "
+                    "calibration run's AOD spread"
+                ),
+            },
+        ),
+        "pcrb": (
+            ("t",),
+            pcrb,
+            {
+                "units": "m",
+                "long_name": (
+                    "PCRB recursion of the tracked 2-D position with the measured error levels (white-jerk "
+                    "model, calibrated q): a prediction"
+                ),
+            },
+        ),
+        "pcrb_true_motion": (
+            ("t",),
+            pcrb_true,
+            {
+                "units": "m",
+                "long_name": (
+                    "PCRB recursion for the true motion (constant acceleration, unknown jumps at the known "
+                    "phase changes, genie) with the measured error levels: a prediction"
+                ),
+            },
+        ),
+    },
+    coords={"t": ("t", t, {"units": "s", "long_name": "time"})},
+)
+write_dataset(
+    ds,
+    smk.output[0],
+    {"sim": dict(smk.params.sim), "calibration": cal},
+    key,
+    title=f"nr physical limits, realization {smk.wildcards.real}",
+)

@@ -1,14 +1,15 @@
 """Adapter: calibration run -> results/nr/calibration.json (noise levels and q)."""
+
 import sys
 
 import numpy as np
 
 sys.path.insert(0, str(__import__("pathlib").Path(__file__).parent))
-from common import read_shards, scenario  # noqa: E402
+from common import read_shards, scenario
 
-from railradio.io import write_json  # noqa: E402
-from railradio.nr.tracking import calibrate  # noqa: E402
-from railradio.workflow import setup_script  # noqa: E402
+from railradio.io import write_json
+from railradio.nr.tracking import calibrate
+from railradio.workflow import setup_script
 
 smk = snakemake  # noqa: F821
 log = setup_script(smk.log[0])
@@ -24,11 +25,20 @@ for rx in ds["receiver"].values:
         for gate in (False, True):  # each tracker calibrated as it will run
             name = f"{rx}/{variant}/{'gate' if gate else 'nogate'}"
             search = {}
-            cfg = calibrate(dsr, variant, dep.x_m, dep.offset_m, dep.h_bs_m - dep.h_ut_m,
-                            scn.trajectory.dt_s, np.asarray(smk.params.tracker["q_grid"]), gate,
-                            smk.params.selection[str(rx)],
-                            distance_edges_m=tuple(smk.params.tracker["w_distance_edges_m"]),
-                            gate_prob=float(smk.params.tracker["gate_prob"]), search=search)
+            cfg = calibrate(
+                dsr,
+                variant,
+                dep.x_m,
+                dep.offset_m,
+                dep.h_bs_m - dep.h_ut_m,
+                scn.trajectory.dt_s,
+                np.asarray(smk.params.tracker["q_grid"]),
+                gate,
+                smk.params.selection[str(rx)],
+                distance_edges_m=tuple(smk.params.tracker["w_distance_edges_m"]),
+                gate_prob=float(smk.params.tracker["gate_prob"]),
+                search=search,
+            )
             out[name] = cfg.record() | {"q_search": search}
             log.info("%s: %s", name, out[name])
 write_json(smk.output[0], out)

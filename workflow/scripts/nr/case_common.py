@@ -1,6 +1,7 @@
 """Shared adapter code of the sensitivity-case scripts: the main run's calibrate.py /
 track.py on the case's estimates, cut to the case's epochs, with the clock errors of the
 case's ``nr.sync`` added to the measured TOAs (railradio.nr.tracking.apply_clock_errors)."""
+
 import runpy
 from pathlib import Path
 
@@ -19,8 +20,9 @@ def run_main_script(smk, script: str, rid: int) -> None:
 
     def read_case(paths):
         ds = read(paths).isel(epoch=slice(0, int(smk.params.n_epochs)))
-        return apply_clock_errors(ds, int(smk.params.seed), spawn_key("nr", rid),
-                                  float(sync["rrh_sigma_s"]), float(sync["train_bias_s"]))
+        return apply_clock_errors(
+            ds, int(smk.params.seed), spawn_key("nr", rid), float(sync["rrh_sigma_s"]), float(sync["train_bias_s"])
+        )
 
     common.read_shards = read_case
     try:

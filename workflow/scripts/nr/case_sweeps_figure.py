@@ -1,4 +1,5 @@
 """Adapter: sensitivity key numbers -> results/figures/nr_sweeps.{pdf,png}."""
+
 import json
 
 from railradio.nr.figures import plot_sweeps

@@ -1,4 +1,5 @@
 """Shared adapter code of the nr scripts: config -> scenario, reading shards."""
+
 import xarray as xr
 
 from railradio.io import read_dataset
@@ -12,5 +13,6 @@ def scenario(smk):
 def read_shards(paths):
     # per-epoch variables are concatenated; the others (the train's geometry) are the same
     # in every shard
-    return xr.concat([read_dataset(p) for p in paths], dim="epoch", data_vars="minimal",
-                     coords="minimal", compat="override")
+    return xr.concat(
+        [read_dataset(p) for p in paths], dim="epoch", data_vars="minimal", coords="minimal", compat="override"
+    )

@@ -1,4 +1,5 @@
 """Adapter: nr intermediates -> all nr figures."""
+
 from railradio.io import read_dataset
 from railradio.nr import figures as f
 from railradio.workflow import setup_script

@@ -1,16 +1,17 @@
 """Adapter: raw IQ and per-block correlations of sample epochs -> results/nr/samples.nc."""
+
 import sys
 
 import numpy as np
 
 sys.path.insert(0, str(__import__("pathlib").Path(__file__).parent))
-from common import scenario  # noqa: E402
+from common import scenario
 
-from railradio.io import write_dataset  # noqa: E402
-from railradio.nr.cellsearch import warmup_start  # noqa: E402
-from railradio.nr.simulate import Synthesis, simulate_epochs  # noqa: E402
-from railradio.rng import spawn_key  # noqa: E402
-from railradio.workflow import setup_script  # noqa: E402
+from railradio.io import write_dataset
+from railradio.nr.cellsearch import warmup_start
+from railradio.nr.simulate import Synthesis, simulate_epochs
+from railradio.rng import spawn_key
+from railradio.workflow import setup_script
 
 smk = snakemake  # noqa: F821
 setup_script(smk.log[0])
@@ -28,8 +29,19 @@ burst = synth(e)
 z, s_min = burst.z, burst.s_min
 fs = scn.receiver.num.sample_rate_hz
 start = scn.receiver.num.symbol_start(s_min) / fs
-ds["iq"] = (("sample",), z.astype(np.complex64),
-            {"units": "W0.5", "long_name": f"received baseband samples of epoch {e}: the front end's, at F_s/{scn.receiver.decimation}"})
-ds = ds.assign_coords(sample=("sample", start + np.arange(z.size) / fs,
-                              {"units": "s", "long_name": "time from the burst's first subframe start"}))
+ds["iq"] = (
+    ("sample",),
+    z.astype(np.complex64),
+    {
+        "units": "W0.5",
+        "long_name": f"received baseband samples of epoch {e}: the front end's, at F_s/{scn.receiver.decimation}",
+    },
+)
+ds = ds.assign_coords(
+    sample=(
+        "sample",
+        start + np.arange(z.size) / fs,
+        {"units": "s", "long_name": "time from the burst's first subframe start"},
+    )
+)
 write_dataset(ds, smk.output[0], dict(smk.params.sim), key, title="nr sample epochs: raw IQ and per-block correlations")

@@ -1,27 +1,37 @@
 """Adapter: one track shard -> results/nr/estimates/{real}/s{shard}.nc."""
+
 import dataclasses
 import sys
 
 sys.path.insert(0, str(__import__("pathlib").Path(__file__).parent))
-from common import scenario  # noqa: E402
+from common import scenario
 
-from railradio.io import write_dataset  # noqa: E402
-from railradio.nr.simulate import calibration_trajectory, shard_epochs, simulate_epochs  # noqa: E402
-from railradio.rng import spawn_key  # noqa: E402
-from railradio.workflow import setup_script  # noqa: E402
+from railradio.io import write_dataset
+from railradio.nr.simulate import calibration_trajectory, shard_epochs, simulate_epochs
+from railradio.rng import spawn_key
+from railradio.workflow import setup_script
 
 smk = snakemake  # noqa: F821
 log = setup_script(smk.log[0])
 scn = scenario(smk)
 real = smk.wildcards.real
 if real == "cal":  # the calibration run's own trajectory
-    scn = dataclasses.replace(scn, trajectory=calibration_trajectory({"calibration": smk.params.calibration,
-                                                                       "trajectory": smk.params.sim["trajectory"]}))
+    scn = dataclasses.replace(
+        scn,
+        trajectory=calibration_trajectory(
+            {"calibration": smk.params.calibration, "trajectory": smk.params.sim["trajectory"]}
+        ),
+    )
 # realization r<i> -> ID i; the calibration run has its own ID (another seed key)
 rid = 1000 if real == "cal" else int(real[1:])
 key = spawn_key("nr", rid)
 epochs = shard_epochs(smk.params.n_epochs, smk.params.n_shards, int(smk.wildcards.shard))
 log.info("realization %s (key %s): epochs %d..%d", real, key, epochs[0], epochs[-1])
 ds = simulate_epochs(scn, epochs, smk.params.seed, key)
-write_dataset(ds, smk.output[0], dict(smk.params.sim), key,
-              title=f"nr per-cell estimates, realization {real}, shard {smk.wildcards.shard}")
+write_dataset(
+    ds,
+    smk.output[0],
+    dict(smk.params.sim),
+    key,
+    title=f"nr per-cell estimates, realization {real}, shard {smk.wildcards.shard}",
+)

@@ -1,10 +1,18 @@
 """Adapter: results/nr/fidelity/s*.nc -> key numbers nr.fidelity.*, nr.detector.* and the figure."""
+
 import numpy as np
 import xarray as xr
 
 from railradio.io import read_dataset, write_json
-from railradio.nr.fidelity import (NOISE_ONLY_ID, comparisons, detector_key_numbers, from_dataset, key_numbers,
-                                   noise_false_alarms, summarize)
+from railradio.nr.fidelity import (
+    NOISE_ONLY_ID,
+    comparisons,
+    detector_key_numbers,
+    from_dataset,
+    key_numbers,
+    noise_false_alarms,
+    summarize,
+)
 from railradio.nr.figures import plot_fidelity
 from railradio.nr.simulate import scenario_from_config
 from railradio.rng import make_rng, spawn_key

@@ -1,4 +1,5 @@
 """Adapter: results/nr/imm/{real}.nc -> figure nr_imm_lag."""
+
 from railradio.io import read_dataset
 from railradio.nr.imm_report import plot_lag
 from railradio.workflow import setup_script

@@ -1,4 +1,5 @@
 """Adapter: results/nr/imm/{real}.nc -> results/nr/imm/key_numbers.json."""
+
 from railradio.io import read_dataset, write_json
 from railradio.nr.imm_report import key_numbers
 from railradio.workflow import setup_script

@@ -1,18 +1,19 @@
 """Adapter: a map cell's segment and calibration estimates -> results/nr/map/{cell}/track.nc
 (each receiver's AOD, TOA and AOD+TOA EKF, calibrated on the cell's own calibration run)."""
+
 import sys
 
 import numpy as np
 import xarray as xr
 
 sys.path.insert(0, str(__import__("pathlib").Path(__file__).parents[1] / "nr"))
-from common import read_shards  # noqa: E402
+from common import read_shards
 
-from railradio.io import write_dataset  # noqa: E402
-from railradio.nr.reproduction_map import VARIANTS  # noqa: E402
-from railradio.nr.simulate import scenario_from_config  # noqa: E402
-from railradio.nr.tracking import calibrate, measurement_errors, selected, track  # noqa: E402
-from railradio.workflow import setup_script  # noqa: E402
+from railradio.io import write_dataset
+from railradio.nr.reproduction_map import VARIANTS
+from railradio.nr.simulate import scenario_from_config
+from railradio.nr.tracking import calibrate, measurement_errors, selected, track
+from railradio.workflow import setup_script
 
 smk = snakemake  # noqa: F821
 log = setup_script(smk.log[0])
@@ -42,25 +43,66 @@ for i, (rx, gate) in enumerate(receivers.items()):
     n_det[i] = np.where(ok, np.take_along_axis(dsr["n_detected"].values, order, axis=1), 0)
     for j, variant in enumerate(VARIANTS):
         search = {}
-        cfg = calibrate(calr, variant, dep.x_m, dep.offset_m, dep.h_bs_m - dep.h_ut_m, dt,
-                        np.asarray(tr["q_grid"]), gate, sel[rx], gate_prob=float(tr["gate_prob"]),
-                        search=search, start_speed_sigma_m_s=float(smk.params.start_speed_sigma_m_s))
+        cfg = calibrate(
+            calr,
+            variant,
+            dep.x_m,
+            dep.offset_m,
+            dep.h_bs_m - dep.h_ut_m,
+            dt,
+            np.asarray(tr["q_grid"]),
+            gate,
+            sel[rx],
+            gate_prob=float(tr["gate_prob"]),
+            search=search,
+            start_speed_sigma_m_s=float(smk.params.start_speed_sigma_m_s),
+        )
         cal[f"{rx}/{variant}"] = cfg.record() | {"gate": gate, "q_search": search}
         out = track(dsr, dep.x_m, dep.offset_m, dep.h_bs_m - dep.h_ut_m, dt, cfg, strength=sel[rx], snapshot=False)
         err[i, j] = np.hypot(out["state"][:, 0] - seg["x_true"].values, out["state"][:, 1])  # scoring only
         log.info("%s %s (gate %s): q %.3g, mean error %.3f m", rx, variant, gate, cfg.q, np.nanmean(err[i, j]))
 res = xr.Dataset(
-    {"pos_err": (("receiver", "variant", "epoch"), err, {"units": "m", "long_name": "2-D EKF position error"}),
-     "aod_err": (("receiver", "epoch", "slot"), aod, {"units": "rad", "long_name": "AOD error of the 3 selected RRHs (NaN: not detected)"}),
-     "range_err": (("receiver", "epoch", "slot"), rng, {"units": "m", "long_name": "TOA range error of the 3 selected RRHs (NaN: not detected)"}),
-     "aod_true": (("receiver", "epoch", "slot"), aod_true, {"units": "rad", "long_name": "true AOD of the 3 selected RRHs (scoring)"}),
-     "n_detected": (("receiver", "epoch", "slot"), n_det, {"units": "1", "long_name": "SS blocks detected of the 3 selected RRHs"}),
-     "t": (("epoch",), seg["t"].values, {"units": "s", "long_name": "time"}),
-     "v_true": (("epoch",), seg["v_true"].values, {"units": "m s-1", "long_name": "true speed"}),
-     "gated": (("receiver",), np.array(list(receivers.values())), {"units": "1", "long_name": "the receiver's trackers are gated"})},
-    coords={"receiver": ("receiver", list(receivers), {"units": "1", "long_name": "receiver"}),
-            "variant": ("variant", list(VARIANTS), {"units": "1", "long_name": "measurements used by the tracker"}),
-            "epoch": ("epoch", seg["epoch"].values, {"units": "1", "long_name": "epoch index of r0"}),
-            "slot": ("slot", [0, 1, 2], {"units": "1", "long_name": "selected RRH rank by strength"})})
-write_dataset(res, smk.output[0], {"sim": dict(smk.params.sim), "tracker": tr, "calibration": cal}, None,
-              title=f"nr map cell {smk.wildcards.cell}: tracks on the segment")
+    {
+        "pos_err": (("receiver", "variant", "epoch"), err, {"units": "m", "long_name": "2-D EKF position error"}),
+        "aod_err": (
+            ("receiver", "epoch", "slot"),
+            aod,
+            {"units": "rad", "long_name": "AOD error of the 3 selected RRHs (NaN: not detected)"},
+        ),
+        "range_err": (
+            ("receiver", "epoch", "slot"),
+            rng,
+            {"units": "m", "long_name": "TOA range error of the 3 selected RRHs (NaN: not detected)"},
+        ),
+        "aod_true": (
+            ("receiver", "epoch", "slot"),
+            aod_true,
+            {"units": "rad", "long_name": "true AOD of the 3 selected RRHs (scoring)"},
+        ),
+        "n_detected": (
+            ("receiver", "epoch", "slot"),
+            n_det,
+            {"units": "1", "long_name": "SS blocks detected of the 3 selected RRHs"},
+        ),
+        "t": (("epoch",), seg["t"].values, {"units": "s", "long_name": "time"}),
+        "v_true": (("epoch",), seg["v_true"].values, {"units": "m s-1", "long_name": "true speed"}),
+        "gated": (
+            ("receiver",),
+            np.array(list(receivers.values())),
+            {"units": "1", "long_name": "the receiver's trackers are gated"},
+        ),
+    },
+    coords={
+        "receiver": ("receiver", list(receivers), {"units": "1", "long_name": "receiver"}),
+        "variant": ("variant", list(VARIANTS), {"units": "1", "long_name": "measurements used by the tracker"}),
+        "epoch": ("epoch", seg["epoch"].values, {"units": "1", "long_name": "epoch index of r0"}),
+        "slot": ("slot", [0, 1, 2], {"units": "1", "long_name": "selected RRH rank by strength"}),
+    },
+)
+write_dataset(
+    res,
+    smk.output[0],
+    {"sim": dict(smk.params.sim), "tracker": tr, "calibration": cal},
+    None,
+    title=f"nr map cell {smk.wildcards.cell}: tracks on the segment",
+)

@@ -1,4 +1,5 @@
 """Adapter: map key numbers -> results/figures/nr_reproduction_map.{pdf,png}."""
+
 import json
 
 from railradio.nr.figures import plot_reproduction_map

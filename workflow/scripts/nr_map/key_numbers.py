@@ -1,4 +1,5 @@
 """Adapter: every map cell's tracks -> results/nr/map/key_numbers.json."""
+
 from railradio.io import read_dataset, write_json
 from railradio.nr import loss
 from railradio.nr.keys import SKIP_S
@@ -17,13 +18,25 @@ for cell, path in zip(smk.params.cells, smk.input, strict=True):
     spacing = loss.rrh_spacing_m(ds)
     for rx in [str(r) for r in ds["receiver"].values]:
         d = ds.sel(receiver=rx)
-        where = (f"{rx} receiver{', gated' if bool(d['gated']) else ''}, map cell {cell}, epochs "
-                 f"{int(ds['epoch'][0])}..{end - 1} of r0")
+        where = (
+            f"{rx} receiver{', gated' if bool(d['gated']) else ''}, map cell {cell}, epochs "
+            f"{int(ds['epoch'][0])}..{end - 1} of r0"
+        )
         # the same resamples for every cell and receiver: paired comparisons across the map
-        numbers |= cell_key_numbers(cell, rx, d["aod_err"].values, d["range_err"].values,
-                                    {str(v): d["pos_err"].sel(variant=v).values for v in d["variant"].values},
-                                    spacing, make_rng(int(smk.params.seed), spawn_key("nr", 2000)),
-                                    int(mp["block_epochs"]), int(mp["n_boot"]), float(mp["confidence"]), where)
-        numbers |= diagnostic_key_numbers(cell, rx, d["aod_err"].values, d["aod_true"].values,
-                                          d["n_detected"].values, where)
+        numbers |= cell_key_numbers(
+            cell,
+            rx,
+            d["aod_err"].values,
+            d["range_err"].values,
+            {str(v): d["pos_err"].sel(variant=v).values for v in d["variant"].values},
+            spacing,
+            make_rng(int(smk.params.seed), spawn_key("nr", 2000)),
+            int(mp["block_epochs"]),
+            int(mp["n_boot"]),
+            float(mp["confidence"]),
+            where,
+        )
+        numbers |= diagnostic_key_numbers(
+            cell, rx, d["aod_err"].values, d["aod_true"].values, d["n_detected"].values, where
+        )
 write_json(smk.output[0], numbers | summary_key_numbers(numbers, list(smk.params.cells), nr))

@@ -1,4 +1,5 @@
 """Adapter: intermediates -> the six tunnel figures."""
+
 from railradio.io import read_dataset
 from railradio.tunnel import figures as f
 from railradio.tunnel.study import cable_from_config, tunnel_from_config
@@ -17,5 +18,11 @@ f.delay_spread(maps, *out["tunnel_delay_spread"])
 f.gdop(runs[("hst", "physical_separable")], *out["tunnel_gdop"])
 f.position_error_cdf(runs, *out["tunnel_position_error_cdf"])
 f.ray_engines(read_dataset(smk.input.engines), *out["tunnel_ray_engines"])
-f.seed_vs_physical(tables, maps, tunnel_from_config(cfg, "rect").cross_distance_m,
-                   cable_from_config(cfg).coupling_loss_db, cov["threshold_dbm"], *out["tunnel_seed_vs_physical"])
+f.seed_vs_physical(
+    tables,
+    maps,
+    tunnel_from_config(cfg, "rect").cross_distance_m,
+    cable_from_config(cfg).coupling_loss_db,
+    cov["threshold_dbm"],
+    *out["tunnel_seed_vs_physical"],
+)

@@ -1,4 +1,5 @@
 """Adapter: channel table -> RSSI map, delay spread, strong rays along the tunnel."""
+
 from railradio.io import read_dataset, write_dataset
 from railradio.tunnel.study import make_map
 from railradio.workflow import setup_script

@@ -1,9 +1,16 @@
 """Adapter: one train type, one channel/measurement variant -> results/tunnel/runs/{train}_{variant}.nc."""
+
 from railradio.io import read_dataset, write_dataset
 from railradio.rng import spawn_key
 from railradio.tunnel.simulate import TRAIN_IDS, VARIANT_IDS, run_train
-from railradio.tunnel.study import (VARIANT_DELAY_ERROR, VARIANTS, cable_from_config, measurement_from_config,
-                                    train_from_config, tunnel_from_config)
+from railradio.tunnel.study import (
+    VARIANT_DELAY_ERROR,
+    VARIANTS,
+    cable_from_config,
+    measurement_from_config,
+    train_from_config,
+    tunnel_from_config,
+)
 from railradio.workflow import setup_script
 
 smk = snakemake  # noqa: F821 - injected by Snakemake
@@ -13,10 +20,26 @@ prop, meas = VARIANTS[smk.wildcards.variant]
 table = read_dataset(smk.input[0])
 tunnel = tunnel_from_config(cfg, table.attrs["shape"])
 train = train_from_config(cfg, smk.wildcards.train)
-over = {"delay_error": VARIANT_DELAY_ERROR[smk.wildcards.variant]} if smk.wildcards.variant in VARIANT_DELAY_ERROR else {}
-ds = run_train(table, tunnel, cable_from_config(cfg), train, measurement_from_config(cfg, **over), prop, meas,
-               cfg["tracking"], smk.params.seed, realizations=cfg["realizations"])
-log.info("%s %s: KF p95 %.3f m", smk.wildcards.train, smk.wildcards.variant,
-         float(ds["kf_err"].quantile(0.95)))
-write_dataset(ds, smk.output[0], cfg, spawn_key("tunnel", 200, TRAIN_IDS[train.name], VARIANT_IDS[(prop, meas)]),
-              title=f"tunnel: {train.name} crossing, {prop} channel, {meas} measurements")
+over = (
+    {"delay_error": VARIANT_DELAY_ERROR[smk.wildcards.variant]} if smk.wildcards.variant in VARIANT_DELAY_ERROR else {}
+)
+ds = run_train(
+    table,
+    tunnel,
+    cable_from_config(cfg),
+    train,
+    measurement_from_config(cfg, **over),
+    prop,
+    meas,
+    cfg["tracking"],
+    smk.params.seed,
+    realizations=cfg["realizations"],
+)
+log.info("%s %s: KF p95 %.3f m", smk.wildcards.train, smk.wildcards.variant, float(ds["kf_err"].quantile(0.95)))
+write_dataset(
+    ds,
+    smk.output[0],
+    cfg,
+    spawn_key("tunnel", 200, TRAIN_IDS[train.name], VARIANT_IDS[(prop, meas)]),
+    title=f"tunnel: {train.name} crossing, {prop} channel, {meas} measurements",
+)

@@ -1,4 +1,5 @@
 """Adapter: sensitivity datasets -> results/figures/tunnel_sensitivity.{pdf,png}."""
+
 from railradio.io import read_dataset
 from railradio.tunnel.figures import sensitivity
 from railradio.workflow import setup_script

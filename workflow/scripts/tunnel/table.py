@@ -1,4 +1,5 @@
 """Adapter: ray families -> tabulated slot-to-receiver channel results/tunnel/table_{name}.nc."""
+
 from railradio.io import read_dataset, write_dataset
 from railradio.tunnel.study import make_table
 from railradio.workflow import setup_script
@@ -8,5 +9,10 @@ log = setup_script(smk.log[0])
 cfg = smk.params.cfg
 ds = make_table(cfg, smk.wildcards.name, smk.params.seed, read_dataset(smk.input[0]))
 log.info("table %s: order %s, %s families", smk.wildcards.name, ds.attrs["reflection_order"], ds.attrs["n_families"])
-write_dataset(ds, smk.output[0], cfg, None if smk.wildcards.name != "seed" else (3, 10),
-              title=f"tunnel: slot-to-receiver channel by along-axis offset ({smk.wildcards.name})")
+write_dataset(
+    ds,
+    smk.output[0],
+    cfg,
+    None if smk.wildcards.name != "seed" else (3, 10),
+    title=f"tunnel: slot-to-receiver channel by along-axis offset ({smk.wildcards.name})",
+)
