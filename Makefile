@@ -74,9 +74,8 @@ GALLERY := fusion_rmse_vs_distance nr_position_error_cdf nr_sensitivity tunnel_p
            tunnel_seed_vs_physical handover_interruption_vs_speed nr_sweeps chain_success_vs_sigma \
            nr_reproduction_map
 
-dag: $(STAMP)  ## docs/rulegraph.png: the rules and their dependencies (no Graphviz needed)
-	$(BIN)/snakemake --rulegraph --workflow-profile workflow/profiles/default 2>/dev/null > results/rulegraph.dot
-	$(BIN)/python -c "from railradio.plotting import plot_rulegraph; plot_rulegraph(open('results/rulegraph.dot').read(), 'docs/rulegraph.png')"
+dag: $(STAMP)  ## docs/workflow/<target>.md: each target's rule graph (Snakemake's Mermaid output)
+	SNAKEMAKE=$(BIN)/snakemake docs/workflow/make_rulegraphs.sh
 
 gallery: figures  ## docs/gallery/*.png: the README's figures, from a paper-scale run (commit them)
 	mkdir -p docs/gallery && for f in $(GALLERY); do cp results/figures/$$f.png docs/gallery/; done

@@ -28,12 +28,13 @@ import scipy.fft as sfft
 import yaml
 from _report import best_of, emit
 
+from railradio.nr.correlator import Correlator
 from railradio.nr.link import ShadowingMap, link_budget
 from railradio.nr.numerology import Numerology
-from railradio.nr.receiver import Correlator, Synthesizer
 from railradio.nr.resample import project, upsample
 from railradio.nr.simulate import scenario_from_config
 from railradio.nr.ssb import qpsk_pool, reference_waveform
+from railradio.nr.synthesis import Synthesizer
 from railradio.workflow import JOB_ENV
 
 # A shard-like run in a fresh process: consecutive epochs of realization r0 through

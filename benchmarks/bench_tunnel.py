@@ -21,8 +21,9 @@ from _report import best_of, emit
 
 from railradio.tunnel.channel import offset_grid_m, received, slot_powers, tabulate
 from railradio.tunnel.geometry import Cable, Tunnel
+from railradio.tunnel.lifting import lift
 from railradio.tunnel.materials import CONCRETE_900MHZ
-from railradio.tunnel.rays import image_families, lift, sbr_families, trace_2d
+from railradio.tunnel.rays import image_families, sbr_families, trace_2d
 
 
 def main() -> None:

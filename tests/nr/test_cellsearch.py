@@ -9,8 +9,8 @@ import yaml
 
 from railradio.nr import simulate as sim
 from railradio.nr.cellsearch import CellSearch, CellSearchConfig, neighbour_list, ss_rsrp_db, warmup_start
+from railradio.nr.correlator import BlockCorrelation
 from railradio.nr.geometry import Deployment
-from railradio.nr.receiver import BlockCorrelation
 from railradio.rng import spawn_key
 
 from ..conftest import ROOT

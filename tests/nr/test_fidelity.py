@@ -10,12 +10,15 @@ import pytest
 
 from railradio.nr import kernels
 from railradio.nr.channel import TdlProfile
-from railradio.nr.fidelity import changed, check_production, sample_epochs
+from railradio.nr.correlator import Correlator
+from railradio.nr.fidelity import check_production, sample_epochs
+from railradio.nr.fidelity_stats import changed
 from railradio.nr.numerology import SAMPLE_RATE_HZ
-from railradio.nr.receiver import Correlator, Links, ReceiverConfig, Synthesizer
+from railradio.nr.receiver import ReceiverConfig
 from railradio.nr.reference import reference_received
 from railradio.nr.resample import project, upsample
 from railradio.nr.ssb import qpsk_pool
+from railradio.nr.synthesis import Links, Synthesizer
 
 ROOT = Path(__file__).resolve().parents[2]
 LOS_ONLY = TdlProfile("LOS", 1.0, 0.0, np.zeros(0), np.zeros(0))
@@ -299,7 +302,7 @@ def test_noise_only_false_alarms_agree_with_the_published_rate():
     import yaml
 
     from railradio.config import load_schema, validate_config
-    from railradio.nr.fidelity import noise_false_alarms
+    from railradio.nr.fidelity_detector import noise_false_alarms
     from railradio.nr.simulate import scenario_from_config
 
     config = yaml.safe_load((ROOT / "config/config.yaml").read_text(encoding="utf-8"))
@@ -328,7 +331,8 @@ def test_at_the_papers_interference_the_production_path_keeps_our_decisions():
     import yaml
 
     from railradio.config import load_schema, validate_config
-    from railradio.nr.fidelity import FidelityRun, stack, toa_error_m
+    from railradio.nr.fidelity import FidelityRun
+    from railradio.nr.fidelity_stats import stack, toa_error_m
     from railradio.nr.simulate import scenario_from_config, simulate_epochs
     from railradio.nr.workflow import receiver_selection
     from railradio.rng import spawn_key

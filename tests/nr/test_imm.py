@@ -8,10 +8,11 @@ import xarray as xr
 from filterpy.kalman import KalmanFilter
 
 from railradio.constants import SPEED_OF_LIGHT_M_S
+from railradio.nr.dynamics import process_noise, transition
 from railradio.nr.imm import ImmConfig, markov_matrix, position_nees, q_for_jump, run_imm, stationary, track_filters
 from railradio.nr.imm_report import change_windows, key_numbers
 from railradio.nr.smoother import rts_smooth
-from railradio.nr.tracking import TrackerConfig, process_noise, run_ekf, track, transition
+from railradio.nr.tracking import TrackerConfig, run_ekf, track
 
 DT = 0.1
 DH = 7.5
@@ -135,7 +136,7 @@ def test_single_model_imm_equals_ekf():
     s0, p0 = _s0(x)
     for gate in (False, True):
         cfg = _cfg(0.3, gate)
-        ref = run_ekf(xy, aod, toa, DT, DH, cfg, s0, p0)
+        ref = run_ekf(_select(xy, aod, toa), DT, DH, cfg, s0, p0, len(xy))
         got = run_imm(_select(xy, aod, toa), DT, DH, cfg, ImmConfig((0.3,), (10.0,)), s0, p0, len(xy))
         np.testing.assert_allclose(got["state"], ref["state"], rtol=1e-9, atol=1e-7)
         np.testing.assert_allclose(got["cov"], ref["cov"], rtol=1e-7, atol=1e-12)
@@ -151,7 +152,7 @@ def test_imm_two_identical_models_equal_ekf():
     xy, aod, toa = _measure(x, rng, np.arange(0.0, 5000.0, 500.0))
     s0, p0 = _s0(x)
     cfg = _cfg(1.0)
-    ref = run_ekf(xy, aod, toa, DT, DH, cfg, s0, p0)
+    ref = run_ekf(_select(xy, aod, toa), DT, DH, cfg, s0, p0, len(xy))
     got = run_imm(_select(xy, aod, toa), DT, DH, cfg, ImmConfig((1.0, 1.0), (5.0, 1.0)), s0, p0, len(xy))
     np.testing.assert_allclose(got["state"], ref["state"], rtol=1e-9, atol=1e-7)
     np.testing.assert_allclose(got["mu"], np.tile(stationary(markov_matrix([5.0, 1.0], DT)), (len(xy), 1)), atol=1e-9)
@@ -166,7 +167,7 @@ def _lag_case(seed: int, gate: bool):
     s0, p0 = _s0(x)
     s0[4] = 1.0
     q_low = 0.01
-    ekf = run_ekf(xy, aod, toa, DT, DH, _cfg(q_low, gate), s0, p0)
+    ekf = run_ekf(_select(xy, aod, toa), DT, DH, _cfg(q_low, gate), s0, p0, len(xy))
     imm = run_imm(
         _select(xy, aod, toa),
         DT,

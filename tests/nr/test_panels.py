@@ -102,10 +102,10 @@ def test_lever_arm_recovers_the_reference_point(x_ref):
     ds = _noiseless_panel_dataset(x_ref)
     cfg = TrackerConfig(variant="aod_toa", q=1.0, sigma_aod_rad=np.radians(0.5), sigma_toa_s=1e-9)
     dh = dep.h_bs_m - dep.h_ut_m
-    _, fix, *_ = track_setup(ds, dep.x_m, dep.offset_m, dh, cfg, "peak", 3)
+    fix = track_setup(ds, dep.x_m, dep.offset_m, dh, cfg, "peak", 3).meas.snapshot_fix
     p, _ = fix(0, x_ref)
     np.testing.assert_allclose(p, [x_ref, 0.0], atol=1e-3)
     # the point model (lever arm ignored) is off by tens of metres
-    _, fix_point, *_ = track_setup(ds, dep.x_m, dep.offset_m, dh, cfg, "peak", 3, lever_arm=False)
+    fix_point = track_setup(ds, dep.x_m, dep.offset_m, dh, cfg, "peak", 3, lever_arm=False).meas.snapshot_fix
     q, _ = fix_point(0, x_ref)
     assert np.hypot(q[0] - x_ref, q[1]) > 10.0

@@ -5,10 +5,12 @@ import numpy as np
 import pytest
 
 from railradio.nr.channel import TdlProfile, tdl_profile
+from railradio.nr.correlator import Correlator
 from railradio.nr.numerology import SAMPLE_RATE_HZ
-from railradio.nr.receiver import Correlator, Links, ReceiverConfig, Synthesizer
+from railradio.nr.receiver import ReceiverConfig
 from railradio.nr.reference import reference_correlation, reference_received
 from railradio.nr.ssb import qpsk_pool
+from railradio.nr.synthesis import Links, Synthesizer
 
 LOS_ONLY = TdlProfile("LOS", 1.0, 0.0, np.zeros(0), np.zeros(0))
 BEAM_SPACING_RAD = np.pi / 64

@@ -37,8 +37,8 @@ def test_data_beam_policies_and_geometry_bounded_window():
     from railradio.constants import SPEED_OF_LIGHT_M_S
     from railradio.nr.link import ShadowingMap, link_budget
     from railradio.nr.numerology import SAMPLE_RATE_HZ
-    from railradio.nr.receiver import Synthesizer
     from railradio.nr.ssb import qpsk_pool
+    from railradio.nr.synthesis import Synthesizer
 
     scn = _scenario()
     dep = scn.deployment
@@ -81,8 +81,8 @@ def test_no_data_synthesizes_only_ss_symbols_without_changing_the_burst():
     built over every symbol with an all-zero data pool ("train" with zero data), up to the
     float32 rounding of the FFT batch."""
     from railradio.nr.link import ShadowingMap, link_budget
-    from railradio.nr.receiver import Synthesizer
     from railradio.nr.ssb import qpsk_pool
+    from railradio.nr.synthesis import Synthesizer
 
     scn = _scenario()
     dep = scn.deployment

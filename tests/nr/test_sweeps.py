@@ -9,9 +9,9 @@ import pytest
 import xarray as xr
 
 from railradio.constants import SPEED_OF_LIGHT_M_S
+from railradio.nr.clocks import apply_clock_errors, clock_offsets_s
 from railradio.nr.keys import sensitivity_floor_numbers, sensitivity_key_numbers, toa_floor_m
 from railradio.nr.numerology import SAMPLE_RATE_HZ
-from railradio.nr.tracking import apply_clock_errors, clock_offsets_s
 from railradio.rng import spawn_key
 
 
@@ -217,8 +217,10 @@ def test_clock_offset_on_the_toa_equals_a_shifted_burst_up_to_one_sample(delay, 
     synthesized with the delay τ + δ gives the same integer-sample TOA as τ's TOA + δ up
     to one sample (noiseless, one LOS path, decimated receiver)."""
     from railradio.nr.channel import TdlProfile
-    from railradio.nr.receiver import Correlator, Links, ReceiverConfig, Synthesizer
+    from railradio.nr.correlator import Correlator
+    from railradio.nr.receiver import ReceiverConfig
     from railradio.nr.ssb import qpsk_pool
+    from railradio.nr.synthesis import Links, Synthesizer
 
     los = TdlProfile("LOS", 1.0, 0.0, np.zeros(0), np.zeros(0))
     cfg = ReceiverConfig(decimation=4, n_blocks=8)

@@ -5,10 +5,12 @@ import numpy as np
 import pytest
 
 from railradio.nr.channel import tdl_profile
+from railradio.nr.correlator import Correlator
 from railradio.nr.numerology import SAMPLE_RATE_HZ
-from railradio.nr.receiver import Correlator, Links, ReceiverConfig, Synthesizer
+from railradio.nr.receiver import ReceiverConfig
 from railradio.nr.reference import reference_correlation, reference_received
 from railradio.nr.ssb import qpsk_pool
+from railradio.nr.synthesis import Links, Synthesizer
 
 # Independent transcription of TR 38.901 v17.0.0 Tables 7.7.2-1, -2, -3 and -5, every row
 # (normalized delay, power dB), in the tables' order; TDL-E's first row is the specular

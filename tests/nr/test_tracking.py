@@ -5,11 +5,19 @@ import numpy as np
 import pytest
 from scipy.stats import chi2
 
+from railradio.nr.dynamics import process_noise, transition
 from railradio.nr.geometry import Trajectory
-from railradio.nr.tracking import TrackerConfig, hx, jacobian, process_noise, run_ekf, snapshot_ls, transition
+from railradio.nr.measurement import hx, jacobian
+from railradio.nr.snapshot import snapshot_ls
+from railradio.nr.tracking import TrackerConfig, run_ekf
 
 RRH = np.array([[0.0, 15.0], [500.0, 15.0], [-500.0, 15.0]])
 DH = 7.5
+
+
+def _fixed(xy, aod, toa):
+    """``select`` of :func:`run_ekf` for measurements fixed in advance (epoch k: ``xy[k]``)."""
+    return lambda k, s: (xy[k], aod[k], toa[k])
 
 
 @pytest.mark.parametrize("variant", ["aod", "toa", "aod_toa"])
@@ -64,7 +72,7 @@ def test_ekf_is_consistent_on_a_simulated_case():
     toa = [m[1::2] for m in meas]
     s0 = truth[0] + np.array([1.0, 0.5, 0, 0, 0, 0])
     p0 = np.diag([4.0, 4.0, 4.0, 4.0, 1.0, 1.0])
-    out = run_ekf(xy, aod, toa, 0.1, DH, cfg, s0, p0)
+    out = run_ekf(_fixed(xy, aod, toa), 0.1, DH, cfg, s0, p0, len(xy))
     err = out["state"][:, :2] - truth[:, :2]
     # y is truly fixed at 0 while the filter lets it move: use the x component (1 dof)
     nees = err[100:, 0] ** 2 / out["cov"][100:, 0, 0]
@@ -81,7 +89,7 @@ def test_missing_measurements_predict_without_nan():
     xy = [RRH if k % 5 else np.zeros((0, 2)) for k in range(50)]
     aod = [m[0::2] if k % 5 else np.zeros(0) for k, m in enumerate(meas)]
     toa = [m[1::2] if k % 5 else np.zeros(0) for k, m in enumerate(meas)]
-    out = run_ekf(xy, aod, toa, 0.1, DH, cfg, truth[0], np.eye(6))
+    out = run_ekf(_fixed(xy, aod, toa), 0.1, DH, cfg, truth[0], np.eye(6), len(xy))
     assert np.all(np.isfinite(out["state"])) and np.all(np.isfinite(out["cov"]))
     assert np.all(np.isnan(out["nis"][::5])) and np.all(out["n_used"][::5] == 0)
 
@@ -92,7 +100,7 @@ def test_gate_rejects_an_outlier():
     cfg = TrackerConfig(variant="toa", q=0.5, sigma_toa_s=2e-9, gate=True)
     toa = [m[1::2].copy() for m in meas]
     toa[20][1] += 5000 / 3e8  # a 5 km TOA outlier on one RRH
-    out = run_ekf([RRH] * 30, [m[0::2] for m in meas], toa, 0.1, DH, cfg, truth[0], np.eye(6))
+    out = run_ekf(_fixed([RRH] * 30, [m[0::2] for m in meas], toa), 0.1, DH, cfg, truth[0], np.eye(6), 30)
     assert out["n_used"][20] == 2
     assert abs(out["state"][20, 0] - truth[20, 0]) < 5.0
 
@@ -153,7 +161,7 @@ def test_toa_crb_counts_the_detected_blocks_against_the_other_ss_blocks():
     nothing; another link's data beam does not enter (it fills other symbols)."""
     from railradio.nr.bounds import DETECT_E_OVER_N0, PSS_SSS_SUBCARRIERS, block_e_over_n0, burst_e_over_n0
     from railradio.nr.numerology import SUBCARRIER_SPACING_HZ
-    from railradio.nr.receiver import Links
+    from railradio.nr.synthesis import Links
 
     assert 10 * np.log10(DETECT_E_OVER_N0) == pytest.approx(8.75, abs=0.01)
     n0 = 1e-20
@@ -203,8 +211,6 @@ def test_pcrb_true_motion_bound_orders_and_resets():
 
 
 def test_distance_dependent_measurement_noise():
-    from railradio.nr.tracking import TrackerConfig
-
     cfg = TrackerConfig(
         variant="aod_toa",
         q=1.0,
@@ -227,7 +233,7 @@ def test_distance_dependent_measurement_noise():
 
 
 def test_robust_sigmas_per_distance_bin():
-    from railradio.nr.tracking import robust_sigmas
+    from railradio.nr.calibration import robust_sigmas
 
     rng = np.random.default_rng(3)
     dist = rng.uniform(0, 1500, 20000)
@@ -273,7 +279,7 @@ def test_select_measurements_equals_nearest_by_full_sort():
 
 def test_snapshot_batch_equals_one_epoch_at_a_time():
     """snapshot_ls_batch over padded epochs gives each epoch's own fix."""
-    from railradio.nr.tracking import snapshot_ls_batch
+    from railradio.nr.snapshot import snapshot_ls_batch
 
     rng = np.random.default_rng(3)
     cfg = TrackerConfig(variant="aod_toa", sigma_aod_rad=np.radians(1.0), sigma_toa_s=2e-9)
@@ -307,7 +313,7 @@ def test_the_tracker_sees_no_truth():
     import yaml
 
     from railradio.nr.simulate import scenario_from_config, simulate_epochs
-    from railradio.nr.tracking import TrackerConfig, track
+    from railradio.nr.tracking import track
     from railradio.rng import spawn_key
 
     from ..conftest import ROOT
@@ -337,7 +343,7 @@ def test_the_tracker_sees_no_truth():
 def test_inlier_sigma_ignores_outliers_a_mad_does_not():
     """40 % of gross errors (another RRH's peak): the inliers' σ is recovered to 3 %, while
     1.4826 · MAD is inflated by more than a third."""
-    from railradio.nr.tracking import inlier_sigma
+    from railradio.nr.calibration import inlier_sigma
 
     rng = np.random.default_rng(11)
     e = np.concatenate([rng.standard_normal(12000) * 2.0, rng.uniform(-3000, 3000, 8000)])
@@ -366,43 +372,43 @@ def test_nees_position_is_the_quadratic_form():
 def test_q_search_widens_past_a_winning_edge_and_reports_monotone_costs(monkeypatch):
     """When the grid's edge wins, the calibration tries decades beyond it; a cost that keeps
     falling to the search limit is reported as monotone and on the edge."""
-    from railradio.nr import tracking as tr
+    from railradio.nr import calibration as cal
 
     monkeypatch.setattr(
-        tr,
+        cal,
         "measurement_errors",
         lambda ds, strength, with_distance: (np.full(100, 0.01), np.full(100, 1.0), np.full(100, 100.0)),
     )
-    monkeypatch.setattr(tr, "track", lambda ds, *a, cfg=None, **k: {"q": a[4].q} if cfg is None else {"q": cfg.q})
+    monkeypatch.setattr(cal, "track", lambda ds, *a, cfg=None, **k: {"q": a[4].q} if cfg is None else {"q": cfg.q})
     args = (None, "aod_toa", np.arange(3) * 500.0, 15.0, 7.5, 0.1)
     for optimum, edge in ((1e3, False), (1e9, True)):
-        monkeypatch.setattr(tr, "_nees_cost", lambda ds, out, o=optimum: abs(np.log10(out["q"] / o)))
+        monkeypatch.setattr(cal, "_nees_cost", lambda ds, out, o=optimum: abs(np.log10(out["q"] / o)))
         search = {}
-        cfg = tr.calibrate(*args, q_grid=np.array([0.01, 1.0, 100.0]), gate=True, search=search)
-        assert cfg.q == (optimum if not edge else tr.Q_SEARCH_LIMITS[1])
+        cfg = cal.calibrate(*args, q_grid=np.array([0.01, 1.0, 100.0]), gate=True, search=search)
+        assert cfg.q == (optimum if not edge else cal.Q_SEARCH_LIMITS[1])
         assert search["at_edge"] is edge and search["monotone"] is edge
-        assert max(search["q"]) == (1e4 if not edge else tr.Q_SEARCH_LIMITS[1])
+        assert max(search["q"]) == (1e4 if not edge else cal.Q_SEARCH_LIMITS[1])
 
 
 def test_q_search_monotone_means_falling_to_the_limit_from_the_grid_edge(monkeypatch):
     """A cost that wobbles inside the grid but falls at every decade from the grid's edge to
     the search limit is monotone toward the edge (no q identified); a flat cost, whose
     tie-break walks to the lower limit, is on the edge but not monotone."""
-    from railradio.nr import tracking as tr
+    from railradio.nr import calibration as cal
 
     monkeypatch.setattr(
-        tr,
+        cal,
         "measurement_errors",
         lambda ds, strength, with_distance: (np.full(100, 0.01), np.full(100, 1.0), np.full(100, 100.0)),
     )
-    monkeypatch.setattr(tr, "track", lambda ds, *a, cfg=None, **k: {"q": a[4].q} if cfg is None else {"q": cfg.q})
+    monkeypatch.setattr(cal, "track", lambda ds, *a, cfg=None, **k: {"q": a[4].q} if cfg is None else {"q": cfg.q})
     args = (None, "aod_toa", np.arange(3) * 500.0, 15.0, 7.5, 0.1)
     wobble = {0.01: 12.0, 1.0: 12.5, 100.0: 7.0}
-    monkeypatch.setattr(tr, "_nees_cost", lambda ds, out: wobble.get(out["q"], abs(np.log10(out["q"] / 1e9))))
+    monkeypatch.setattr(cal, "_nees_cost", lambda ds, out: wobble.get(out["q"], abs(np.log10(out["q"] / 1e9))))
     search = {}
-    tr.calibrate(*args, q_grid=np.array([0.01, 1.0, 100.0]), gate=True, search=search)
+    cal.calibrate(*args, q_grid=np.array([0.01, 1.0, 100.0]), gate=True, search=search)
     assert search["at_edge"] and search["monotone"]
-    monkeypatch.setattr(tr, "_nees_cost", lambda ds, out: 1.0)
+    monkeypatch.setattr(cal, "_nees_cost", lambda ds, out: 1.0)
     search = {}
-    cfg = tr.calibrate(*args, q_grid=np.array([0.01, 1.0, 100.0]), gate=True, search=search)
-    assert cfg.q == pytest.approx(tr.Q_SEARCH_LIMITS[0]) and search["at_edge"] and not search["monotone"]
+    cfg = cal.calibrate(*args, q_grid=np.array([0.01, 1.0, 100.0]), gate=True, search=search)
+    assert cfg.q == pytest.approx(cal.Q_SEARCH_LIMITS[0]) and search["at_edge"] and not search["monotone"]

@@ -7,12 +7,14 @@ import pytest
 import yaml
 
 from railradio.nr.channel import TdlProfile
+from railradio.nr.correlator import Correlator
 from railradio.nr.link import ShadowingMap, link_budget
 from railradio.nr.numerology import SAMPLE_RATE_HZ
-from railradio.nr.receiver import Correlator, Links, ReceiverConfig, Synthesizer
+from railradio.nr.receiver import ReceiverConfig
 from railradio.nr.reference import reference_correlation, reference_received
 from railradio.nr.simulate import Synthesis, scenario_from_config
 from railradio.nr.ssb import qpsk_pool
+from railradio.nr.synthesis import Links, Synthesizer
 from railradio.nr.traffic import ServingCell, ServingRule
 from railradio.rng import spawn_key
 

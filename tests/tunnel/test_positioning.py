@@ -5,8 +5,10 @@ import pytest
 
 from railradio.constants import SPEED_OF_LIGHT_M_S
 from railradio.tunnel.geometry import Cable, Tunnel
+from railradio.tunnel.measurement import MeasurementModel
 from railradio.tunnel.positioning import cep, gain_to_offset_m, gdop_seed, gdop_tdoa_along, rssi_ls, tdoa_gauss_newton
-from railradio.tunnel.simulate import MeasurementModel, Train, wideband_candidates
+from railradio.tunnel.simulate import Train
+from railradio.tunnel.wideband import wideband_candidates
 
 H = 3.15
 
@@ -83,7 +85,7 @@ def test_ambiguity_resolved_from_the_measurements_alone():
     """Noiseless delays over a whole crossing (every feed, both sides, section ends): the
     receivers' delay pattern and continuity from the first section give the true side and
     feed at every epoch, without the truth; a flipped fix is counted as wrong."""
-    from railradio.tunnel.simulate import ambiguity_wrong, resolve_ambiguity
+    from railradio.tunnel.wideband import ambiguity_wrong, resolve_ambiguity
 
     tun, cab, tr, head, x_rx, cand = _crossing()
     h, fix = resolve_ambiguity(cand, tr.receiver_offsets_m, cab.feed_spacing_m, (0.0, cab.feed_spacing_m), 20.0)
@@ -99,7 +101,7 @@ def test_ambiguity_resolved_from_the_measurements_alone():
 
 
 def test_ambiguity_robust_to_one_wrong_peak_and_bad_input():
-    from railradio.tunnel.simulate import resolve_ambiguity
+    from railradio.tunnel.wideband import resolve_ambiguity
 
     tun, cab, tr, head, x_rx, cand = _crossing(step=5.0)
     bad = cand.copy()

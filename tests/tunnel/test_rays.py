@@ -9,8 +9,9 @@ from railradio.constants import SPEED_OF_LIGHT_M_S
 from railradio.tunnel.channel import beat_length_m, coherent_gain_by_order, moving_mean, offset_grid_m, tabulate
 from railradio.tunnel.geometry import Cable, Tunnel
 from railradio.tunnel.keys import ENGINE_TOL_COHERENT_DB, ENGINE_TOL_MEAN_DB
+from railradio.tunnel.lifting import image_coherent_gain, lift, reflection_product, trace
 from railradio.tunnel.materials import CONCRETE_900MHZ
-from railradio.tunnel.rays import image_coherent_gain, image_families, lift, reflection_product, sbr_families, trace
+from railradio.tunnel.rays import image_families, sbr_families
 
 LAM = SPEED_OF_LIGHT_M_S / 900e6
 RECT = Tunnel(shape="rect")
@@ -133,7 +134,7 @@ def test_local_mean_far_from_a_slot_decays_at_the_eh11_attenuation():
     # the order converged there; the incoherent ray-power sum (~1/d) would fail this
     import yaml
 
-    from railradio.tunnel.study import far_decay
+    from railradio.tunnel.engine_checks import far_decay
 
     cfg = yaml.safe_load(open("config/config.yaml"))["tunnel"]
     far = far_decay(cfg)
@@ -165,7 +166,8 @@ def test_the_table_covers_every_slot_and_a_short_table_fails_the_cutoff_check():
 
     import yaml
 
-    from railradio.tunnel.study import cable_from_config, cutoff_check, local_mean_window, tunnel_from_config
+    from railradio.tunnel.engine_checks import cutoff_check
+    from railradio.tunnel.study import cable_from_config, local_mean_window, tunnel_from_config
 
     root = pathlib.Path(__file__).resolve().parents[2]
     cfg = yaml.safe_load(open(root / "config/config.yaml"))["tunnel"]

@@ -5,19 +5,14 @@ import pytest
 import yaml
 
 from railradio.config import deep_merge
-from railradio.tunnel.simulate import (
-    MeasurementModel,
-    calibrate_separable,
-    delay_error_field,
-    kf_realizations,
-    run_train,
-)
+from railradio.tunnel.measurement import MeasurementModel, delay_error_field
+from railradio.tunnel.sensitivity import sensitivity_cases
+from railradio.tunnel.simulate import calibrate_separable, kf_realizations, run_train
 from railradio.tunnel.study import (
     cable_from_config,
     make_order,
     make_table,
     measurement_from_config,
-    sensitivity_cases,
     train_from_config,
     tunnel_from_config,
 )
@@ -93,7 +88,7 @@ def test_wideband_peak_recovers_a_single_path_delay():
     from railradio.tunnel.channel import offset_grid_m, tabulate
     from railradio.tunnel.geometry import Cable, Tunnel
     from railradio.tunnel.rays import image_families
-    from railradio.tunnel.simulate import peak_interp_bound_s, wideband_delays
+    from railradio.tunnel.wideband import peak_interp_bound_s, wideband_delays
 
     tun, cab = Tunnel(length_m=2000.0, shape="rect"), Cable()
     step = 0.04

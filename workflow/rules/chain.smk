@@ -49,6 +49,8 @@ rule chain_summary:
         "results/chain/summary.nc",
     log:
         "results/logs/chain/summary.log",
+    benchmark:
+        "results/benchmarks/chain/summary.tsv"
     resources:
         mem_mb=2000,
     conda:
@@ -71,6 +73,8 @@ rule chain_key_numbers:
         figure_max_sigma_m=CH_FIGURE_MAX_SIGMA_M,
     log:
         "results/logs/chain/key_numbers.log",
+    benchmark:
+        "results/benchmarks/chain/key_numbers.tsv"
     conda:
         "../envs/railradio.yaml"
     script:
@@ -92,6 +96,8 @@ rule chain_figure:
         figure_max_sigma_m=CH_FIGURE_MAX_SIGMA_M,
     log:
         "results/logs/chain/figure.log",
+    benchmark:
+        "results/benchmarks/chain/figure.tsv"
     conda:
         "../envs/railradio.yaml"
     script:

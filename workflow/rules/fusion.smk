@@ -60,6 +60,8 @@ rule fusion_sweep:
         sweep="{sweep}",
     log:
         "results/logs/fusion/sweep_{sweep}.log",
+    benchmark:
+        "results/benchmarks/fusion/sweep_{sweep}.tsv"
     conda:
         "../envs/railradio.yaml"
     script:
@@ -81,6 +83,8 @@ rule fusion_figure:
         sweep=lambda w: FUSION_FIGURE_SWEEP[w.name],
     log:
         "results/logs/fusion/figure_{name}.log",
+    benchmark:
+        "results/benchmarks/fusion/figure_{name}.tsv"
     wildcard_constraints:
         name="distance|tdoa_error|aoa_error",
     conda:
@@ -100,6 +104,8 @@ rule fusion_key_numbers:
         sweeps=FUSION_SWEEPS,
     log:
         "results/logs/fusion/key_numbers.log",
+    benchmark:
+        "results/benchmarks/fusion/key_numbers.tsv"
     conda:
         "../envs/railradio.yaml"
     script:
@@ -150,6 +156,8 @@ rule fusion_sens_sweep:
         kind="{kind}",
     log:
         "results/logs/fusion/sens_sweep_{kind}.log",
+    benchmark:
+        "results/benchmarks/fusion/sens_sweep_{kind}.tsv"
     wildcard_constraints:
         kind="curve|rho",
     conda:
@@ -172,6 +180,8 @@ rule fusion_sens_figure:
         png="results/figures/fusion_sensitivity.png",
     log:
         "results/logs/fusion/sens_figure.log",
+    benchmark:
+        "results/benchmarks/fusion/sens_figure.tsv"
     conda:
         "../envs/railradio.yaml"
     script:
@@ -187,6 +197,8 @@ rule fusion_sens_key_numbers:
         "results/sens/fusion/key_numbers.json",
     log:
         "results/logs/fusion/sens_key_numbers.log",
+    benchmark:
+        "results/benchmarks/fusion/sens_key_numbers.tsv"
     conda:
         "../envs/railradio.yaml"
     script:

@@ -98,6 +98,8 @@ rule handover_summary:
         policies=HO["policies"],
     log:
         "results/logs/handover/summary.log",
+    benchmark:
+        "results/benchmarks/handover/summary.tsv"
     resources:
         mem_mb=3000,
     conda:
@@ -148,6 +150,8 @@ rule handover_sensitivity:
         speed_kmh=float(HO_SENS["speed_kmh"]),
     log:
         "results/logs/handover/sensitivity.log",
+    benchmark:
+        "results/benchmarks/handover/sensitivity.tsv"
     conda:
         "../envs/railradio.yaml"
     script:
@@ -167,6 +171,8 @@ rule handover_figure:
         png="results/figures/{name}.png",
     log:
         "results/logs/handover/figure_{name}.log",
+    benchmark:
+        "results/benchmarks/handover/figure_{name}.tsv"
     wildcard_constraints:
         name="|".join(HO_FIGURES),
     conda:
@@ -214,6 +220,8 @@ rule handover_key_numbers:
         sim=HO_SIM,
     log:
         "results/logs/handover/key_numbers.log",
+    benchmark:
+        "results/benchmarks/handover/key_numbers.tsv"
     conda:
         "../envs/railradio.yaml"
     script:

@@ -5,7 +5,7 @@ from railradio.nr.workflow import receiver_selection as nr_selection
 from railradio.nr.simulate import scenario_from_config
 from railradio.nr.workflow import sim_config as nr_sim
 from railradio.nr import cases as nr_cases
-from railradio.nr.tracking import VARIANTS as NR_TRACKER_VARIANTS
+from railradio.nr.measurement import VARIANTS as NR_TRACKER_VARIANTS
 
 # (validated with every cross-key rule in common.smk: railradio.config_checks)
 NR = config["nr"]
@@ -60,6 +60,8 @@ rule nr_trajectory:
         n_epochs=NR_EPOCHS,
     log:
         "results/logs/nr/trajectory.log",
+    benchmark:
+        "results/benchmarks/nr/trajectory.tsv"
     conda:
         "../envs/railradio.yaml"
     script:
@@ -197,6 +199,8 @@ rule nr_sample:
         epochs=[min(2000, NR_EPOCHS - 1)],
     log:
         "results/logs/nr/sample.log",
+    benchmark:
+        "results/benchmarks/nr/sample.tsv"
     conda:
         "../envs/railradio.yaml"
     script:
@@ -214,6 +218,8 @@ rule nr_figures:
         [report(f, caption="../report/nr.rst", category="nr") for f in STUDY_FIGURES["nr"]],
     log:
         "results/logs/nr/figures.log",
+    benchmark:
+        "results/benchmarks/nr/figures.tsv"
     conda:
         "../envs/railradio.yaml"
     script:
@@ -231,6 +237,8 @@ rule nr_key_numbers:
         "results/nr/key_numbers.json",
     log:
         "results/logs/nr/key_numbers.log",
+    benchmark:
+        "results/benchmarks/nr/key_numbers.tsv"
     conda:
         "../envs/railradio.yaml"
     script:
@@ -330,6 +338,8 @@ rule nr_case_key_numbers:
                                       if nr_cases.sync_sigma_s(NR_CASES[c]) > 0},
     log:
         "results/logs/nr/cases/key_numbers.log",
+    benchmark:
+        "results/benchmarks/nr/cases/key_numbers.tsv"
     conda:
         "../envs/railradio.yaml"
     script:
@@ -351,6 +361,8 @@ rule nr_case_figure:
         cases=["base"] + [c for c in NR_CASES if not any(c in sw["cases"] for sw in NR_SWEEPS.values())],
     log:
         "results/logs/nr/cases/figure.log",
+    benchmark:
+        "results/benchmarks/nr/cases/figure.tsv"
     conda:
         "../envs/railradio.yaml"
     script:
@@ -374,6 +386,8 @@ rule nr_case_sweeps_figure:
         sync_sigma_s={c: nr_cases.sync_sigma_s(NR_CASES[c]) for c in NR_CASES},
     log:
         "results/logs/nr/cases/sweeps_figure.log",
+    benchmark:
+        "results/benchmarks/nr/cases/sweeps_figure.tsv"
     conda:
         "../envs/railradio.yaml"
     script:

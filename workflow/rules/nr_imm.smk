@@ -41,6 +41,8 @@ rule nr_imm_key_numbers:
         window_s=NR_IMM["window_s"],
     log:
         "results/logs/nr/imm_key_numbers.log",
+    benchmark:
+        "results/benchmarks/nr/imm_key_numbers.tsv"
     conda:
         "../envs/railradio.yaml"
     script:
@@ -62,6 +64,8 @@ rule nr_imm_figure:
         window_s=NR_IMM["figure_window_s"],
     log:
         "results/logs/nr/imm_figure.log",
+    benchmark:
+        "results/benchmarks/nr/imm_figure.tsv"
     conda:
         "../envs/railradio.yaml"
     script:

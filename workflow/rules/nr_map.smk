@@ -84,6 +84,8 @@ rule nr_map_key_numbers:
         nr=NR,
     log:
         "results/logs/nr/map/key_numbers.log",
+    benchmark:
+        "results/benchmarks/nr/map/key_numbers.tsv"
     conda:
         "../envs/railradio.yaml"
     script:
@@ -106,6 +108,8 @@ rule nr_map_figure:
         nr=NR,
     log:
         "results/logs/nr/map/figure.log",
+    benchmark:
+        "results/benchmarks/nr/map/figure.tsv"
     conda:
         "../envs/railradio.yaml"
     script:

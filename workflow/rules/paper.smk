@@ -17,6 +17,8 @@ rule key_numbers:
         config=config,
     log:
         "results/logs/paper/key_numbers.log",
+    benchmark:
+        "results/benchmarks/paper/key_numbers.tsv"
     conda:
         "../envs/railradio.yaml"
     script:
@@ -36,6 +38,8 @@ rule paper:
         "results/paper/main.pdf",
     log:
         "results/logs/paper/latexmk.log",
+    benchmark:
+        "results/benchmarks/paper/latexmk.tsv"
     conda:
         "../envs/railradio.yaml"
     script:

@@ -2,7 +2,8 @@
 # Chain: ray families -> tabulated slot-to-receiver channel per engine (NetCDF) ->
 # RSSI map, delay spread, coverage (NetCDF) -> one run per train type and channel /
 # measurement variant (snapshot fixes, KF, PF; NetCDF) -> figures + key numbers.
-from railradio.tunnel.study import SIDE_WALL, TABLES, VARIANTS, channel_config, sensitivity_cases
+from railradio.tunnel.sensitivity import sensitivity_cases
+from railradio.tunnel.study import SIDE_WALL, TABLES, VARIANTS, channel_config
 
 TUNNEL = config["tunnel"]
 TUNNEL_TABLES = [n for n in TABLES if SIDE_WALL not in n]  # image (square), sbr (circle), seed (the seed's model)
@@ -211,6 +212,8 @@ rule tunnel_figures:
         names=TUNNEL_FIGURE_NAMES,
     log:
         "results/logs/tunnel/figures.log",
+    benchmark:
+        "results/benchmarks/tunnel/figures.tsv"
     conda:
         "../envs/railradio.yaml"
     script:
@@ -233,6 +236,8 @@ rule tunnel_sens_figure:
         trains=TUNNEL_TRAINS,
     log:
         "results/logs/tunnel/sens_figure.log",
+    benchmark:
+        "results/benchmarks/tunnel/sens_figure.tsv"
     conda:
         "../envs/railradio.yaml"
     script:
@@ -258,6 +263,8 @@ rule tunnel_key_numbers:
         trains=TUNNEL_TRAINS,
     log:
         "results/logs/tunnel/key_numbers.log",
+    benchmark:
+        "results/benchmarks/tunnel/key_numbers.tsv"
     conda:
         "../envs/railradio.yaml"
     script:

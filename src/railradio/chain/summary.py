@@ -104,22 +104,36 @@ def crossover(sigmas_m, p_policy, p_ref: float) -> tuple[float, str]:
 STATUS_CODE = {"found": 0.0, "above": 1.0, "never": -1.0}
 
 
+def _put(
+    out: dict[str, Any], name: str, unit: str, desc: str, value: float | None, se: float | None = None, digits: int = 3
+) -> None:
+    """Add key ``name`` to ``out`` (a non-finite value or standard error: null)."""
+    out[name] = KeySpec(name, unit, desc, digits=digits).entry(
+        None if value is None or not math.isfinite(value) else float(value),
+        None if se is None or not math.isfinite(se) else float(se),
+    )
+
+
 def key_numbers(summ: xr.Dataset, nr_stats: dict[str, dict[str, float]], figure_max_sigma_m: float) -> dict[str, Any]:
     """Key numbers ``chain.*`` (the chain is ours: no source value)."""
     out: dict[str, Any] = {}
-
-    def put(name, unit, desc, value, se=None, digits=3):
-        out[name] = KeySpec(name, unit, desc, digits=digits).entry(
-            None if value is None or not math.isfinite(value) else float(value),
-            None if se is None or not math.isfinite(se) else float(se),
-        )
-
     v = float(summ["speed_kmh"])
     gm = summ.where(np.isfinite(summ["sigma_m"]), drop=True).sortby("sigma_m")
-    sig = gm["sigma_m"].values
     a3 = summ["success"].sel(policy="a3")
     a3_ref = float(a3.sel(input=gm["input"].values[0]))
-    put(
+    _a3_keys(out, summ, gm, v, a3, a3_ref)
+    _nr_input_keys(out, summ, nr_stats, v, a3_ref)
+    for p in ("joint", "distance"):
+        _policy_sigma_keys(out, summ, gm, p, a3_ref, figure_max_sigma_m)
+    _comparison_keys(out, summ, gm, figure_max_sigma_m)
+    return out
+
+
+def _a3_keys(out: dict[str, Any], summ: xr.Dataset, gm: xr.Dataset, v: float, a3: xr.DataArray, a3_ref: float) -> None:
+    """A3 (position-free reference): success and ping-pong at speed v [km/h], and the spread
+    of its success over the position inputs."""
+    _put(
+        out,
         f"chain.a3.success.v{v:g}",
         "1",
         f"A3 success at {v:g} km/h (position-free reference)",
@@ -127,13 +141,15 @@ def key_numbers(summ: xr.Dataset, nr_stats: dict[str, dict[str, float]], figure_
         float(summ["success_se"].sel(policy="a3", input=gm["input"].values[0])),
         4,
     )
-    put(
+    _put(
+        out,
         "chain.a3.success_spread",
         "1",
         "max − min of A3 success over all position inputs (0: A3 ignores position)",
         float(a3.max() - a3.min()),
     )
-    put(
+    _put(
+        out,
         f"chain.a3.pingpong.v{v:g}",
         "1",
         f"A3 ping-pong at {v:g} km/h",
@@ -141,11 +157,19 @@ def key_numbers(summ: xr.Dataset, nr_stats: dict[str, dict[str, float]], figure_
         None,
         4,
     )
+
+
+def _nr_input_keys(
+    out: dict[str, Any], summ: xr.Dataset, nr_stats: dict[str, dict[str, float]], v: float, a3_ref: float
+) -> None:
+    """Per nr position input: joint/distance rates, success minus A3's, and the input's
+    error statistics (``nr_stats[filt]``)."""
     for filt in [str(i)[3:] for i in summ["input"].values if str(i).startswith("nr_")]:
         lab = f"nr_{filt}"
         for p in ("joint", "distance"):
             for rate in ("success", "pingpong"):
-                put(
+                _put(
+                    out,
                     f"chain.nr_{filt}.{p}.{rate}.v{v:g}",
                     "1",
                     f"{p} {rate} at {v:g} km/h with the nr {filt.upper()} position",
@@ -153,109 +177,142 @@ def key_numbers(summ: xr.Dataset, nr_stats: dict[str, dict[str, float]], figure_
                     float(summ[f"{rate}_se"].sel(input=lab, policy=p)),
                     4,
                 )
-            put(
+            _put(
+                out,
                 f"chain.nr_{filt}.{p}.success_minus_a3",
                 "1",
                 f"{p} success with nr {filt.upper()} position minus A3's",
                 float(summ["success"].sel(input=lab, policy=p)) - a3_ref,
             )
-        put(
+        _put(
+            out,
             f"chain.nr_{filt}.sigma_eff_m",
             "m",
             f"RMS along-track error of the nr {filt.upper()} input as fed (bootstrap)",
             float(summ["err_rms_m"].sel(input=lab)),
         )
         st = nr_stats[filt]
-        put(
+        _put(
+            out,
             f"chain.nr_{filt}.err_m.mean",
             "m",
             f"mean signed along-track error of the nr {filt.upper()} (source epochs)",
             st["mean"],
         )
-        put(
+        _put(
+            out,
             f"chain.nr_{filt}.err_m.p95",
             "m",
             f"95th percentile of |along-track error| of the nr {filt.upper()}",
             st["p95"],
         )
-        put(
+        _put(
+            out,
             f"chain.nr_{filt}.err_m.rms",
             "m",
             f"RMS along-track error of the nr {filt.upper()} (source epochs)",
             st["rms"],
         )
-        put(
+        _put(
+            out,
             f"chain.nr_{filt}.outage_share",
             "1",
             "share of used nr epochs with no tracker output (filled: hold + drift)",
             st["outage_share"],
         )
-        put(
+        _put(
+            out,
             f"chain.nr_{filt}.nofix_share",
             "1",
             "share of used nr epochs without any detected RRH (EKF coasts)",
             st["nofix_share"],
         )
-        put(f"chain.nr_{filt}.epochs", "1", "nr epochs within the speed window, pooled over realizations", st["epochs"])
-    for p in ("joint", "distance"):
-        ps = gm["success"].sel(policy=p).values
-        s_star, status = crossover(sig, ps, a3_ref)
-        lo, _ = crossover(
-            sig,
-            gm["success_lo"].sel(policy=p).values,
-            float(summ["success_hi"].sel(policy="a3", input=gm["input"].values[0])),
-        )
-        hi, _ = crossover(
-            sig,
-            gm["success_hi"].sel(policy=p).values,
-            float(summ["success_lo"].sel(policy="a3", input=gm["input"].values[0])),
-        )
-        pre = "chain" if p == "joint" else "chain.distance"
-        put(
-            f"{pre}.sigma_crossover_m",
-            "m",
-            f"Gauss–Markov σ at which {p} success falls to A3's (interpolated; null: status ≠ 0)",
-            s_star,
-        )
-        put(f"{pre}.sigma_crossover_m_lo", "m", f"crossover of {p}'s lower 95% bound with A3's upper bound", lo)
-        put(f"{pre}.sigma_crossover_m_hi", "m", f"crossover of {p}'s upper 95% bound with A3's lower bound", hi)
-        put(
-            f"{pre}.sigma_crossover_status",
+        _put(
+            out,
+            f"chain.nr_{filt}.epochs",
             "1",
-            "0: crossover found; 1: beats A3 at every σ swept; −1: never beats A3",
-            STATUS_CODE[status],
+            "nr epochs within the speed window, pooled over realizations",
+            st["epochs"],
         )
-        in_fig = sig <= figure_max_sigma_m
-        put(
-            f"chain.{p}.beats_a3_all_sigma_fig",
-            "1",
-            f"1 if {p}'s lower 95% bound exceeds A3's upper bound at every σ ≤ {figure_max_sigma_m:g} m",
-            float(
-                np.all(
-                    gm["success_lo"].sel(policy=p).values[in_fig]
-                    > float(summ["success_hi"].sel(policy="a3", input=gm["input"].values[0]))
-                )
-            ),
-        )
-        for s in (0.0, 2.0, figure_max_sigma_m):
-            if s in sig:
-                lab = gm["input"].values[list(sig).index(s)]
-                put(
-                    f"chain.{p}.success.sigma{s:g}",
-                    "1",
-                    f"{p} success at Gauss–Markov σ = {s:g} m",
-                    float(summ["success"].sel(input=lab, policy=p)),
-                    float(summ["success_se"].sel(input=lab, policy=p)),
-                    4,
-                )
-        put(
-            f"chain.{p}.success_drop_fig",
-            "1",
-            f"{p} success at σ = 0 minus at σ = {figure_max_sigma_m:g} m",
-            float(ps[0] - ps[in_fig][-1]),
-        )
+
+
+def _policy_sigma_keys(
+    out: dict[str, Any], summ: xr.Dataset, gm: xr.Dataset, p: str, a3_ref: float, figure_max_sigma_m: float
+) -> None:
+    """Policy ``p`` along the Gauss–Markov σ sweep ``gm``: the crossover with A3 (and of the
+    95 % bounds), whether it beats A3 in the figure's range, success at σ = 0, 2, the
+    figure's largest σ [m], and the drop over the figure's range."""
+    sig = gm["sigma_m"].values
+    ps = gm["success"].sel(policy=p).values
+    s_star, status = crossover(sig, ps, a3_ref)
+    lo, _ = crossover(
+        sig,
+        gm["success_lo"].sel(policy=p).values,
+        float(summ["success_hi"].sel(policy="a3", input=gm["input"].values[0])),
+    )
+    hi, _ = crossover(
+        sig,
+        gm["success_hi"].sel(policy=p).values,
+        float(summ["success_lo"].sel(policy="a3", input=gm["input"].values[0])),
+    )
+    pre = "chain" if p == "joint" else "chain.distance"
+    _put(
+        out,
+        f"{pre}.sigma_crossover_m",
+        "m",
+        f"Gauss–Markov σ at which {p} success falls to A3's (interpolated; null: status ≠ 0)",
+        s_star,
+    )
+    _put(out, f"{pre}.sigma_crossover_m_lo", "m", f"crossover of {p}'s lower 95% bound with A3's upper bound", lo)
+    _put(out, f"{pre}.sigma_crossover_m_hi", "m", f"crossover of {p}'s upper 95% bound with A3's lower bound", hi)
+    _put(
+        out,
+        f"{pre}.sigma_crossover_status",
+        "1",
+        "0: crossover found; 1: beats A3 at every σ swept; −1: never beats A3",
+        STATUS_CODE[status],
+    )
     in_fig = sig <= figure_max_sigma_m
-    put(
+    _put(
+        out,
+        f"chain.{p}.beats_a3_all_sigma_fig",
+        "1",
+        f"1 if {p}'s lower 95% bound exceeds A3's upper bound at every σ ≤ {figure_max_sigma_m:g} m",
+        float(
+            np.all(
+                gm["success_lo"].sel(policy=p).values[in_fig]
+                > float(summ["success_hi"].sel(policy="a3", input=gm["input"].values[0]))
+            )
+        ),
+    )
+    for s in (0.0, 2.0, figure_max_sigma_m):
+        if s in sig:
+            lab = gm["input"].values[list(sig).index(s)]
+            _put(
+                out,
+                f"chain.{p}.success.sigma{s:g}",
+                "1",
+                f"{p} success at Gauss–Markov σ = {s:g} m",
+                float(summ["success"].sel(input=lab, policy=p)),
+                float(summ["success_se"].sel(input=lab, policy=p)),
+                4,
+            )
+    _put(
+        out,
+        f"chain.{p}.success_drop_fig",
+        "1",
+        f"{p} success at σ = 0 minus at σ = {figure_max_sigma_m:g} m",
+        float(ps[0] - ps[in_fig][-1]),
+    )
+
+
+def _comparison_keys(out: dict[str, Any], summ: xr.Dataset, gm: xr.Dataset, figure_max_sigma_m: float) -> None:
+    """Distance against joint in the figure's range, the joint crossover over each nr
+    input's RMS error, the largest σ swept and the handover count (after the crossovers)."""
+    sig = gm["sigma_m"].values
+    in_fig = sig <= figure_max_sigma_m
+    _put(
+        out,
         "chain.distance_minus_joint_min_fig",
         "1",
         f"smallest distance-minus-joint success difference over σ ≤ {figure_max_sigma_m:g} m (> 0: distance better "
@@ -269,12 +326,12 @@ def key_numbers(summ: xr.Dataset, nr_stats: dict[str, dict[str, float]], figure_
     s_star = out["chain.sigma_crossover_m"]["value"]
     for filt in [str(i)[3:] for i in summ["input"].values if str(i).startswith("nr_")]:
         eff = float(summ["err_rms_m"].sel(input=f"nr_{filt}"))
-        put(
+        _put(
+            out,
             f"chain.nr_{filt}.sigma_margin",
             "1",
             f"joint crossover σ over the RMS error of the nr {filt.upper()} input",
             None if s_star is None or eff <= 0 else s_star / eff,
         )
-    put("chain.sigma_max_m", "m", "largest Gauss–Markov σ swept", float(sig[-1]))
-    put("chain.n_handovers", "1", "node handovers per (input, policy)", float(summ["n_handovers"]))
-    return out
+    _put(out, "chain.sigma_max_m", "m", "largest Gauss–Markov σ swept", float(sig[-1]))
+    _put(out, "chain.n_handovers", "1", "node handovers per (input, policy)", float(summ["n_handovers"]))

@@ -14,6 +14,7 @@ the position index, so results do not depend on how positions are chunked.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import asdict, dataclass
 
 import numpy as np
@@ -205,6 +206,35 @@ def trial_normals(seed: int, key: tuple[int, ...], positions: range, n_rows: int
     return z
 
 
+def run_positions(
+    params: PointParams,
+    seed: int,
+    key: tuple[int, ...],
+    n_rows: int,
+    chunk_stats: Callable[[np.ndarray, np.ndarray], dict[str, np.ndarray]],
+    chunk_positions: int = 50,
+) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+    """The Monte Carlo loop of one sweep point, shared by the main study and the sensitivity
+    sweeps: train positions from ``key + (0,)``, then chunks of positions, each with its
+    ``n_rows`` rows of standard normals (:func:`trial_normals`).
+
+    ``chunk_stats(x_true, z)`` maps a chunk's true positions [P] and normals [n_rows, P, T]
+    to per-position statistics (last axis P).  Returns the true positions [n_positions] and
+    the statistics concatenated over the chunks along their last axis.
+    """
+    if chunk_positions < 1:
+        raise ValueError(f"chunk_positions must be >= 1, got {chunk_positions!r}")
+    x_true = train_positions(params, make_rng(seed, key + (0,)))
+    n, t = params.n_positions, params.n_trials
+    parts: list[dict[str, np.ndarray]] = []
+    for start in range(0, n, chunk_positions):
+        idx = range(start, min(start + chunk_positions, n))
+        z = trial_normals(seed, key, idx, n_rows, t)
+        parts.append(chunk_stats(x_true[idx.start : idx.stop], z))
+    cat = {k: np.concatenate([p[k] for p in parts], axis=-1) for k in parts[0]}
+    return x_true, cat
+
+
 def simulate_point(params: PointParams, seed: int, key: tuple[int, ...], chunk_positions: int = 50) -> xr.Dataset:
     """Run one sweep point and return per-position statistics.
 
@@ -225,17 +255,15 @@ def simulate_point(params: PointParams, seed: int, key: tuple[int, ...], chunk_p
         ``sq_err_var`` [m⁴] (variance of the squared error, for Monte Carlo errors),
         clip counts, and ``crlb_var`` [m²] = 1/J(x).
     """
-    if chunk_positions < 1:
-        raise ValueError(f"chunk_positions must be >= 1, got {chunk_positions!r}")
-    x_true = train_positions(params, make_rng(seed, key + (0,)))
-    n, t = params.n_positions, params.n_trials
-    parts: list[dict[str, np.ndarray]] = []
-    for start in range(0, n, chunk_positions):
-        idx = range(start, min(start + chunk_positions, n))
-        n_delta, n_theta = trial_normals(seed, key, idx, 2, t)
-        parts.append(_chunk_stats(params, x_true[idx.start : idx.stop], n_delta, n_theta))
-    cat = {k: np.concatenate([p[k] for p in parts], axis=-1) for k in parts[0]}
+    x_true, cat = run_positions(
+        params, seed, key, 2, lambda xs, z: _chunk_stats(params, xs, z[0], z[1]), chunk_positions
+    )
+    return _point_dataset(params, x_true, cat)
 
+
+def _point_dataset(params: PointParams, x_true: np.ndarray, cat: dict[str, np.ndarray]) -> xr.Dataset:
+    """The dataset of :func:`simulate_point` from the true positions [m] and the per-position
+    statistics of :func:`run_positions`; adds ``crlb_var`` [m²] = 1/J(x)."""
     geom = params.geometry
     crlb_var = 1.0 / fisher_information(x_true, params.sigma_delta_m, params.sigma_aoa_rad, geom)
     pos_dims = ("position",)

@@ -3,7 +3,8 @@
 Two sweeps, each at the study's reference point (d, σ_TDOA, σ_AOA of ``fusion.reference``)
 and with the main study's Monte Carlo engine (:mod:`railradio.fusion.montecarlo`): the
 same train positions (:func:`~railradio.fusion.montecarlo.train_positions`), one generator
-per position spawned from the point's key and the position index, chunked positions:
+per position spawned from the point's key and the position index, chunked positions (the
+shared loop :func:`~railradio.fusion.montecarlo.run_positions`):
 
 * ``curve`` — the track a circular arc of radius R (:mod:`railradio.fusion.arc`; R = ∞, the
   source's straight track, is always the first point).  Estimators ``mismatch_*`` keep the
@@ -47,8 +48,8 @@ from railradio.fusion.correlated import (
 )
 from railradio.fusion.estimators import aoa_on_track, aoa_variance_propagated, clip_to_segment, fuse, tdoa_on_track
 from railradio.fusion.geometry import CellGeometry
-from railradio.fusion.montecarlo import PointParams, train_positions, trial_normals
-from railradio.rng import make_rng, spawn_key, stable_id
+from railradio.fusion.montecarlo import PointParams, run_positions
+from railradio.rng import spawn_key, stable_id
 
 KINDS = ("curve", "rho")
 
@@ -240,29 +241,36 @@ def simulate_sens_point(p: SensPoint, seed: int, key: tuple[int, ...], chunk_pos
     (ρ) rows of standard normals, the first two in the main study's order (range
     difference, angle; for ρ: Δ2, Δ0, angle).
     """
-    if chunk_positions < 1:
-        raise ValueError(f"chunk_positions must be >= 1, got {chunk_positions!r}")
-    b = p.base
-    x_true = train_positions(b, make_rng(seed, key + (0,)))
     estimators = ESTIMATORS[p.kind]
     n_rows = 2 if p.kind == "curve" else 3
-    n, t = b.n_positions, b.n_trials
-    parts = []
-    for start in range(0, n, chunk_positions):
-        idx = range(start, min(start + chunk_positions, n))
-        z = trial_normals(seed, key, idx, n_rows, t)
-        xs = x_true[idx.start : idx.stop]
-        est = (_curve_chunk if p.kind == "curve" else _rho_chunk)(p, xs, z)
-        stats: dict[str, np.ndarray] = {}
-        err = np.stack([est[e] for e in estimators]) - xs[None, :, None]  # [E, P, T]
-        sq = err * err
-        stats["mse"] = sq.mean(axis=2)
-        stats["bias"] = err.mean(axis=2)
-        stats["sq_err_var"] = sq.var(axis=2, ddof=1)
-        stats.update({k: v for k, v in est.items() if k.startswith("n_")})
-        parts.append(stats)
-    cat = {k: np.concatenate([q[k] for q in parts], axis=-1) for k in parts[0]}
+    x_true, cat = run_positions(
+        p.base, seed, key, n_rows, lambda xs, z: _sens_chunk_stats(p, estimators, xs, z), chunk_positions
+    )
+    return _sens_dataset(p, estimators, x_true, cat)
 
+
+def _sens_chunk_stats(
+    p: SensPoint, estimators: tuple[str, ...], xs: np.ndarray, z: np.ndarray
+) -> dict[str, np.ndarray]:
+    """Per-position statistics of one chunk: ``mse`` [m²], ``bias`` [m], ``sq_err_var`` [m⁴]
+    over estimator × position and the trial counts per position; xs [P], z [n_rows, P, T]."""
+    est = (_curve_chunk if p.kind == "curve" else _rho_chunk)(p, xs, z)
+    stats: dict[str, np.ndarray] = {}
+    err = np.stack([est[e] for e in estimators]) - xs[None, :, None]  # [E, P, T]
+    sq = err * err
+    stats["mse"] = sq.mean(axis=2)
+    stats["bias"] = err.mean(axis=2)
+    stats["sq_err_var"] = sq.var(axis=2, ddof=1)
+    stats.update({k: v for k, v in est.items() if k.startswith("n_")})
+    return stats
+
+
+def _sens_dataset(
+    p: SensPoint, estimators: tuple[str, ...], x_true: np.ndarray, cat: dict[str, np.ndarray]
+) -> xr.Dataset:
+    """The dataset of :func:`simulate_sens_point` from the true positions [m] and the
+    per-position statistics; adds ``crlb_var`` [m²] (arc or correlated-TDOA bound)."""
+    b = p.base
     if p.kind == "curve":
         arc = p.arc
         crlb_var = 1.0 / fisher_information_arc(x_true, b.sigma_delta_m, b.sigma_aoa_rad, arc)

@@ -73,10 +73,36 @@ def cost_grid(
     if n_blocks < 1 or runs_per_block < 1:
         raise ValueError("n_blocks and runs_per_block must be >= 1")
     alphas = np.asarray(alphas, dtype=float)
-    kin = kinematics(scn, speed_kmh)
-    n_m = len(m_values)
-    per_run = {meth: [[] for _ in m_values] for meth in METHODS}
     full_m = [m for m in m_values if 2 <= m <= full_grid_max_m]
+    per_run, full_runs = _run_costs(
+        scn, speed_kmh, seed, n_blocks, runs_per_block, m_values, alphas, full_m, full_grid_step
+    )
+    cost, cost_se = _cost_mean_se(per_run, len(m_values), alphas.size)
+    full = _full_grid_check(per_run, full_runs, m_values, METHODS.index(scn.joint.wslr))
+    ds = _cost_dataset(cost, cost_se, full, m_values, alphas)
+    ds["speed_kmh"] = xr.Variable((), float(speed_kmh), {"units": "km/h", "long_name": "train speed"})
+    ds["n_runs"] = xr.Variable((), n_blocks * runs_per_block, {"units": "1", "long_name": "crossings"})
+    ds["full_grid_step"] = xr.Variable((), full_grid_step, {"units": "1", "long_name": "step of the full weight grid"})
+    ds.attrs["config_wslr"] = scn.joint.wslr
+    return ds
+
+
+def _run_costs(
+    scn: Scenario,
+    speed_kmh: float,
+    seed: int,
+    n_blocks: int,
+    runs_per_block: int,
+    m_values: list[int],
+    alphas: np.ndarray,
+    full_m: list[int],
+    full_grid_step: float,
+) -> tuple[dict[str, list[list[np.ndarray]]], dict[int, list[np.ndarray]]]:
+    """Per-run costs of every block (``stream="cost"``): per WSLR method and m, the [A, B]
+    costs of the geometric family per block; per m of ``full_m``, the [A_full, B] costs of
+    the full grid (config WSLR method) per block."""
+    kin = kinematics(scn, speed_kmh)
+    per_run = {meth: [[] for _ in m_values] for meth in METHODS}
     full_runs = {m: [] for m in full_m}
     for blk in range(n_blocks):
         draws = draw_block(seed, speed_kmh, blk, runs_per_block, kin, scn.train.n_nodes, stream="cost")
@@ -87,17 +113,30 @@ def cost_grid(
                 per_run[meth][j].append(_block_costs(ctx, band, geometric_weight_table(m, alphas), meth))
         for m in full_m:
             full_runs[m].append(_block_costs(ctx, band, full_weight_table(m, full_grid_step), scn.joint.wslr))
-    cost = np.zeros((len(METHODS), n_m, alphas.size))
+    return per_run, full_runs
+
+
+def _cost_mean_se(per_run: dict[str, list[list[np.ndarray]]], n_m: int, n_alpha: int) -> tuple[np.ndarray, np.ndarray]:
+    """The cost J [wslr, m, alpha] (mean over runs) and its Monte Carlo standard error."""
+    cost = np.zeros((len(METHODS), n_m, n_alpha))
     cost_se = np.zeros_like(cost)
     for a, meth in enumerate(METHODS):
         for j in range(n_m):
             c = np.concatenate(per_run[meth][j], axis=1)  # [A, R]
             cost[a, j] = c.mean(axis=1)
             cost_se[a, j] = c.std(axis=1, ddof=1) / np.sqrt(c.shape[1])
+    return cost, cost_se
+
+
+def _full_grid_check(
+    per_run: dict[str, list[list[np.ndarray]]], full_runs: dict[int, list[np.ndarray]], m_values: list[int], i_cfg: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per m: the full grid's min J, the geometric family's min J minus it on the same runs
+    (method ``METHODS[i_cfg]``) and that gain's paired standard error (NaN: not computed)."""
+    n_m = len(m_values)
     full_min = np.full(n_m, np.nan)
     full_gain = np.full(n_m, np.nan)
     full_gain_se = np.full(n_m, np.nan)
-    i_cfg = METHODS.index(scn.joint.wslr)
     for j, m in enumerate(m_values):
         if m in full_runs:
             cf = np.concatenate(full_runs[m], axis=1)  # [A_full, R]
@@ -107,6 +146,20 @@ def cost_grid(
             d = cg[int(cg.mean(axis=1).argmin())] - cf[jf]  # paired, per run
             full_gain[j] = d.mean()
             full_gain_se[j] = d.std(ddof=1) / np.sqrt(d.size)
+    return full_min, full_gain, full_gain_se
+
+
+def _cost_dataset(
+    cost: np.ndarray,
+    cost_se: np.ndarray,
+    full: tuple[np.ndarray, np.ndarray, np.ndarray],
+    m_values: list[int],
+    alphas: np.ndarray,
+) -> xr.Dataset:
+    """The cost dataset: J and its standard error, the minima over alpha, the settings
+    within one standard error of the minimum, the argmin (m, alpha) per WSLR method and the
+    full-grid check ``full`` of :func:`_full_grid_check`."""
+    full_min, full_gain, full_gain_se = full
     best = cost.reshape(len(METHODS), -1).argmin(axis=1)
     best_m = np.array([m_values[i // alphas.size] for i in best])
     best_alpha = np.array([alphas[i % alphas.size] for i in best])
@@ -116,7 +169,7 @@ def cost_grid(
     ia = cost.argmin(axis=2)  # [wslr, m]
     cost_min_m = np.take_along_axis(cost, ia[..., None], axis=2)[..., 0]
     cost_min_m_se = np.take_along_axis(cost_se, ia[..., None], axis=2)[..., 0]
-    ds = xr.Dataset(
+    return xr.Dataset(
         {
             "cost": (
                 ("wslr", "m", "alpha"),
@@ -170,11 +223,6 @@ def cost_grid(
             "alpha": ("alpha", alphas, {"units": "1", "long_name": "geometric weight parameter alpha"}),
         },
     )
-    ds["speed_kmh"] = xr.Variable((), float(speed_kmh), {"units": "km/h", "long_name": "train speed"})
-    ds["n_runs"] = xr.Variable((), n_blocks * runs_per_block, {"units": "1", "long_name": "crossings"})
-    ds["full_grid_step"] = xr.Variable((), full_grid_step, {"units": "1", "long_name": "step of the full weight grid"})
-    ds.attrs["config_wslr"] = scn.joint.wslr
-    return ds
 
 
 def best_weights(ds: xr.Dataset, method: str) -> tuple[int, float]:

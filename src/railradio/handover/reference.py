@@ -268,8 +268,8 @@ def _distance(run: _Run) -> list[dict]:
 
 def _joint(run: _Run) -> list[dict]:
     sc = run.scn
-    rd, jt, ex, tr = sc.radio, sc.joint, sc.execution, sc.train
-    L, xc, v = rd.spacing_m, 0.5 * rd.spacing_m, run.v
+    rd, jt, ex = sc.radio, sc.joint, sc.execution
+    L, v = rd.spacing_m, run.v
     a_l3 = 1 - (1 - 1 / 2 ** (rd.l3_k / 4)) ** (run.tm / rd.l3_reference_period_s)
     if jt.measurements == "raw":
         sigma0 = math.sqrt(2) * rd.meas_sigma_db
@@ -295,16 +295,30 @@ def _joint(run: _Run) -> list[dict]:
         pl_e, pr_e = L / (1 + q * r), L * q / (q + r)
         return pl_e - v * ex.t0_s, pr_e - v * ex.t0_s
 
-    # regressor of every node's estimated position, L3-filtered like the gaps
+    freg = _filtered_regressor(run, reg, a_l3)
+    k_head, fit = _head_fit(run, freg, gap, band)
+    ks = _node_commands(run, freg, gap, reg, k_head, fit, gaph)
+    return _joint_outcomes(run, ks, fit[3])  # fit = (a_hat, n_hat, PL, PR, Xm)
+
+
+def _filtered_regressor(run: _Run, reg, a_l3: float) -> list[list[float]]:
+    """Regressor of every node's estimated position, L3-filtered like the gaps: [node][k]."""
+    jt = run.scn.joint
     freg = []
-    for i in range(tr.n_nodes):
+    for i in range(run.scn.train.n_nodes):
         f_i = []
         for k in range(run.k_n):
             r = reg(run.x_hat(i, k))
             f_i.append(r if (k == 0 or jt.measurements == "raw") else (1 - a_l3) * f_i[-1] + a_l3 * r)
         freg.append(f_i)
+    return freg
 
-    # head: running least squares in the zone, trigger at x_hat >= Xm
+
+def _head_fit(run: _Run, freg: list[list[float]], gap, band) -> tuple[int, tuple]:
+    """Head: running least squares in the zone, trigger at x_hat >= Xm.  Returns the head's
+    command sample and the fit (a_hat, n_hat, PL, PR, Xm) there."""
+    rd, jt, tr = run.scn.radio, run.scn.joint, run.scn.train
+    xc = 0.5 * rd.spacing_m
     s1 = sr = srr = sg = srg = 0.0
     k_head, fit = run.k_n - 1, None
     for k in range(run.k_n):
@@ -329,6 +343,14 @@ def _joint(run: _Run) -> list[dict]:
         if s1 >= jt.min_fit_samples and xh >= xm:
             k_head = k
             break
+    return k_head, fit
+
+
+def _node_commands(run: _Run, freg: list[list[float]], gap, reg, k_head: int, fit: tuple, gaph: float) -> list[int]:
+    """Command sample of every node: the head's, then each follower's from the WSLR of the
+    previous nodes' deviations from the head's fit."""
+    jt, ex, tr = run.scn.joint, run.scn.execution, run.scn.train
+    L, v = run.scn.radio.spacing_m, run.v
     a_hat, n_hat, pl, pr, xm = fit
 
     def model(x):
@@ -371,8 +393,15 @@ def _joint(run: _Run) -> list[dict]:
         ks.append(k_i)
         xs.append(x_i)
         devs.append(gap(i, k_i) - (a_hat + 10 * n_hat * freg[i][k_i]))
+    return ks
+
+
+def _joint_outcomes(run: _Run, ks: list[int], pr: float) -> list[dict]:
+    """Outcomes of the nodes' commands at samples ``ks``; the joint retry rule uses the
+    band's right edge ``pr``."""
+    jt, ex, v = run.scn.joint, run.scn.execution, run.v
     out = []
-    for i in range(tr.n_nodes):
+    for i in range(run.scn.train.n_nodes):
         x_cmd_hat = run.x_hat(i, ks[i])
         back = v * ex.t0_s if jt.retry_rule == "completed" else 0.0
 

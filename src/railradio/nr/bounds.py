@@ -8,7 +8,7 @@ Bounds (functions of the signal model alone):
   the PSS+SSS energy of block b after its beam gain, N0_b the thermal noise of both chains
   plus, as Gaussian interference, what the other RRHs send on the PSS+SSS subcarriers
   during that block's symbols — their own SS block b on their beam b (every RRH sends its
-  burst at the same instants; the data fill other symbols, :class:`railradio.nr.receiver.Synthesizer`).
+  burst at the same instants; the data fill other symbols, :class:`railradio.nr.synthesis.Synthesizer`).
 * The posterior CRB recursion of Tichavský et al. (1998) as a function of the
   per-measurement variances it is given (:func:`pcrb_m`).
 
@@ -28,8 +28,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from railradio.constants import SPEED_OF_LIGHT_M_S
+from railradio.nr.dynamics import process_noise, transition
+from railradio.nr.measurement import jacobian
 from railradio.nr.numerology import SAMPLE_RATE_HZ, SUBCARRIER_SPACING_HZ
-from railradio.nr.tracking import jacobian, process_noise, transition
 
 PSS_SSS_SUBCARRIERS = 127
 BETA_RMS_HZ = SUBCARRIER_SPACING_HZ * np.sqrt((PSS_SSS_SUBCARRIERS**2 - 1) / 12)
@@ -54,7 +55,7 @@ def block_e_over_n0(links, n_chains: int | None = None) -> NDArray[np.float64]:
     """[links, blocks] E_b/N0_b of every link's PSS+SSS in every SS block: its energy after
     the block's beam gain over thermal noise plus the other links' PSS+SSS of the same block
     (their beam b) as white interference over those subcarriers. ``links``: a
-    :class:`railradio.nr.receiver.Links`."""
+    :class:`railradio.nr.synthesis.Links`."""
     t_u = 1.0 / SUBCARRIER_SPACING_HZ
     chains = links.n_chains if n_chains is None else n_chains
     p_sc = links.amp[:, None] ** 2 * links.beam_amp**2  # [links, blocks] power per subcarrier [W]

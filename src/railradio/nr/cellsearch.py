@@ -35,8 +35,9 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from railradio.nr.correlator import BlockCorrelation, Correlator
 from railradio.nr.geometry import Deployment
-from railradio.nr.receiver import BlockCorrelation, Correlator, ReceiverConfig
+from railradio.nr.receiver import ReceiverConfig
 
 
 @dataclass(frozen=True)

@@ -288,7 +288,8 @@ def _square(x: float, y: float, colour: str):
 def plot_fidelity(summary: dict, pdf: str, png: str) -> None:
     """Changed-decision shares of every shortcut (railradio.nr.fidelity), per receiver, with
     their 95 % intervals, the 0.5 % goal and a redraw of the noise as the yardstick."""
-    from railradio.nr.fidelity import DECISIONS, GOAL_CHANGE_FRAC
+    from railradio.nr.fidelity import DECISIONS
+    from railradio.nr.fidelity_stats import GOAL_CHANGE_FRAC
 
     comps = [c for c in summary if c != "noise"] + ["noise"]
     rxs = list(summary[comps[0]])

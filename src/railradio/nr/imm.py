@@ -32,18 +32,9 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.stats import chi2
 
-from railradio.nr.tracking import (
-    VARIANTS,
-    TrackerConfig,
-    distances_m,
-    hx,
-    jacobian,
-    process_noise,
-    residual_fn,
-    run_ekf,
-    track_setup,
-    transition,
-)
+from railradio.nr.dynamics import process_noise, transition
+from railradio.nr.measurement import VARIANTS, distances_m, hx, jacobian, residual_fn
+from railradio.nr.tracking import Reacquire, Select, TrackerConfig, run_ekf, track_setup
 
 
 def markov_matrix(sojourn_s, dt_s: float) -> NDArray[np.float64]:
@@ -138,7 +129,7 @@ def _moments(mu: NDArray, xs: NDArray, ps: NDArray) -> tuple[NDArray, NDArray]:
 
 
 def run_imm(
-    select,
+    select: Select,
     dt_s: float,
     dh_m: float,
     cfg: TrackerConfig,
@@ -146,7 +137,7 @@ def run_imm(
     s0: NDArray,
     p0: NDArray,
     n_epochs: int,
-    reacquire=None,
+    reacquire: Reacquire | None = None,
     reacquire_after: int = 10,
 ) -> dict[str, NDArray]:
     """Run the IMM over ``n_epochs`` epochs; ``select(n, x_pred) -> (rrh_xy, aod, toa)`` and
@@ -169,7 +160,6 @@ def run_imm(
     res = residual_fn(cfg.variant)
     per = sum(VARIANTS[cfg.variant])
     gate = chi2.ppf(cfg.gate_prob, per) if cfg.gate else np.inf
-    eye = np.eye(6)
     out = {
         "state": np.zeros((n_epochs, 6)),
         "cov": np.zeros((n_epochs, 6, 6)),
@@ -181,15 +171,7 @@ def run_imm(
     for k in range(n_epochs):
         cbar = mu.copy()
         if k > 0:  # 1. mixing, 2. per-model prediction
-            cbar = mu @ pi
-            mix = pi * mu[:, None] / np.where(cbar > 0, cbar, 1.0)[None, :]  # μ_i|j [i, j]
-            x0 = mix.T @ xs
-            p0m = np.empty_like(ps)
-            for j in range(m):
-                d = xs - x0[j]
-                p0m[j] = np.einsum("i,iab->ab", mix[:, j], ps) + np.einsum("i,ia,ib->ab", mix[:, j], d, d)
-            xs = x0 @ f.T
-            ps = np.einsum("ab,jbc,dc->jad", f, p0m, f) + np.stack(qs)
+            cbar, xs, ps = _mix_predict(mu, pi, xs, ps, f, qs)
         x_pred = cbar @ xs
         xy, aod_k, toa_k = select(k, x_pred)
         xy = np.asarray(xy, float).reshape(-1, 2)
@@ -197,29 +179,12 @@ def run_imm(
             z = cfg.pick(np.asarray(aod_k), np.asarray(toa_k))
             keep = np.ones(xy.shape[0], dtype=bool)
             if cfg.gate:  # per-RRH χ² test, passed if any model's gate passes it
-                for i in range(xy.shape[0]):
-                    ok = False
-                    for j in range(m):
-                        hi = jacobian(xs[j], xy[i : i + 1], dh_m, cfg.variant)
-                        si = hi @ ps[j] @ hi.T + cfg.noise(1, distances_m(xs[j], xy[i : i + 1]))
-                        ri = res(z[i * per : (i + 1) * per], hx(xs[j], xy[i : i + 1], dh_m, cfg.variant))
-                        ok = ok or float(ri @ np.linalg.solve(si, ri)) <= gate
-                    keep[i] = ok
+                keep = _union_gate(xs, ps, xy, z, dh_m, cfg, res, gate)
             if keep.any():
                 sel = xy[keep]
                 zs = z[np.repeat(keep, per)]
                 r = cfg.noise(sel.shape[0], distances_m(x_pred, sel))
-                loglik = np.empty(m)
-                for j in range(m):  # EKF update of model j (Joseph form, as filterpy's)
-                    h = jacobian(xs[j], sel, dh_m, cfg.variant)
-                    pht = ps[j] @ h.T
-                    s = h @ pht + r
-                    gain = pht @ np.linalg.inv(s)
-                    nu = res(zs, hx(xs[j], sel, dh_m, cfg.variant))
-                    loglik[j], _ = _gauss_logpdf(nu, s)
-                    xs[j] = xs[j] + gain @ nu
-                    ikh = eye - gain @ h
-                    ps[j] = ikh @ ps[j] @ ikh.T + gain @ r @ gain.T
+                loglik = _update_models(xs, ps, sel, zs, r, dh_m, cfg, res)
                 # 3. mode probabilities (log-sum-exp)
                 lw = loglik + np.log(np.maximum(cbar, 1e-300))
                 w = np.exp(lw - lw.max())
@@ -232,10 +197,7 @@ def run_imm(
                 if reacquire is not None and misses >= reacquire_after:
                     fix = reacquire(k)
                     if fix is not None:
-                        xs[:, :2] = fix[0]
-                        ps[:, :2, :] = 0.0
-                        ps[:, :, :2] = 0.0
-                        ps[:, :2, :2] = fix[1]
+                        _reseed(xs, ps, fix)
                         out["reacquired"][k] = True
                         misses = 0
         else:
@@ -243,6 +205,73 @@ def run_imm(
         out["state"][k], out["cov"][k] = _moments(mu, xs, ps)
         out["mu"][k] = mu
     return out
+
+
+def _reseed(xs: NDArray, ps: NDArray, fix: tuple[NDArray, NDArray]) -> None:
+    """Re-seed, in place, every model's position from ``fix`` (position [2], covariance
+    [2, 2]), its cross-covariances with the other state components zeroed."""
+    xs[:, :2] = fix[0]
+    ps[:, :2, :] = 0.0
+    ps[:, :, :2] = 0.0
+    ps[:, :2, :2] = fix[1]
+
+
+def _mix_predict(
+    mu: NDArray, pi: NDArray, xs: NDArray, ps: NDArray, f: NDArray, qs: list[NDArray]
+) -> tuple[NDArray, NDArray, NDArray]:
+    """1. mixing (BLK eq. 11.6.6-8 to -11) of the models' states ``xs`` [m, 6] and
+    covariances ``ps`` [m, 6, 6] with mode probabilities ``mu`` and Markov matrix ``pi``,
+    2. each model's prediction with transition ``f`` and its process noise ``qs[j]``:
+    returns (c̄ [m], predicted states, predicted covariances)."""
+    cbar = mu @ pi
+    mix = pi * mu[:, None] / np.where(cbar > 0, cbar, 1.0)[None, :]  # μ_i|j [i, j]
+    x0 = mix.T @ xs
+    p0m = np.empty_like(ps)
+    for j in range(xs.shape[0]):
+        d = xs - x0[j]
+        p0m[j] = np.einsum("i,iab->ab", mix[:, j], ps) + np.einsum("i,ia,ib->ab", mix[:, j], d, d)
+    xs = x0 @ f.T
+    ps = np.einsum("ab,jbc,dc->jad", f, p0m, f) + np.stack(qs)
+    return cbar, xs, ps
+
+
+def _union_gate(
+    xs: NDArray, ps: NDArray, xy: NDArray, z: NDArray, dh_m: float, cfg: TrackerConfig, res, gate: float
+) -> NDArray[np.bool_]:
+    """Per-RRH χ² test of the measurements ``z`` of the RRHs ``xy`` [n, 2] at threshold
+    ``gate``, passed if the gate of any model (states ``xs``, covariances ``ps``) passes it."""
+    per = sum(VARIANTS[cfg.variant])
+    keep = np.ones(xy.shape[0], dtype=bool)
+    for i in range(xy.shape[0]):
+        ok = False
+        for j in range(xs.shape[0]):
+            hi = jacobian(xs[j], xy[i : i + 1], dh_m, cfg.variant)
+            si = hi @ ps[j] @ hi.T + cfg.noise(1, distances_m(xs[j], xy[i : i + 1]))
+            ri = res(z[i * per : (i + 1) * per], hx(xs[j], xy[i : i + 1], dh_m, cfg.variant))
+            ok = ok or float(ri @ np.linalg.solve(si, ri)) <= gate
+        keep[i] = ok
+    return keep
+
+
+def _update_models(
+    xs: NDArray, ps: NDArray, sel: NDArray, zs: NDArray, r: NDArray, dh_m: float, cfg: TrackerConfig, res
+) -> NDArray[np.float64]:
+    """EKF update, in place, of every model's state ``xs[j]`` and covariance ``ps[j]`` with
+    the measurements ``zs`` of the RRHs ``sel`` and their noise ``r``; returns the models'
+    log-likelihoods log Λ_j (BLK eq. 11.6.6-12)."""
+    eye = np.eye(6)
+    loglik = np.empty(xs.shape[0])
+    for j in range(xs.shape[0]):  # EKF update of model j (Joseph form, as filterpy's)
+        h = jacobian(xs[j], sel, dh_m, cfg.variant)
+        pht = ps[j] @ h.T
+        s = h @ pht + r
+        gain = pht @ np.linalg.inv(s)
+        nu = res(zs, hx(xs[j], sel, dh_m, cfg.variant))
+        loglik[j], _ = _gauss_logpdf(nu, s)
+        xs[j] = xs[j] + gain @ nu
+        ikh = eye - gain @ h
+        ps[j] = ikh @ ps[j] @ ikh.T + gain @ r @ gain.T
+    return loglik
 
 
 def track_filters(
@@ -262,23 +291,16 @@ def track_filters(
     ``cov`` [n, 6, 6] (NaN before the first measured epoch ``k0``), ``reacquired`` [n]
     and, for the IMM, ``mu`` [n, models]; plus ``k0``.
     """
-    pick, snapshot_fix, k0, s0, p0, n = track_setup(ds, rrh_x, rrh_y, dh_m, cfg, strength, n_use)
+    setup = track_setup(ds, rrh_x, rrh_y, dh_m, cfg, strength, n_use)
+    k0, n, s0, p0 = setup.k0, setup.n_epochs, setup.s0, setup.p0
     out: dict = {"k0": k0}
     runs = {"ekf": None} | ({"imm": imm} if imm is not None else {})
     for name, model in runs.items():
-        state_now = {"x": s0[0]}
-
-        def select(k: int, s, state_now=state_now):
-            state_now["x"] = float(s[0])
-            return pick(k + k0, float(s[0]))
-
-        def reacq(k: int, state_now=state_now):
-            return snapshot_fix(k + k0, state_now["x"]) if cfg.gate else None
-
+        follow = setup.follower()
         if model is None:
-            r = run_ekf(select, None, None, dt_s, dh_m, cfg, s0, p0, n_epochs=n - k0, reacquire=reacq)
+            r = run_ekf(follow.select, dt_s, dh_m, cfg, s0, p0, n - k0, reacquire=follow.reacquire)
         else:
-            r = run_imm(select, dt_s, dh_m, cfg, model, s0, p0, n_epochs=n - k0, reacquire=reacq)
+            r = run_imm(follow.select, dt_s, dh_m, cfg, model, s0, p0, n_epochs=n - k0, reacquire=follow.reacquire)
         full = {}
         for key in ("state", "cov", "mu", "reacquired"):
             if key in r:

@@ -13,6 +13,7 @@ realizations pooled):
 
 from __future__ import annotations
 
+import functools
 from typing import Any
 
 import numpy as np
@@ -91,74 +92,17 @@ def key_numbers(runs: list[xr.Dataset], window_s: float) -> dict[str, Any]:
     if len(spacings) != 1:
         raise ValueError(f"runs come from different RRH spacings: {sorted(spacings)}")
     spacing = spacings.pop()
-
-    def put(name, unit, desc, fn, lost_frac=None):
-        value, se = _pooled(runs, fn)
-        if lost_frac is not None:  # an accuracy: null where the track is lost too often
-            value = loss.accuracy(value, lost_frac)
-            se = se if value is not None else None
-        out[name] = KeySpec(name, unit, desc).entry(value, se, lost_frac=lost_frac)
-
     for f in FILTERS:
-        who = {
-            "ekf": "the seed's EKF (robust receiver, AOD+TOA, gated)",
-            "imm": "the IMM (same measurements and gate)",
-            "rts": "the RTS-smoothed EKF (offline)",
-        }[f]
-        put(
-            f"nr.track.{f}.lost_frac",
-            "1",
-            f"share of the scored epochs lost by {who} (2-D error above half the RRH spacing)",
-            lambda rs, f=f: float(np.mean(loss.lost_mask(_overall(rs, "pos_err", f), spacing))),
-        )
-        lf = out[f"nr.track.{f}.lost_frac"]["value"]
-        put(
-            f"nr.track.{f}.tracked.err_m.mean",
-            "m",
-            f"mean 2-D position error of {who} over the epochs not lost",
-            lambda rs, f=f: (lambda v: _stat(v[~loss.lost_mask(v, spacing)], np.mean))(_overall(rs, "pos_err", f)),
-        )
-        put(
-            f"nr.track.{f}.err_m.mean",
-            "m",
-            f"mean 2-D position error of {who}",
-            lambda rs, f=f: _stat(_overall(rs, "pos_err", f), np.mean),
-            lf,
-        )
-        put(
-            f"nr.track.{f}.err_m.p95",
-            "m",
-            f"95th percentile of the 2-D position error of {who}",
-            lambda rs, f=f: _stat(_overall(rs, "pos_err", f), lambda v: np.percentile(v, 95)),
-            lf,
-        )
-        put(
-            f"nr.track.{f}.err_m.after_change_mean",
-            "m",
-            f"mean 2-D position error of {who} in the {w} after each acceleration change",
-            lambda rs, f=f: _stat(_after(rs, "pos_err", f, window_s), np.mean),
-            lf,
-        )
-        put(
-            f"nr.track.{f}.lag_m.after_change_mean",
-            "m",
-            f"mean along-track lag −sign(Δa)·(x̂ − x) of {who} in the {w} after each acceleration change",
-            lambda rs, f=f: _stat(_after(rs, "along_err", f, window_s, signed=True), np.mean),
-            lf,
-        )
-        put(
-            f"nr.track.{f}.nees.mean",
-            "1",
-            f"mean 2-D position NEES of {who} (2 for a consistent filter)",
-            lambda rs, f=f: _stat(_overall(rs, "pos_nees", f), np.mean),
-        )
+        _filter_keys(out, runs, f, window_s, spacing)
     for mode in ("quiet", "manoeuvre"):
         name = f"nr.track.imm.q_{mode}"
         q = {float(r["q"].sel(mode=mode)) for r in runs}
         if len(q) != 1:
             raise ValueError(f"runs disagree on the {mode} model's q: {sorted(q)}")
         out[name] = KeySpec(name, "m2 s-5", f"white-jerk intensity of the IMM's {mode} model").entry(q.pop())
-    put(
+    _put(
+        out,
+        runs,
         "nr.track.imm.manoeuvre_prob.mean",
         "1",
         "mean probability of the IMM's manoeuvre model",
@@ -166,13 +110,84 @@ def key_numbers(runs: list[xr.Dataset], window_s: float) -> dict[str, Any]:
             np.concatenate([r["mode_prob"].sel(mode="manoeuvre").values[r["t"].values >= SKIP_S] for r in rs]), np.mean
         ),
     )
-    put(
+    _put(
+        out,
+        runs,
         "nr.track.imm.manoeuvre_prob.after_change_mean",
         "1",
         f"mean probability of the IMM's manoeuvre model in the {w} after each acceleration change",
         lambda rs: _stat(_after(rs, "mode_prob", None, window_s), np.mean),
     )
     return out
+
+
+def _put(out: dict[str, Any], runs: list[xr.Dataset], name, unit, desc, fn, lost_frac=None) -> None:
+    """Enter the key ``name`` into ``out``: ``fn`` pooled over ``runs`` (:func:`_pooled`)."""
+    value, se = _pooled(runs, fn)
+    if lost_frac is not None:  # an accuracy: null where the track is lost too often
+        value = loss.accuracy(value, lost_frac)
+        se = se if value is not None else None
+    out[name] = KeySpec(name, unit, desc).entry(value, se, lost_frac=lost_frac)
+
+
+def _filter_keys(out: dict[str, Any], runs: list[xr.Dataset], f: str, window_s: float, spacing: float) -> None:
+    """Enter the keys ``nr.track.{f}.*`` of filter ``f`` into ``out``: its lost share (track
+    lost: 2-D error above half the RRH ``spacing`` [m]), errors, lag after the changes
+    (``window_s``) and NEES."""
+    w = f"{window_s:g} s"
+    who = {
+        "ekf": "the seed's EKF (robust receiver, AOD+TOA, gated)",
+        "imm": "the IMM (same measurements and gate)",
+        "rts": "the RTS-smoothed EKF (offline)",
+    }[f]
+    put = functools.partial(_put, out, runs)
+    put(
+        f"nr.track.{f}.lost_frac",
+        "1",
+        f"share of the scored epochs lost by {who} (2-D error above half the RRH spacing)",
+        lambda rs, f=f: float(np.mean(loss.lost_mask(_overall(rs, "pos_err", f), spacing))),
+    )
+    lf = out[f"nr.track.{f}.lost_frac"]["value"]
+    put(
+        f"nr.track.{f}.tracked.err_m.mean",
+        "m",
+        f"mean 2-D position error of {who} over the epochs not lost",
+        lambda rs, f=f: (lambda v: _stat(v[~loss.lost_mask(v, spacing)], np.mean))(_overall(rs, "pos_err", f)),
+    )
+    put(
+        f"nr.track.{f}.err_m.mean",
+        "m",
+        f"mean 2-D position error of {who}",
+        lambda rs, f=f: _stat(_overall(rs, "pos_err", f), np.mean),
+        lf,
+    )
+    put(
+        f"nr.track.{f}.err_m.p95",
+        "m",
+        f"95th percentile of the 2-D position error of {who}",
+        lambda rs, f=f: _stat(_overall(rs, "pos_err", f), lambda v: np.percentile(v, 95)),
+        lf,
+    )
+    put(
+        f"nr.track.{f}.err_m.after_change_mean",
+        "m",
+        f"mean 2-D position error of {who} in the {w} after each acceleration change",
+        lambda rs, f=f: _stat(_after(rs, "pos_err", f, window_s), np.mean),
+        lf,
+    )
+    put(
+        f"nr.track.{f}.lag_m.after_change_mean",
+        "m",
+        f"mean along-track lag −sign(Δa)·(x̂ − x) of {who} in the {w} after each acceleration change",
+        lambda rs, f=f: _stat(_after(rs, "along_err", f, window_s, signed=True), np.mean),
+        lf,
+    )
+    put(
+        f"nr.track.{f}.nees.mean",
+        "1",
+        f"mean 2-D position NEES of {who} (2 for a consistent filter)",
+        lambda rs, f=f: _stat(_overall(rs, "pos_nees", f), np.mean),
+    )
 
 
 def _running_mean(v: np.ndarray, n: int) -> np.ndarray:

@@ -190,8 +190,8 @@ def _clamped_floor(c: np.ndarray, j: int, k: int, window: int, guard: int) -> fl
 @njit(cache=True, nogil=True)
 def local_mean_argmax(r: np.ndarray, window: int, guard: int) -> tuple:
     """Cell-averaging CFAR per row of r [R, K]: the floor at each lag (mean of r over
-    ``window`` lags on each side beyond ``guard``, fewer at the ends — the same as
-    ``railradio.nr.receiver.local_mean``) and the lag maximizing r/floor.
+    ``window`` lags on each side beyond ``guard``, fewer at the ends, as the CA-CFAR detector of
+    :class:`railradio.nr.correlator.Correlator` defines it) and the lag maximizing r/floor.
 
     Returns (k_best [R] int64, eta = r at k_best [R], floor at k_best [R]).
     """
@@ -339,7 +339,7 @@ def add_spill(
     dt_s: float,
 ) -> None:
     """z[n_c + starts[s] + j] += LOS(m) · Σ_{l: j < b[l]} gains[s, l] · at[s, col_of[l, j]], in
-    place: the delayed taps' spill across symbol boundaries (:class:`railradio.nr.receiver.
+    place: the delayed taps' spill across symbol boundaries (:class:`railradio.nr.synthesis.
     Synthesizer`), from ``at`` [S, Q], the boundary difference's waveform at each tap's delayed
     sample positions, and the receive symbol's held tap gains; LOS(m) is :func:`place`'s
     phasor (exact at each symbol start times a per-sample factor). Samples past the end of z

@@ -17,7 +17,7 @@ from railradio.nr.antenna import RrhArray, TrainArray
 from railradio.nr.channel import pathloss_umi_los_db, shadowing_field_db
 from railradio.nr.geometry import Deployment
 from railradio.nr.numerology import N_ACTIVE
-from railradio.nr.receiver import Links
+from railradio.nr.synthesis import Links
 from railradio.rng import make_rng
 
 BOLTZMANN_DBM_HZ = -174.0
@@ -128,12 +128,27 @@ def link_budget(
     of the train's reference point ``x_m``."""
     d2d_all = np.hypot(dep.x_m - x_m, dep.offset_m)
     rrh = np.flatnonzero(d2d_all <= radio.range_m)
-    n1, n2 = dep.n_id()
-    lam = radio.wavelength_m
+    paths = _Paths(dep, radio, rrh_array, shadow, shadowing, rrh)
+    if train.co_located:
+        return _co_located_budget(paths, x_m, speed_m_s, train)
+    return _panel_budget(paths, x_m, speed_m_s, train)
 
-    def path(xp: float, gain_db) -> dict:
+
+@dataclass(frozen=True)
+class _Paths:
+    """The paths of the RRHs ``rrh`` in range to a receiver anywhere on the track."""
+
+    dep: Deployment
+    radio: RadioParams
+    rrh_array: RrhArray
+    shadow: ShadowingMap
+    shadowing: bool
+    rrh: NDArray[np.int64]
+
+    def path(self, xp: float, gain_db) -> dict:
         """Geometry and large-scale terms of every RRH's path to a receiver at ``xp``;
         ``gain_db(aoa)``: its receive gain [dBi]."""
+        dep, radio, rrh = self.dep, self.radio, self.rrh
         d3d = dep.distance_3d_m(xp, rrh)
         d2d = dep.distance_2d_m(xp, rrh)
         aod = dep.aod_rad(np.full(rrh.size, xp), rrh)
@@ -144,38 +159,50 @@ def link_budget(
             d2d=d2d,
             aod=aod,
             aoa=aoa,
-            gt=rrh_array.beam_gains_db(aod),
+            gt=self.rrh_array.beam_gains_db(aod),
             gr=gain_db(aoa),
             pl=pathloss_umi_los_db(d3d, d2d, radio.carrier_hz, dep.h_bs_m, dep.h_ut_m),
-            sh=shadow.at(xp, rrh) if shadowing else np.zeros(rrh.size),
+            sh=self.shadow.at(xp, rrh) if self.shadowing else np.zeros(rrh.size),
         )
 
-    if train.co_located:
-        c = path(x_m, train.gain_db)
-        d3d, d2d, pl, sh, aod, aoa, gt, gr = (c[k] for k in ("d3d", "d2d", "pl", "sh", "aod", "aoa", "gt", "gr"))
-        amp = np.sqrt(radio.epre_w * 10 ** ((-pl + sh + gr) / 10))
-        links = Links(
-            n_id1=n1[rrh],
-            n_id2=n2[rrh],
-            tau_s=d3d / SPEED_OF_LIGHT_M_S,
-            amp=amp,
-            beam_amp=10 ** (gt / 20),
-            data_amp=10 ** (gt.max(axis=1) / 20),
-            f_los_hz=speed_m_s / lam * (dep.x_m[rrh] - x_m) / d3d,
-            phase0=(-2 * np.pi * d3d / lam) % (2 * np.pi),
-            doppler_hz=abs(speed_m_s) / lam,
-            noise_psd_w_hz=radio.noise_psd_w_hz,
-            n_chains=train.n_chains,
-            extra={"tx_power_dbm": radio.tx_power_dbm},
-        )
-        return LinkBudget(
-            rrh, d3d, pl, sh, aod, aoa, gt, gr, links, link_rrh=rrh, link_d2d_m=d2d, link_panel_x_m=np.zeros(rrh.size)
-        )
+
+def _co_located_budget(paths: _Paths, x_m: float, speed_m_s: float, train: TrainArray) -> LinkBudget:
+    """The link budget of co-located train panels: one link per RRH."""
+    dep, radio, rrh = paths.dep, paths.radio, paths.rrh
+    n1, n2 = dep.n_id()
+    lam = radio.wavelength_m
+    c = paths.path(x_m, train.gain_db)
+    d3d, d2d, pl, sh, aod, aoa, gt, gr = (c[k] for k in ("d3d", "d2d", "pl", "sh", "aod", "aoa", "gt", "gr"))
+    amp = np.sqrt(radio.epre_w * 10 ** ((-pl + sh + gr) / 10))
+    links = Links(
+        n_id1=n1[rrh],
+        n_id2=n2[rrh],
+        tau_s=d3d / SPEED_OF_LIGHT_M_S,
+        amp=amp,
+        beam_amp=10 ** (gt / 20),
+        data_amp=10 ** (gt.max(axis=1) / 20),
+        f_los_hz=speed_m_s / lam * (dep.x_m[rrh] - x_m) / d3d,
+        phase0=(-2 * np.pi * d3d / lam) % (2 * np.pi),
+        doppler_hz=abs(speed_m_s) / lam,
+        noise_psd_w_hz=radio.noise_psd_w_hz,
+        n_chains=train.n_chains,
+        extra={"tx_power_dbm": radio.tx_power_dbm},
+    )
+    return LinkBudget(
+        rrh, d3d, pl, sh, aod, aoa, gt, gr, links, link_rrh=rrh, link_d2d_m=d2d, link_panel_x_m=np.zeros(rrh.size)
+    )
+
+
+def _panel_budget(paths: _Paths, x_m: float, speed_m_s: float, train: TrainArray) -> LinkBudget:
+    """The link budget of separate train panels: one link per RRH and panel, RRH-major."""
+    dep, radio, rrh = paths.dep, paths.radio, paths.rrh
+    n1, n2 = dep.n_id()
+    lam = radio.wavelength_m
     # separate panels: each RRH reaches the head panel at x + panel_x[0] and the tail panel
     # at x + panel_x[1] over its own path (delay, path loss, shadowing, angles, fading)
     per = []
     for panel, dx_panel in enumerate(train.panel_x_m):
-        p = path(x_m + float(dx_panel), lambda aoa, panel=panel: train.panel_gain_db(aoa, panel))
+        p = paths.path(x_m + float(dx_panel), lambda aoa, panel=panel: train.panel_gain_db(aoa, panel))
         per.append(p | {"power": -p["pl"] + p["sh"] + p["gr"] + p["gt"].max(axis=1)})
     panel = np.argmax(np.stack([p["power"] for p in per]), axis=0)  # [R] the stronger panel
     pick = {k: np.choose(panel, [p[k] for p in per]) for k in ("d3d", "pl", "sh", "aod", "aoa", "gr")}
@@ -183,7 +210,7 @@ def link_budget(
     # one data beam per RRH: its best beam toward the stronger panel, seen by both panels
     b_data = gt_serv.argmax(axis=1)
     cols = {k: np.stack([p[k] for p in per], axis=1).ravel() for k in ("d3d", "d2d", "pl", "sh", "gr")}
-    gt_l = np.stack([p["gt"] for p in per], axis=1).reshape(-1, rrh_array.n_beams)  # [2R, beams]
+    gt_l = np.stack([p["gt"] for p in per], axis=1).reshape(-1, paths.rrh_array.n_beams)  # [2R, beams]
     x_rrh_l = np.repeat(dep.x_m[rrh], 2)
     xp_l = np.tile([per[0]["xp"], per[1]["xp"]], rrh.size)
     links = Links(

@@ -1,6 +1,6 @@
 """The geometry of every link while one SS burst is on the air (the train moves ≈ 0.26 m).
 
-The production synthesizer (:class:`railradio.nr.receiver.Synthesizer`) holds each link's
+The production synthesizer (:class:`railradio.nr.synthesis.Synthesizer`) holds each link's
 geometry at the epoch instant t0 over the whole ≈ 2 ms burst: the bulk delay τ0, a constant
 LOS Doppler f_D cos α (a carrier phase linear in time) and the beam gains toward the train's
 position at t0. :class:`BurstMotion` gives the same quantities at any instant of the burst

@@ -7,6 +7,11 @@ linear transition (Rauch, Tung & Striebel 1965; Särkkä 2013, Theorem 8.2):
 The EKF's prediction is exactly x⁻_{k+1} = F x_k, P⁻_{k+1} = F P_k Fᵀ + Q (the measurement
 model's nonlinearity enters only through the filtered x_k, P_k), so the stored posteriors
 are enough. A re-acquisition reset at epoch k is part of the posterior at k.
+
+Why not filterpy's ``KalmanFilter.rts_smoother`` (a dependency already): it takes no epochs
+before the first fix (the track's leading NaN states) and forms the gain with an explicit
+inverse of P⁻; here the gain solves P⁻ Cᵀ = F P. The two agree to rounding
+(``tests/nr/test_smoother.py``), so the published RTS numbers stay as computed here.
 """
 
 from __future__ import annotations

@@ -1,7 +1,7 @@
 """Which RRH serves the train: the network's decision, part of the synthesis.
 
 Each RRH is its own cell (the source gives every RRH its own PCI), so only the serving cell
-carries the train's data (:class:`railradio.nr.receiver.Synthesizer`, ``data_beam``). The
+carries the train's data (:class:`railradio.nr.synthesis.Synthesizer`, ``data_beam``). The
 network picks it from the true large-scale received power (path loss, shadowing, the best
 SS beam; no fast fading) with a hysteresis: a neighbour takes over when it is stronger than
 the serving cell by ``hysteresis_db`` (the A3 entering condition of TS 36.331 §5.5.4.4 with

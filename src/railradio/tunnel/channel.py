@@ -29,7 +29,8 @@ from numba import njit
 
 from railradio.constants import SPEED_OF_LIGHT_M_S
 from railradio.tunnel.geometry import Cable, Tunnel
-from railradio.tunnel.rays import Families, reflection_product
+from railradio.tunnel.lifting import reflection_product
+from railradio.tunnel.rays import Families
 
 PROPAGATIONS = ("physical", "seed")
 
@@ -210,19 +211,13 @@ def tabulate(
     offsets = np.asarray(offsets_m, dtype=float)
     n_d, n_f = offsets.size, len(fam)
     h = tunnel.cross_distance_m
-    if propagation == "physical":
-        eirp = 10.0 ** (cable.slot_eirp_offset_db(tunnel.slot_spacing_m) / 20.0)
-        g_grid = _scaled_product_grid(fam, eps, polarization, n_sin_grid) * (eirp * lam / (4.0 * math.pi))
-    else:
-        sm = seed_model or SeedModel()
-        if rng is None:
-            raise ValueError("rng is required for propagation='seed' (random multipath loss)")
-        fixed_db = -sm.reflection_loss_db * fam.n_refl
     taps = np.zeros((n_d, n_delay_bins), dtype=complex)
     p_mean = np.zeros(n_d)
     m1 = np.zeros(n_d)
     m2 = np.zeros(n_d)
     if propagation == "physical":  # compiled; its moments come from the local mean below
+        eirp = 10.0 ** (cable.slot_eirp_offset_db(tunnel.slot_spacing_m) / 20.0)
+        g_grid = _scaled_product_grid(fam, eps, polarization, n_sin_grid) * (eirp * lam / (4.0 * math.pi))
         _physical_taps(
             np.ascontiguousarray(fam.ell_m, dtype=float),
             g_grid,
@@ -235,50 +230,114 @@ def tabulate(
             p_mean,
         )
     else:
-        ell = fam.ell_m[:, None]
-        for a in range(0, n_d, chunk):
-            dx = offsets[a : a + chunk][None, :]
-            d = np.sqrt(ell**2 + dx**2)
-            d_direct = np.sqrt(h * h + dx**2)
-            # the seed's random 0-10 dB multipath loss, drawn per reflected ray and per offset,
-            # i.e. independently for every slot-receiver pair (seed 2.4.2)
-            mp_db = np.where(fam.n_refl[:, None] > 0, rng.uniform(0.0, sm.multipath_max_db, d.shape), 0.0)
-            loss_db = (
-                (
-                    cable.coupling_loss_at_db(d_direct)
-                    + 20.0 * np.log10(4.0 * math.pi * d / lam)
-                    + sm.tunnel_att_db_per_m * d
-                )
-                - fixed_db[:, None]
-                + mp_db
-            )
-            amp = 10.0 ** (-loss_db / 20.0) * np.exp(-1j * k * d)
-            tau = d / SPEED_OF_LIGHT_M_S
-            pw = np.abs(amp) ** 2
-            p_mean[a : a + chunk] = pw.sum(axis=0)
-            m1[a : a + chunk] = (pw * tau).sum(axis=0)
-            m2[a : a + chunk] = (pw * tau**2).sum(axis=0)
-            b = np.clip(np.rint((tau - d_direct / SPEED_OF_LIGHT_M_S) / delay_bin_s), 0, n_delay_bins - 1)
-            nd = dx.shape[1]
-            flat = (np.arange(nd)[None, :] * n_delay_bins + b.astype(np.int64)).ravel()
-            re = np.bincount(flat, weights=amp.real.ravel(), minlength=nd * n_delay_bins)
-            im = np.bincount(flat, weights=amp.imag.ravel(), minlength=nd * n_delay_bins)
-            taps[a : a + chunk] = (re + 1j * im).reshape(nd, n_delay_bins)
+        _seed_model_taps(fam, cable, offsets, h, k, seed_model, rng, delay_bin_s, chunk, taps, p_mean, m1, m2)
     los = np.sqrt(h * h + offsets**2) / SPEED_OF_LIGHT_M_S
     p_incoherent = p_mean
     lm_desc = "local-mean power gain (incoherent sum over rays, the seed's model) "
     if propagation == "physical":
-        if local_mean_window_m is None or not local_mean_window_m > 0:
-            raise ValueError("local_mean_window_m (> 0) is required for propagation='physical'")
-        step = offsets[1] - offsets[0] if n_d > 1 else 1.0
-        n_win = window_samples(local_mean_window_m, step)
-        p_mean = moving_mean(np.abs(taps.sum(axis=1)) ** 2, n_win, mirror_start=True)
-        pdp = moving_mean(np.abs(taps) ** 2, n_win, mirror_start=True)
-        tau_b = los[:, None] + np.arange(n_delay_bins)[None, :] * delay_bin_s
-        p_pdp = pdp.sum(axis=1)
-        m1 = (pdp * tau_b).sum(axis=1) * (p_mean / p_pdp)
-        m2 = (pdp * tau_b**2).sum(axis=1) * (p_mean / p_pdp)
-        lm_desc = f"local-mean power gain (coherent ray sum, power averaged over {local_mean_window_m:g} m) "
+        p_mean, m1, m2, lm_desc = _physical_local_mean(offsets, taps, los, delay_bin_s, local_mean_window_m)
+    attrs = {
+        "engine": fam.engine,
+        "propagation": propagation,
+        "polarization": polarization,
+        "n_families": n_f,
+        "max_reflections": int(fam.n_refl.max(initial=0)),
+        "local_mean_window_m": float(local_mean_window_m or 0.0),
+        "shape": tunnel.shape,
+    }
+    return _table_dataset(taps, p_mean, p_incoherent, m1, m2, los, offsets, delay_bin_s, lm_desc, attrs)
+
+
+def _seed_model_taps(
+    fam: Families,
+    cable: Cable,
+    offsets: np.ndarray,
+    h: float,
+    k: float,
+    seed_model: SeedModel | None,
+    rng: np.random.Generator | None,
+    delay_bin_s: float,
+    chunk: int,
+    taps: np.ndarray,
+    p_mean: np.ndarray,
+    m1: np.ndarray,
+    m2: np.ndarray,
+) -> None:
+    """The seed's model (seed 2.2-2.4) into ``taps`` [offset, bin], its incoherent local mean
+    ``p_mean`` and the delay moments ``m1``, ``m2`` [offset], ``chunk`` offsets at a time."""
+    sm = seed_model or SeedModel()
+    if rng is None:
+        raise ValueError("rng is required for propagation='seed' (random multipath loss)")
+    fixed_db = -sm.reflection_loss_db * fam.n_refl
+    lam = cable.wavelength_m
+    n_d, n_delay_bins = taps.shape
+    ell = fam.ell_m[:, None]
+    for a in range(0, n_d, chunk):
+        dx = offsets[a : a + chunk][None, :]
+        d = np.sqrt(ell**2 + dx**2)
+        d_direct = np.sqrt(h * h + dx**2)
+        # the seed's random 0-10 dB multipath loss, drawn per reflected ray and per offset,
+        # i.e. independently for every slot-receiver pair (seed 2.4.2)
+        mp_db = np.where(fam.n_refl[:, None] > 0, rng.uniform(0.0, sm.multipath_max_db, d.shape), 0.0)
+        loss_db = (
+            (
+                cable.coupling_loss_at_db(d_direct)
+                + 20.0 * np.log10(4.0 * math.pi * d / lam)
+                + sm.tunnel_att_db_per_m * d
+            )
+            - fixed_db[:, None]
+            + mp_db
+        )
+        amp = 10.0 ** (-loss_db / 20.0) * np.exp(-1j * k * d)
+        tau = d / SPEED_OF_LIGHT_M_S
+        pw = np.abs(amp) ** 2
+        p_mean[a : a + chunk] = pw.sum(axis=0)
+        m1[a : a + chunk] = (pw * tau).sum(axis=0)
+        m2[a : a + chunk] = (pw * tau**2).sum(axis=0)
+        b = np.clip(np.rint((tau - d_direct / SPEED_OF_LIGHT_M_S) / delay_bin_s), 0, n_delay_bins - 1)
+        nd = dx.shape[1]
+        flat = (np.arange(nd)[None, :] * n_delay_bins + b.astype(np.int64)).ravel()
+        re = np.bincount(flat, weights=amp.real.ravel(), minlength=nd * n_delay_bins)
+        im = np.bincount(flat, weights=amp.imag.ravel(), minlength=nd * n_delay_bins)
+        taps[a : a + chunk] = (re + 1j * im).reshape(nd, n_delay_bins)
+
+
+def _physical_local_mean(
+    offsets: np.ndarray, taps: np.ndarray, los: np.ndarray, delay_bin_s: float, local_mean_window_m: float | None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, str]:
+    """The physical channel's local mean (the coherent ray sum's power averaged over
+    ``local_mean_window_m`` of offsets, mirrored at dx = 0) and the delay moments of the
+    local-mean power delay profile [offset], with the local mean's description."""
+    n_d, n_delay_bins = taps.shape
+    if local_mean_window_m is None or not local_mean_window_m > 0:
+        raise ValueError("local_mean_window_m (> 0) is required for propagation='physical'")
+    step = offsets[1] - offsets[0] if n_d > 1 else 1.0
+    n_win = window_samples(local_mean_window_m, step)
+    p_mean = moving_mean(np.abs(taps.sum(axis=1)) ** 2, n_win, mirror_start=True)
+    pdp = moving_mean(np.abs(taps) ** 2, n_win, mirror_start=True)
+    tau_b = los[:, None] + np.arange(n_delay_bins)[None, :] * delay_bin_s
+    p_pdp = pdp.sum(axis=1)
+    m1 = (pdp * tau_b).sum(axis=1) * (p_mean / p_pdp)
+    m2 = (pdp * tau_b**2).sum(axis=1) * (p_mean / p_pdp)
+    lm_desc = f"local-mean power gain (coherent ray sum, power averaged over {local_mean_window_m:g} m) "
+    return p_mean, m1, m2, lm_desc
+
+
+def _table_dataset(
+    taps: np.ndarray,
+    p_mean: np.ndarray,
+    p_incoherent: np.ndarray,
+    m1: np.ndarray,
+    m2: np.ndarray,
+    los: np.ndarray,
+    offsets: np.ndarray,
+    delay_bin_s: float,
+    lm_desc: str,
+    attrs: dict,
+) -> xr.Dataset:
+    """The tabulated channel of :func:`tabulate` [offset] (mean delay and RMS delay spread from
+    the moments ``m1``, ``m2`` over ``p_mean``)."""
+    n_delay_bins = taps.shape[1]
     mean_tau = m1 / p_mean
     rms = np.sqrt(np.maximum(m2 / p_mean - mean_tau**2, 0.0))
     ds = xr.Dataset(
@@ -317,15 +376,7 @@ def tabulate(
                 {"units": "s", "long_name": "excess delay over the line of sight (last bin collects everything later)"},
             ),
         },
-        attrs={
-            "engine": fam.engine,
-            "propagation": propagation,
-            "polarization": polarization,
-            "n_families": n_f,
-            "max_reflections": int(fam.n_refl.max(initial=0)),
-            "local_mean_window_m": float(local_mean_window_m or 0.0),
-            "shape": tunnel.shape,
-        },
+        attrs=attrs,
     )
     return ds
 

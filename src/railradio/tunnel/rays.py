@@ -6,14 +6,16 @@ cross-section, therefore moves in (y, z) exactly like a 2-D ray with direction u
 in the cross-section (a billiard), while x advances analytically.  Both engines find the
 2-D *ray families* from the slot to the receiver in the cross-section (:class:`Families`:
 2-D path length l, the wall normal and 2-D direction at every reflection, a 2-D spreading
-factor); :func:`lift` turns a family into the 3-D ray for any along-axis offset dx:
+factor); :func:`railradio.tunnel.lifting.lift` turns a family into the 3-D ray for any
+along-axis offset dx:
 
     d = sqrt(l^2 + dx^2),  sin b = l / d,  cos(incidence)_k = sin b |u_k . n_k|
     a = G(sin b) sqrt(l / J) lambda / (4 pi d) exp(-j k d) exp(j pi/2 N_caustic),  tau = d / c
 
-with G the product of the reflection coefficients along the ray and J the 2-D ray-tube
-width per radian (J = l for planar walls).  Per ray: complex amplitude (relative to an
-isotropic source of unit EIRP), delay, number of reflections.
+with G the product of the reflection coefficients along the ray (its polarization rules:
+:mod:`railradio.tunnel.lifting`) and J the 2-D ray-tube width per radian (J = l for planar
+walls).  Per ray: complex amplitude (relative to an isotropic source of unit EIRP), delay,
+number of reflections.
 
 Engines:
 
@@ -28,28 +30,17 @@ Engines:
   width J follows from the slope of the miss distance over launch angle (the count of
   rays in the circle bounds it at caustics).  The 2-D caustic count is approximated by
   its parity (the orientation of the tube).
-
-Polarization: vertical (E along y) at both ends.  ``paraxial``: TM on walls whose normal
-is closer to vertical, TE otherwise (the rule for a rectangle, docs/model/tunnel.md §2.1).  ``vector``:
-the field vector is tracked and split into its s and p parts at every reflection; the
-received amplitude is its projection on the vertical direction made transverse to the
-arriving ray.
 """
 
 from __future__ import annotations
 
-import cmath
 import math
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
-from numba import njit
 
-from railradio.constants import SPEED_OF_LIGHT_M_S
 from railradio.tunnel.geometry import Tunnel
-from railradio.tunnel.materials import fresnel_te, fresnel_tm
-
-POLARIZATIONS = ("paraxial", "vector")
 
 
 @dataclass
@@ -92,6 +83,53 @@ class Families:
 
 
 # --------------------------------------------------------------------------- image method
+def _axis_images(s: float, a: float, order: int) -> tuple[np.ndarray, np.ndarray]:
+    """Images of a source at s between walls at 0 and a with at most ``order`` reflections:
+    positions and reflection counts (see :func:`image_families`)."""
+    pos, cnt = [s], [0]
+    for k in range(-order, order + 1):
+        if k != 0 and 2 * abs(k) <= order:
+            pos.append(2 * k * a + s), cnt.append(2 * abs(k))
+        if abs(2 * k - 1) <= order:
+            pos.append(2 * k * a - s), cnt.append(abs(2 * k - 1))
+    return np.array(pos), np.array(cnt)
+
+
+def _wall_crossings(
+    img_y: np.ndarray,
+    dy: np.ndarray,
+    n_y: np.ndarray,
+    h: float,
+    img_z: np.ndarray,
+    dz: np.ndarray,
+    n_z: np.ndarray,
+    w: float,
+    order: int,
+    r_max: int,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Parameters t in (0, 1) where each image's unfolded line crosses y = jH and z = jW
+    [image, crossing] (inf where it has no more) and whether each crossing is off a y wall."""
+    n = img_y.size
+    t_all = np.full((n, r_max), np.inf)
+    is_y = np.zeros((n, r_max), dtype=bool)
+    col = np.zeros(n, dtype=int)
+    for which, start, delta, cnt, a in (("y", img_y, dy, n_y, h), ("z", img_z, dz, n_z, w)):
+        for j in range(1, order + 1):
+            has = cnt >= j
+            if not np.any(has):
+                continue
+            sgn = np.sign(delta[has])
+            # j-th wall plane crossed going from the image toward the receiver
+            first = np.where(sgn > 0, np.ceil(start[has] / a + 1e-12), np.floor(start[has] / a - 1e-12))
+            plane = (first + sgn * (j - 1)) * a
+            t = (plane - start[has]) / delta[has]
+            rows = np.nonzero(has)[0]
+            t_all[rows, col[rows]] = t
+            is_y[rows, col[rows]] = which == "y"
+            col[rows] += 1
+    return t_all, is_y
+
+
 def image_families(tunnel: Tunnel, order: int) -> Families:
     """All images of the slot in the rectangular tunnel with |m| + |n| <= ``order``.
 
@@ -107,18 +145,8 @@ def image_families(tunnel: Tunnel, order: int) -> Families:
     h, w = tunnel.height_m, tunnel.width_m
     (ys, zs), (yr, zr) = tunnel.slot_yz, tunnel.rx_yz
     zs0, zr0 = zs + w / 2.0, zr + w / 2.0  # shift so the z walls are at 0 and W
-
-    def axis_images(s: float, a: float):
-        pos, cnt = [s], [0]
-        for k in range(-order, order + 1):
-            if k != 0 and 2 * abs(k) <= order:
-                pos.append(2 * k * a + s), cnt.append(2 * abs(k))
-            if abs(2 * k - 1) <= order:
-                pos.append(2 * k * a - s), cnt.append(abs(2 * k - 1))
-        return np.array(pos), np.array(cnt)
-
-    py, ny = axis_images(ys, h)
-    pz, nz = axis_images(zs0, w)
+    py, ny = _axis_images(ys, h, order)
+    pz, nz = _axis_images(zs0, w, order)
     iy, iz = np.meshgrid(np.arange(py.size), np.arange(pz.size), indexing="ij")
     iy, iz = iy.ravel(), iz.ravel()
     keep = ny[iy] + nz[iz] <= order
@@ -131,23 +159,7 @@ def image_families(tunnel: Tunnel, order: int) -> Families:
     uy, uz = dy / ell, dz / ell
     # parameters t in (0, 1) where the unfolded line crosses y = jH and z = jW
     r_max = max(int(n_tot.max(initial=0)), 1)
-    t_all = np.full((ell.size, r_max), np.inf)
-    is_y = np.zeros((ell.size, r_max), dtype=bool)
-    col = np.zeros(ell.size, dtype=int)
-    for which, start, delta, cnt, a in (("y", img_y, dy, n_y, h), ("z", img_z, dz, n_z, w)):
-        for j in range(1, order + 1):
-            has = cnt >= j
-            if not np.any(has):
-                continue
-            sgn = np.sign(delta[has])
-            # j-th wall plane crossed going from the image toward the receiver
-            first = np.where(sgn > 0, np.ceil(start[has] / a + 1e-12), np.floor(start[has] / a - 1e-12))
-            plane = (first + sgn * (j - 1)) * a
-            t = (plane - start[has]) / delta[has]
-            rows = np.nonzero(has)[0]
-            t_all[rows, col[rows]] = t
-            is_y[rows, col[rows]] = which == "y"
-            col[rows] += 1
+    t_all, is_y = _wall_crossings(img_y, dy, n_y, h, img_z, dz, n_z, w, order, r_max)
     order_idx = np.argsort(t_all, axis=1, kind="stable")
     is_y = np.take_along_axis(is_y, order_idx, axis=1)
     valid = np.arange(r_max)[None, :] < n_tot[:, None]
@@ -244,23 +256,10 @@ def trace_2d(tunnel: Tunnel, phi: np.ndarray, max_refl: int, rx_radius_m: float,
     return (j, nb, ell, miss), (normals, dirs)
 
 
-def sbr_families(tunnel: Tunnel, n_rays: int, max_refl: int, rx_radius_m: float) -> Families:
-    """Shooting and bouncing rays in the cross-section (see the module docstring)."""
-    if not isinstance(n_rays, (int, np.integer)) or n_rays < 16:
-        raise ValueError(f"n_rays must be an integer >= 16, got {n_rays!r}")
-    if not isinstance(max_refl, (int, np.integer)) or max_refl < 0:
-        raise ValueError(f"max_refl must be a non-negative integer, got {max_refl!r}")
-    wall = tunnel.wall_distance_m(*tunnel.rx_yz)
-    if not 0 < rx_radius_m < wall:
-        raise ValueError(
-            f"rx_radius_m must be in (0, {wall:.3g}) (the receiver's distance to the wall), got {rx_radius_m!r}"
-        )
-    dphi = 2.0 * math.pi / n_rays
-    phi = (np.arange(n_rays) + 0.5) * dphi
-    (j, nb, ell, miss), _ = trace_2d(tunnel, phi, max_refl, rx_radius_m)
-    # group captures into families: same reflection count, adjacent launch angles
-    o = np.lexsort((j, nb))
-    j, nb, ell, miss = j[o], nb[o], ell[o], miss[o]
+def _group_captures(j: np.ndarray, nb: np.ndarray, n_rays: int) -> list[np.ndarray]:
+    """Captures (sorted by reflection count, then launch index ``j``) grouped into families:
+    runs of adjacent launch angles with the same reflection count, a run that wraps around
+    phi = 2 pi joined with the run at phi = 0 [family -> capture indices]."""
     new = np.ones(j.size, dtype=bool)
     new[1:] = (nb[1:] != nb[:-1]) | (j[1:] - j[:-1] != 1)
     starts = np.nonzero(new)[0]
@@ -283,6 +282,34 @@ def sbr_families(tunnel: Tunnel, n_rays: int, max_refl: int, rx_radius_m: float)
             merged[k] = [np.concatenate([idx[0], merged[tgt][0]])]
             merged[tgt] = []
     groups = [g[0] for g in merged if g]
+    return groups
+
+
+class _FamilyFits(NamedTuple):
+    """Per family [f]: the launch angle interpolated to zero miss and the captured one closest
+    to it [rad], the tube width J per radian [m], the sign of the miss slope (nan for a
+    single-ray family), the number of captured rays, the number of reflections."""
+
+    phi0: np.ndarray
+    phi_best: np.ndarray
+    jac: np.ndarray
+    slope_sign: np.ndarray
+    run_len: np.ndarray
+    fam_b: np.ndarray
+
+
+def _fit_families(
+    groups: list[np.ndarray],
+    j: np.ndarray,
+    nb: np.ndarray,
+    miss: np.ndarray,
+    n_rays: int,
+    dphi: float,
+    rx_radius_m: float,
+) -> _FamilyFits:
+    """Each family's central launch angle and tube width from the signed miss distance over
+    launch angle (the count of rays in the reception circle bounds the width at caustics);
+    launch angles ``dphi`` apart."""
     n_f = len(groups)
     phi0 = np.empty(n_f)
     phi_best = np.empty(n_f)
@@ -310,8 +337,26 @@ def sbr_families(tunnel: Tunnel, n_rays: int, max_refl: int, rx_radius_m: float)
             jac[f] = 2.0 * rx_radius_m / (1.5 * dphi)
             slope_sign[f] = np.nan
         phi0[f] = (j0 + 0.5) * dphi
-    # re-trace the central rays (interpolated to zero miss) with their history; where the
-    # interpolation misses (at caustics m is not linear in phi) keep the closest captured ray
+    return _FamilyFits(phi0, phi_best, jac, slope_sign, run_len, fam_b)
+
+
+class _CentralRays(NamedTuple):
+    """Per family [f]: the central ray's launch angle [rad], 2-D length [m] and miss
+    distance [m], the normals and directions at its reflections [f, max_refl, 2]."""
+
+    phi0: np.ndarray
+    ell_m: np.ndarray
+    miss_m: np.ndarray
+    normals: np.ndarray
+    dirs: np.ndarray
+
+
+def _retrace_central(
+    tunnel: Tunnel, phi0: np.ndarray, phi_best: np.ndarray, fam_b: np.ndarray, max_refl: int, rx_radius_m: float
+) -> _CentralRays:
+    """Re-trace the central rays (interpolated to zero miss) with their history; where the
+    interpolation misses (at caustics m is not linear in phi) keep the closest captured ray."""
+    n_f = fam_b.size
     best = None
     for cand in (phi0, phi_best):
         (cj, cb, cell, cmiss), (normals, dirs) = trace_2d(tunnel, cand, max_refl, rx_radius_m, history=True)
@@ -328,7 +373,30 @@ def sbr_families(tunnel: Tunnel, n_rays: int, max_refl: int, rx_radius_m: float)
             better = miss_c < best[2]
             best[0][better], best[1][better], best[2][better] = cand[better], ell_c[better], miss_c[better]
             best[3][better], best[4][better] = normals[better], dirs[better]
-    phi0, ell_f, miss_f, normals, dirs = best
+    return _CentralRays(*best)
+
+
+def sbr_families(tunnel: Tunnel, n_rays: int, max_refl: int, rx_radius_m: float) -> Families:
+    """Shooting and bouncing rays in the cross-section (see the module docstring)."""
+    if not isinstance(n_rays, (int, np.integer)) or n_rays < 16:
+        raise ValueError(f"n_rays must be an integer >= 16, got {n_rays!r}")
+    if not isinstance(max_refl, (int, np.integer)) or max_refl < 0:
+        raise ValueError(f"max_refl must be a non-negative integer, got {max_refl!r}")
+    wall = tunnel.wall_distance_m(*tunnel.rx_yz)
+    if not 0 < rx_radius_m < wall:
+        raise ValueError(
+            f"rx_radius_m must be in (0, {wall:.3g}) (the receiver's distance to the wall), got {rx_radius_m!r}"
+        )
+    dphi = 2.0 * math.pi / n_rays
+    phi = (np.arange(n_rays) + 0.5) * dphi
+    (j, nb, ell, miss), _ = trace_2d(tunnel, phi, max_refl, rx_radius_m)
+    # group captures into families: same reflection count, adjacent launch angles
+    o = np.lexsort((j, nb))
+    j, nb, ell, miss = j[o], nb[o], ell[o], miss[o]
+    groups = _group_captures(j, nb, n_rays)
+    phi0, phi_best, jac, slope_sign, run_len, fam_b = _fit_families(groups, j, nb, miss, n_rays, dphi, rx_radius_m)
+    n_f = len(groups)
+    phi0, ell_f, miss_f, normals, dirs = _retrace_central(tunnel, phi0, phi_best, fam_b, max_refl, rx_radius_m)
     ok = np.isfinite(ell_f)
     # orientation of the tube relative to the line-of-sight family: odd caustic count
     ref = slope_sign[(fam_b == 0) & np.isfinite(slope_sign)]
@@ -358,223 +426,3 @@ def sbr_families(tunnel: Tunnel, n_rays: int, max_refl: int, rx_radius_m: float)
     return Families(
         ell_f[srt], fam_b[srt], normals[srt], dirs[srt], final[srt], spread[srt], caustic[srt], "sbr", stats
     )
-
-
-# ---------------------------------------------------------------------------- 3-D lifting
-def _perp_vertical(k: np.ndarray) -> np.ndarray:
-    """Unit vector along the vertical (y) made transverse to k (fallback z) [..., 3]."""
-    e = np.zeros_like(k)
-    e[..., 1] = 1.0
-    e = e - k[..., 1:2] * k
-    nrm = np.linalg.norm(e, axis=-1, keepdims=True)
-    fallback = np.zeros_like(k)
-    fallback[..., 2] = 1.0
-    fallback = fallback - k[..., 2:3] * k
-    fallback /= np.maximum(np.linalg.norm(fallback, axis=-1, keepdims=True), 1e-300)
-    return np.where(nrm > 1e-9, e / np.maximum(nrm, 1e-300), fallback)
-
-
-def reflection_product(
-    fam: Families, sin_b: np.ndarray, eps: complex | None, polarization: str, return_history: bool = False
-):
-    """Product of the reflection coefficients G[f, s] at elevations with sin b = ``sin_b``.
-
-    ``paraxial``: prod_k Gamma_{TM or TE}(sin b |u_k . n_k|).  ``vector``: the vertical
-    field is tracked through the s/p split of every reflection and projected on the
-    receiver's vertical polarization.  With ``return_history`` (vector only) also the
-    field magnitude after each reflection [f, s, k] (it can never grow).  ``eps=None``:
-    perfectly absorbing walls (G = 0 for every reflected ray).
-    """
-    if polarization not in POLARIZATIONS:
-        raise ValueError(f"polarization must be one of {POLARIZATIONS}, got {polarization!r}")
-    s = np.asarray(sin_b, dtype=float)
-    if eps is None:  # perfectly absorbing walls: only the unreflected ray survives
-        shape = (len(fam), s.shape[-1])
-        g = np.where((fam.n_refl == 0)[:, None], 1.0 + 0j, 0.0 + 0j) * np.ones(shape)
-        return (g, np.zeros((*shape, fam.normal.shape[1]))) if return_history else g
-    if np.any(s < 0) or np.any(s > 1):
-        raise ValueError("sin_b must be in [0, 1]")
-    n_f, r_max = fam.normal.shape[:2]
-    s2 = s[None, :] if s.ndim == 1 else s
-    if s.ndim != 1 and s2.shape[0] != n_f:
-        raise ValueError(f"sin_b must be [s] or [{n_f}, s], got shape {s.shape}")
-    n_s = s2.shape[1]
-    if polarization == "paraxial" and fam.engine == "image":
-        # in the rectangle all floor/ceiling (TM) reflections of a family share one incidence
-        # cosine, and all side-wall (TE) ones another: the product is two powers
-        n_tm, c_tm, n_te, c_te = image_power_form(fam)
-        return (
-            fresnel_tm(np.clip(s2 * c_tm[:, None], 0.0, 1.0), eps) ** n_tm[:, None]
-            * fresnel_te(np.clip(s2 * c_te[:, None], 0.0, 1.0), eps) ** n_te[:, None]
-        )
-    if polarization == "paraxial":
-        g = np.ones((n_f, n_s), dtype=complex)
-        for k in range(r_max):
-            act = (fam.n_refl > k)[:, None]
-            if not np.any(act):
-                break
-            u, nrm = fam.direction[:, k], fam.normal[:, k]
-            c2d = np.abs(np.einsum("ij,ij->i", u, nrm))[:, None]
-            cos_i = np.clip(s2 * c2d, 0.0, 1.0)
-            vertical = (np.abs(nrm[:, 0]) >= np.abs(nrm[:, 1]))[:, None]
-            gam = np.where(vertical, fresnel_tm(cos_i, eps), fresnel_te(cos_i, eps))
-            g = np.where(act, g * gam, g)
-        return g
-    cb = np.sqrt(np.maximum(1.0 - s2**2, 0.0))
-
-    def k3(u2):  # [f, 2] -> [f, s, 3]
-        return np.stack([np.broadcast_to(cb, (n_f, n_s)), s2 * u2[:, 0:1], s2 * u2[:, 1:2]], axis=-1)
-
-    first = fam.direction[:, 0] if r_max else fam.final_direction
-    first = np.where((fam.n_refl > 0)[:, None], first, fam.final_direction)
-    kvec = k3(first)
-    e = _perp_vertical(kvec).astype(complex)
-    hist = np.zeros((n_f, n_s, r_max)) if return_history else None
-    for k in range(r_max):
-        act = (fam.n_refl > k)[:, None]
-        if not np.any(act):
-            break
-        kin = k3(fam.direction[:, k])
-        n3 = np.zeros((n_f, 1, 3))
-        n3[:, 0, 1:] = fam.normal[:, k]
-        n3 = np.broadcast_to(n3, kin.shape)
-        cos_i = np.clip(-np.einsum("fsi,fsi->fs", kin, n3), 0.0, 1.0)
-        sv = np.cross(kin, n3)
-        sn = np.linalg.norm(sv, axis=-1, keepdims=True)
-        xhat = np.zeros_like(sv)
-        xhat[..., 0] = 1.0
-        sv = np.where(sn > 1e-9, sv / np.maximum(sn, 1e-300), xhat)
-        kout = kin - 2.0 * np.einsum("fsi,fsi->fs", kin, n3)[..., None] * n3
-        p_in, p_out = np.cross(sv, kin), np.cross(sv, kout)
-        es = np.einsum("fsi,fsi->fs", e, sv)
-        ep = np.einsum("fsi,fsi->fs", e, p_in)
-        e_new = (fresnel_te(cos_i, eps) * es)[..., None] * sv + (fresnel_tm(cos_i, eps) * ep)[..., None] * p_out
-        e = np.where(act[..., None], e_new, e)
-        if return_history:
-            hist[:, :, k] = np.linalg.norm(e, axis=-1)
-    rvec = _perp_vertical(k3(fam.final_direction))
-    g = np.einsum("fsi,fsi->fs", e, rvec)
-    return (g, hist) if return_history else g
-
-
-@dataclass
-class Rays:
-    """Per-ray result of :func:`trace`: arrays [ray, offset]."""
-
-    amplitude: np.ndarray
-    """complex amplitude relative to an isotropic source of unit EIRP (free space: lambda/(4 pi d))"""
-    delay_s: np.ndarray
-    n_reflections: np.ndarray
-    """[ray]"""
-
-
-def lift(fam: Families, dx_m, wavelength_m: float, eps: complex, polarization: str) -> Rays:
-    """3-D rays of every family at along-axis offsets ``dx_m`` (exact, no grid)."""
-    dx = np.abs(np.asarray(dx_m, dtype=float))[None, :]
-    ell = fam.ell_m[:, None]
-    d = np.sqrt(ell**2 + dx**2)
-    out = reflection_product(fam, ell / d, eps, polarization)
-    k = 2.0 * math.pi / wavelength_m
-    amp = (
-        out
-        * fam.spread[:, None]
-        * np.exp(1j * fam.caustic_phase_rad[:, None])
-        * wavelength_m
-        / (4.0 * math.pi * d)
-        * np.exp(-1j * k * d)
-    )
-    return Rays(amp, d / SPEED_OF_LIGHT_M_S, fam.n_refl.copy())
-
-
-ENGINES = ("image", "sbr")
-
-
-def trace(
-    engine: str,
-    tunnel: Tunnel,
-    dx_m,
-    wavelength_m: float,
-    eps: complex,
-    order: int,
-    polarization: str | None = None,
-    n_rays: int = 100_000,
-    rx_radius_m: float = 0.1,
-) -> Rays:
-    """One interface to both engines: rays from a slot to the receiver at offsets dx.
-
-    ``image`` needs a rectangular tunnel; ``sbr`` takes either cross-section.  The
-    polarization rule defaults to paraxial for the image method, vector for SBR.
-    """
-    if engine == "image":
-        fam = image_families(tunnel, order)
-    elif engine == "sbr":
-        fam = sbr_families(tunnel, n_rays, order, rx_radius_m)
-    else:
-        raise ValueError(f"engine must be one of {ENGINES}, got {engine!r}")
-    pol = polarization or ("paraxial" if engine == "image" else "vector")
-    return lift(fam, dx_m, wavelength_m, eps, pol)
-
-
-@njit(cache=True, nogil=True)
-def _image_sum(ell, n_tm, c_tm, n_te, c_te, dx, k, eps, out):
-    """out[order, j] += every family's ray at offset dx[j], by its reflection order."""
-    for j in range(dx.size):
-        for f in range(ell.size):
-            d = math.sqrt(ell[f] * ell[f] + dx[j] * dx[j])
-            s = ell[f] / d
-            g = 1.0 + 0j
-            if n_tm[f] > 0:
-                c = s * c_tm[f]
-                r = cmath.sqrt(eps - (1.0 - c * c))
-                g *= ((eps * c - r) / (eps * c + r)) ** n_tm[f]
-            if n_te[f] > 0:
-                c = s * c_te[f]
-                r = cmath.sqrt(eps - (1.0 - c * c))
-                g *= ((c - r) / (c + r)) ** n_te[f]
-            out[n_tm[f] + n_te[f], j] += g * cmath.exp(-1j * k * d) / d
-
-
-def image_power_form(fam: Families) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """An image family's reflections in the rectangle, counted by wall pair: (number of
-    floor/ceiling reflections, their 2-D incidence cosine |u_y|, number of side-wall
-    reflections, |u_z|) per family (the 2-D direction only changes sign at a reflection)."""
-    valid = np.arange(fam.normal.shape[1])[None, :] < fam.n_refl[:, None]
-    on_floor = valid & (np.abs(fam.normal[..., 0]) >= np.abs(fam.normal[..., 1]))
-    n_tm = on_floor.sum(axis=1).astype(np.int64)
-    n_te = (fam.n_refl - n_tm).astype(np.int64)
-    return (
-        n_tm,
-        np.abs(fam.final_direction[:, 0]).astype(float),
-        n_te,
-        np.abs(fam.final_direction[:, 1]).astype(float),
-    )
-
-
-def image_coherent_gain(fam: Families, dx_m, wavelength_m: float, eps: complex, by_order: bool = False) -> np.ndarray:
-    """Coherent (narrowband) gain of one slot in the rectangular tunnel, the sum of every
-    image family's ray, at offsets ``dx_m`` (complex, relative to unit EIRP): exactly
-    :func:`lift` (paraxial rule) summed over rays, without its [ray, offset] arrays.  In the
-    rectangle every reflection off the floor or ceiling (TM) has the incidence cosine
-    sin b |u_y|, off a side wall (TE) sin b |u_z|, so the product is two powers.
-    ``by_order``: the sum of each reflection order apart, [order 0..max, offset] (its
-    cumulative sum over orders is the gain truncated at each order)."""
-    if fam.engine != "image":
-        raise ValueError(f"fam must come from image_families, got engine {fam.engine!r}")
-    if eps is None:
-        raise ValueError("eps is required")
-    dx = np.ascontiguousarray(np.abs(np.asarray(dx_m, dtype=float)).ravel())
-    n_tm, c_tm, n_te, c_te = image_power_form(fam)
-    out = np.zeros((int(fam.n_refl.max(initial=0)) + 1, dx.size), dtype=complex)
-    _image_sum(
-        np.ascontiguousarray(fam.ell_m, dtype=float),
-        n_tm,
-        c_tm,
-        n_te,
-        c_te,
-        dx,
-        2.0 * math.pi / wavelength_m,
-        complex(eps),
-        out,
-    )
-    out *= wavelength_m / (4.0 * math.pi)
-    return out if by_order else out.sum(axis=0)

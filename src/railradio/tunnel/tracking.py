@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 from filterpy.kalman import KalmanFilter
+from scipy.stats import median_abs_deviation
 
 
 def _cv_model(dt_s: float, accel_sigma: float) -> tuple[np.ndarray, np.ndarray]:
@@ -251,5 +252,5 @@ def robust_variance(errors_m: np.ndarray) -> float:
     e = e[np.isfinite(e)]
     if e.size < 2:
         raise ValueError("need at least two finite errors")
-    mad = 1.4826 * np.median(np.abs(e - np.median(e)))
+    mad = 1.4826 * median_abs_deviation(e, axis=None)  # 1.4826: the normal consistency constant to 4 digits
     return float(max(mad, 1e-3) ** 2)

@@ -8,7 +8,7 @@ sys.path.insert(0, str(__import__("pathlib").Path(__file__).parent))
 from common import read_shards, scenario
 
 from railradio.io import write_json
-from railradio.nr.tracking import calibrate
+from railradio.nr.calibration import calibrate
 from railradio.workflow import setup_script
 
 smk = snakemake  # noqa: F821

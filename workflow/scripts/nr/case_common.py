@@ -1,13 +1,13 @@
 """Shared adapter code of the sensitivity-case scripts: the main run's calibrate.py /
 track.py on the case's estimates, cut to the case's epochs, with the clock errors of the
-case's ``nr.sync`` added to the measured TOAs (railradio.nr.tracking.apply_clock_errors)."""
+case's ``nr.sync`` added to the measured TOAs (railradio.nr.clocks.apply_clock_errors)."""
 
 import runpy
 from pathlib import Path
 
 import common
 
-from railradio.nr.tracking import apply_clock_errors
+from railradio.nr.clocks import apply_clock_errors
 from railradio.rng import spawn_key
 
 

@@ -10,7 +10,9 @@ sys.path.insert(0, str(__import__("pathlib").Path(__file__).parent))
 from common import read_shards, scenario
 
 from railradio.io import write_dataset
-from railradio.nr.tracking import VARIANTS, TrackerConfig, measurement_errors, nees_position, track
+from railradio.nr.calibration import measurement_errors
+from railradio.nr.measurement import VARIANTS
+from railradio.nr.tracking import TrackerConfig, nees_position, track
 from railradio.workflow import setup_script
 
 smk = snakemake  # noqa: F821

@@ -13,9 +13,10 @@ from common import read_shards, scenario
 
 from railradio.io import write_dataset
 from railradio.nr.bounds import change_epochs
+from railradio.nr.dynamics import process_noise, transition
 from railradio.nr.imm import ImmConfig, position_nees, q_for_jump, track_filters
 from railradio.nr.smoother import rts_smooth
-from railradio.nr.tracking import TrackerConfig, process_noise, transition
+from railradio.nr.tracking import TrackerConfig
 from railradio.workflow import setup_script
 
 smk = snakemake  # noqa: F821

@@ -10,9 +10,10 @@ sys.path.insert(0, str(__import__("pathlib").Path(__file__).parents[1] / "nr"))
 from common import read_shards
 
 from railradio.io import write_dataset
+from railradio.nr.calibration import calibrate, measurement_errors, selected
 from railradio.nr.reproduction_map import VARIANTS
 from railradio.nr.simulate import scenario_from_config
-from railradio.nr.tracking import calibrate, measurement_errors, selected, track
+from railradio.nr.tracking import track
 from railradio.workflow import setup_script
 
 smk = snakemake  # noqa: F821

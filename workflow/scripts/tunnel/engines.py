@@ -1,7 +1,7 @@
 """Adapter: image method vs SBR (square and circle) -> results/tunnel/engines.nc."""
 
 from railradio.io import read_dataset, write_dataset
-from railradio.tunnel.study import make_engines
+from railradio.tunnel.engine_checks import make_engines
 from railradio.workflow import setup_script
 
 smk = snakemake  # noqa: F821 - injected by Snakemake

@@ -4,7 +4,7 @@ import numpy as np
 
 from railradio.io import read_dataset, write_dataset
 from railradio.rng import spawn_key
-from railradio.tunnel.study import make_peak_bias
+from railradio.tunnel.peak_bias import make_peak_bias
 from railradio.workflow import setup_script
 
 smk = snakemake  # noqa: F821 - injected by Snakemake

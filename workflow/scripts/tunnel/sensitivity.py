@@ -2,8 +2,8 @@
 
 from railradio.io import read_dataset, write_dataset
 from railradio.rng import spawn_key
+from railradio.tunnel.sensitivity import make_sensitivity
 from railradio.tunnel.simulate import TRAIN_IDS
-from railradio.tunnel.study import make_sensitivity
 from railradio.workflow import setup_script
 
 smk = snakemake  # noqa: F821 - injected by Snakemake

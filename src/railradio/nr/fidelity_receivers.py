@@ -1,0 +1,83 @@
+"""The study's receivers on one burst, as the fidelity target runs them: each receiver's
+decisions (block detections, TOA, AOD, the selected cells) at a chosen correlation rate."""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from railradio.nr.cellsearch import correlation_key, ss_rsrp_db
+from railradio.nr.correlator import Correlator
+from railradio.nr.simulate import Scenario
+
+
+@dataclass
+class ReceiverDecisions:
+    """One receiver's decisions on one burst (arrays over the candidates)."""
+
+    detected: NDArray[np.bool_]  # [cand, block]
+    toa_samples: NDArray[np.float64]  # [cand] full-rate samples, NaN: nothing detected
+    aod_rad: NDArray[np.float64]  # [cand]
+    strength: NDArray[np.float64]  # [cand] what the receiver selects its cells by
+    selected: NDArray[np.bool_]  # [cand]
+
+
+class Receivers:
+    """The study's receivers (the source's and the variants, ``Scenario.variants``) and the
+    cell search's SS-RSRP correlator at one rate: the front end's (``nr.receiver.decimation``),
+    as in production, or a finer one on the front end's samples band-limited-interpolated
+    (1: every full-rate lag; the template zero-stuffed, the CA-CFAR window and guard the same
+    duration)."""
+
+    def __init__(self, scn: Scenario, selection: dict[str, str], decimation: int, n_use: int = 3):
+        base = scn.receiver.decimation
+        self.decimation = decimation
+        rx = [("seed", scn.receiver, scn.detector)] + list(scn.variants)
+        self.names = [name for name, _, _ in rx]
+        self.selection = selection
+        self.n_use = n_use
+
+        def cor(rc, det, pfa):
+            return Correlator(dataclasses.replace(rc, decimation=decimation), det, pfa, template_decimation=base)
+
+        self.cors = [cor(rc, det, scn.pfa) for _, rc, det in rx]
+        cs = scn.cell_search
+        cs_rc = cs.receiver_config(scn.receiver)
+        key = correlation_key(cs_rc, cs.detector, cs.pfa)
+        self.cs_shared = next(
+            (j for j, (_, rc, det) in enumerate(rx) if correlation_key(rc, det, scn.pfa) == key), None
+        )
+        self.cs_cor = None if self.cs_shared is not None else cor(cs_rc, cs.detector, cs.pfa)
+
+    def __call__(self, z: NDArray[np.complex64], s_min: int, n1: NDArray, n2: NDArray) -> dict[str, ReceiverDecisions]:
+        spectra = {}
+
+        def zf(c):
+            if c.n_win not in spectra:
+                spectra[c.n_win] = c.window_spectra(z, s_min)
+            return spectra[c.n_win]
+
+        res = [c.correlate(z, s_min, n1, n2, zf=zf(c)) for c in self.cors]
+        cs_res = (
+            res[self.cs_shared]
+            if self.cs_shared is not None
+            else self.cs_cor.correlate(z, s_min, n1, n2, zf=zf(self.cs_cor))
+        )
+        rsrp = ss_rsrp_db(cs_res)
+        out = {}
+        for name, r in zip(self.names, res, strict=True):
+            score = np.where(r.detected, (r.eta - r.mu) / np.maximum(r.sigma, 1e-30), -np.inf)
+            best = np.where(r.detected.any(axis=1), score.max(axis=1), np.nan)
+            strength = {"ss_rsrp": rsrp, "best_score": best, "peak": r.peak_comb}[self.selection[name]]
+            ok = np.isfinite(r.aod_rad) & np.isfinite(r.toa_samples)
+            s = np.where(ok, np.nan_to_num(strength, nan=-np.inf), -np.inf)
+            order = np.argsort(-s)[: self.n_use]  # railradio.nr.calibration.selected, one epoch
+            sel = np.zeros(n1.size, dtype=bool)
+            sel[order[ok[order]]] = True
+            out[name] = ReceiverDecisions(
+                r.detected.copy(), r.toa_samples.copy(), r.aod_rad.copy(), np.asarray(strength, float), sel
+            )
+        return out

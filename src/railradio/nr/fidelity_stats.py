@@ -1,0 +1,162 @@
+"""The fidelity target's measures and verdicts: the changed decisions between two paths,
+the error distributions' comparison (two-sample KS, the TOA-within-5-m share with a paired
+epoch bootstrap) and the rule by which a shortcut is bounded."""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from railradio.constants import SPEED_OF_LIGHT_M_S
+from railradio.nr.antenna import wrap_rad
+from railradio.nr.fidelity import AOD_CHANGE_DEG, COMPARISONS, DECISIONS, TOA_CHANGE_SAMPLES, Comparison
+from railradio.nr.numerology import SAMPLE_RATE_HZ
+
+
+def toa_error_m(toa_samples: NDArray, d3d_m: NDArray) -> NDArray[np.float64]:
+    """TOA range error [m] (NaN where nothing was detected)."""
+    return toa_samples / SAMPLE_RATE_HZ * SPEED_OF_LIGHT_M_S - d3d_m
+
+
+def aod_error_deg(aod_rad: NDArray, aod_true_rad: NDArray) -> NDArray[np.float64]:
+    return np.degrees(wrap_rad(aod_rad - aod_true_rad))
+
+
+def changed(kind: str, a: dict[str, NDArray], b: dict[str, NDArray]) -> NDArray[np.float64]:
+    """Per-decision change indicators of decision ``kind`` between two runs' arrays
+    (``detected`` [E, C, B], ``selected``/``toa``/``aod`` [E, C]): 1 changed, 0 not, NaN
+    where neither run made that decision (no TOA/AOD in either). Returns [E, n]."""
+    if kind == "detection":
+        out = (a["detected"] != b["detected"]).astype(float)
+        return out.reshape(out.shape[0], -1)
+    if kind == "selection":
+        return (a["selected"] != b["selected"]).astype(float)
+    key, tol = ("toa", TOA_CHANGE_SAMPLES) if kind == "toa" else ("aod", np.radians(AOD_CHANGE_DEG))
+    x, y = a[key], b[key]
+    fa, fb = np.isfinite(x), np.isfinite(y)
+    with np.errstate(invalid="ignore"):
+        diff = np.abs(wrap_rad(x - y)) if key == "aod" else np.abs(x - y)
+        out = np.where(fa & fb, (diff > tol + 1e-9).astype(float), np.where(fa | fb, 1.0, np.nan))
+    return out
+
+
+def stack(epochs: list[dict], receivers: list[str]) -> dict:
+    """The per-epoch results of :meth:`railradio.nr.fidelity.FidelityRun.epoch` as arrays:
+    ``{variant: {receiver: {"detected" [E, C, B], "selected", "toa", "aod" [E, C]}}}``."""
+    out = {}
+    for v in epochs[0]["decisions"]:
+        out[v] = {}
+        for r in receivers:
+            ds = [e["decisions"][v][r] for e in epochs]
+            out[v][r] = {
+                "detected": np.stack([d.detected for d in ds]),
+                "selected": np.stack([d.selected for d in ds]),
+                "toa": np.stack([d.toa_samples for d in ds]),
+                "aod": np.stack([d.aod_rad for d in ds]),
+            }
+    return out
+
+
+TOA_WITHIN_M = 5.0
+"""The TOA-within share's range-error limit [m]."""
+GOAL_CHANGE_FRAC = 0.005
+"""A deterministic shortcut is bounded when each changed-decision share is at most this."""
+
+
+def within_share(toa: NDArray, d3d_m: NDArray, in_range: NDArray) -> NDArray[np.float64]:
+    """[E, C] 1 where the TOA range error is within :data:`TOA_WITHIN_M`, 0 where not (no
+    TOA counts as not), NaN for candidates out of range (they send nothing)."""
+    with np.errstate(invalid="ignore"):
+        ok = np.abs(toa_error_m(toa, d3d_m)) <= TOA_WITHIN_M
+    return np.where(in_range, ok.astype(float), np.nan)
+
+
+def paired_bootstrap_diff(
+    a: NDArray, b: NDArray, rng: np.random.Generator, n_boot: int = 2000, level: float = 0.95
+) -> tuple[float, float, float]:
+    """Difference of means mean(a) - mean(b) of per-epoch values a, b [E, n] (NaN ignored)
+    with a bootstrap interval over epochs (the epochs resampled, pairs kept)."""
+
+    def diff(idx):
+        return np.nanmean(a[idx]) - np.nanmean(b[idx])
+
+    e = a.shape[0]
+    boots = np.array([diff(rng.integers(0, e, e)) for _ in range(n_boot)])
+    q = (1 - level) / 2
+    return float(diff(np.arange(e))), float(np.quantile(boots, q)), float(np.quantile(boots, 1 - q))
+
+
+def summarize(
+    stacked: dict, truth: dict, receivers: list[str], comps: dict[str, Comparison] | None = None, seed: int = 0
+) -> dict:
+    """Every comparison's measures: ``{shortcut: {receiver: {...}}}`` with, per decision,
+    the changed share, its 95 % interval (clustered by epoch,
+    :func:`railradio.handover.stats.clustered_rate`) and the number of decisions; and the
+    distributions' comparison: the two-sample KS p-values of the TOA range and AOD errors,
+    the TOA-within-5-m shares and their difference with a paired epoch-bootstrap interval.
+
+    ``truth``: ``d3d`` and ``aod`` [E, C] (true 3-D distance and AOD), ``in_range`` [E, C]."""
+    from scipy.stats import ks_2samp
+
+    from railradio.handover.stats import clustered_rate
+
+    rng = np.random.default_rng(seed)
+    inr = truth["in_range"]
+    out = {}
+    for name, comp in (COMPARISONS if comps is None else comps).items():
+        if comp.off not in stacked:
+            continue
+        out[name] = {}
+        for r in receivers:
+            a, b = stacked[comp.off][r], stacked[comp.base][r]
+            m = {}
+            for k in DECISIONS:
+                ev = changed(k, a, b)
+                rate = clustered_rate(ev)
+                m[k] = {"frac": rate["p"], "lo": rate["lo"], "hi": rate["hi"], "n": rate["n"]}
+            ea = toa_error_m(a["toa"], truth["d3d"])[inr]
+            eb = toa_error_m(b["toa"], truth["d3d"])[inr]
+            ea, eb = ea[np.isfinite(ea)], eb[np.isfinite(eb)]
+            m["toa_ks_p"] = float(ks_2samp(ea, eb).pvalue) if ea.size and eb.size else float("nan")
+            fa = aod_error_deg(a["aod"], truth["aod"])[inr]
+            fb = aod_error_deg(b["aod"], truth["aod"])[inr]
+            fa, fb = fa[np.isfinite(fa)], fb[np.isfinite(fb)]
+            m["aod_ks_p"] = float(ks_2samp(fa, fb).pvalue) if fa.size and fb.size else float("nan")
+            wa = within_share(a["toa"], truth["d3d"], inr)
+            wb = within_share(b["toa"], truth["d3d"], inr)
+            m["within5_off"], m["within5_base"] = float(np.nanmean(wa)), float(np.nanmean(wb))
+            m["within5_diff"], m["within5_diff_lo"], m["within5_diff_hi"] = paired_bootstrap_diff(wa, wb, rng)
+            out[name][r] = m
+    return out
+
+
+DIST_TOL = 0.02
+"""Largest |difference| of the TOA-within-5-m share (its 95 % interval's ends) under which
+two paths' error distributions count as the same [share]."""
+KS_ALPHA = 0.05
+"""Significance level of the two-sample KS tests."""
+
+
+def distributions_agree(m: dict) -> bool:
+    """KS p-values of the TOA and AOD errors ≥ :data:`KS_ALPHA` and the TOA-within-5-m
+    difference's interval inside ±:data:`DIST_TOL`."""
+    ks = [p for p in (m["toa_ks_p"], m["aod_ks_p"]) if np.isfinite(p)]
+    return all(p >= KS_ALPHA for p in ks) and m["within5_diff_lo"] >= -DIST_TOL and m["within5_diff_hi"] <= DIST_TOL
+
+
+def bounded(m: dict, noise: dict, stochastic: bool) -> bool:
+    """The rule (stated before the paper-scale run): a stochastic comparison is bounded when
+    the error distributions agree (:func:`distributions_agree`); a deterministic one when
+    every decision's changed share is at most :data:`GOAL_CHANGE_FRAC` — or, for a decision
+    that a redraw of the noise alone changes more often than that (``noise``, the same
+    receiver's ``noise`` comparison: the decision is not reproducible under the model's own
+    randomness), when the error distributions agree."""
+    if stochastic:
+        return distributions_agree(m)
+    for k in DECISIONS:
+        if m[k]["frac"] <= GOAL_CHANGE_FRAC:
+            continue
+        if noise[k]["frac"] > GOAL_CHANGE_FRAC and distributions_agree(m):
+            continue
+        return False
+    return True

@@ -1,0 +1,507 @@
+"""Received SS bursts (seed eq. 2–3): the transmitter and channel synthesizer.
+
+Synthesis (per epoch, :class:`Synthesizer`): every RRH in range sends its burst grid (PSS,
+SSS, PBCH, full-buffer data; SS-block symbols on that block's beam, other symbols on their
+data beam) through its own channel: bulk 3-D delay τ0 (TS 38.211's time-continuous symbols
+sampled exactly: a per-symbol phase ramp e^{-j2π f_k τ0} and each symbol's extent placed at
+⌈τ0 F_s⌉), TDL taps (per-symbol Rayleigh gains, fixed-delay basis e^{-j2π f_k τ_l}) and the
+LOS tap's Doppler as a continuous phase within every symbol (inter-carrier interference);
+plus AWGN. Its shortcuts, each measured against the exact computation
+(:func:`railradio.nr.reference.reference_received`) on paper-scale epochs by the fidelity
+target (:mod:`railradio.nr.fidelity`):
+
+* a band: only the N_FFT/D_s central subcarriers are synthesized (at F_s/D_s), then the
+  receiver's front end filters to its own band;
+* the Rayleigh taps are held per symbol and rotate within a symbol with the LOS Doppler;
+  each delayed tap's copy of a symbol is wrapped within the symbol's extent (its spill into
+  the next symbol is omitted);
+* the geometry (bulk delay, LOS Doppler, beam gains) is held over the 2 ms burst (the train
+  moves ≤ 0.26 m, 0.2 full-rate samples); ``motion`` follows it symbol by symbol.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import NamedTuple
+
+import numpy as np
+from numpy.typing import NDArray
+
+from railradio.nr import kernels
+from railradio.nr.channel import TdlProfile, sos_params
+from railradio.nr.numerology import N_FFT, SUBCARRIER_SPACING_HZ, SYMBOLS_PER_SLOT, Numerology
+from railradio.nr.receiver import ReceiverConfig, fft_rows
+from railradio.nr.ssb import band_bins, burst_grid, reference_waveform
+
+
+@dataclass
+class Links:
+    """Everything about the RRHs in range at one epoch (arrays over RRHs).
+
+    Attributes
+    ----------
+    n_id1, n_id2 : [R] int
+    tau_s : [R] bulk 3-D delay [s]
+    amp : [R] amplitude [√W] per unit-EPRE subcarrier: √(P_sc · G_R / PL · 10^{S/10})
+    beam_amp : [R, n_beams] Tx beam amplitude gains toward the train [linear, √]
+    data_amp : [R] Tx amplitude gain of the data beam (best beam toward the train)
+    f_los_hz : [R] LOS Doppler f_D cos α [Hz]
+    phase0 : [R] LOS carrier phase at t = 0 [rad]
+    doppler_hz : maximum Doppler v/λ [Hz]
+    noise_psd_w_hz : N0 of one receive chain [W/Hz]
+    n_chains : receive chains summed (noise adds)
+    """
+
+    n_id1: NDArray[np.int64]
+    n_id2: NDArray[np.int64]
+    tau_s: NDArray[np.float64]
+    amp: NDArray[np.float64]
+    beam_amp: NDArray[np.float64]
+    data_amp: NDArray[np.float64]
+    f_los_hz: NDArray[np.float64]
+    phase0: NDArray[np.float64]
+    doppler_hz: float
+    noise_psd_w_hz: float
+    n_chains: int = 2
+    extra: dict = field(default_factory=dict)
+
+    @property
+    def n(self) -> int:
+        return int(self.tau_s.size)
+
+
+DATA_BEAMS = ("serving", "train", "random", "none")
+
+
+class _LinkGrid(NamedTuple):
+    """One link's resource grid as :func:`kernels.fill_grid` takes it, for the symbols
+    synthesized: the data pool rows, the SS-block overlay (:meth:`Synthesizer.overlay`), the
+    delay's phase ramp [n], the per-symbol amplitude and the long-CP ramps."""
+
+    pool_idx: NDArray[np.int64]
+    ov: tuple[NDArray, ...]
+    ramp: NDArray[np.complex64]
+    g_row: NDArray[np.float32]
+    long_of: NDArray[np.int64]
+    long_ramp: NDArray[np.complex64]
+
+
+class Synthesizer:
+    """Builds received bursts for one receiver configuration (caches per-cell grids).
+
+    Traffic [ours, by the deployment rule of ``config/README.md``]: the full-buffer data of
+    the resource elements outside the SS blocks (source) go, by ``data_beam``,
+
+    - ``"serving"``: from the serving cell on its best beam toward the train (the train is
+      its user); every other RRH, in each slot (14 symbols, the PDSCH scheduling unit of
+      TS 38.214 §5.1.2) with probability ``load``, toward a uniformly drawn SS-beam
+      direction (its own users along the track), and nothing in its other slots;
+    - ``"train"``: every RRH toward the train (a worst case);
+    - ``"random"``: every RRH as a non-serving one above;
+    - ``"none"``: PSS and SSS only — the data pool is zeroed, and the PBCH, which draws its
+      QPSK symbols from the same pool, goes with it.
+
+    The random beams and loads are drawn for every RRH whatever the policy, so changing the
+    policy or the serving cell changes no other draw.
+    """
+
+    def __init__(
+        self,
+        cfg: ReceiverConfig,
+        profile: TdlProfile,
+        pool: NDArray[np.complex64],
+        n_sinusoids: int = 16,
+        full_channel_range_m: float = np.inf,
+        data_beam: str = "serving",
+        load: float = 1.0,
+        exact_spill: bool = False,
+    ):
+        if data_beam not in DATA_BEAMS:
+            raise ValueError(f"data_beam must be one of {DATA_BEAMS}, got {data_beam!r}")
+        if not 0.0 <= load <= 1.0:
+            raise ValueError(f"load must be in [0, 1], got {load!r}")
+        self.data_beam, self.load = data_beam, float(load)
+        self.cfg, self.profile = cfg, profile
+        self.n_sinusoids = n_sinusoids
+        self.full_channel_range_m = full_channel_range_m
+        num = cfg.num
+        band = pool[:, band_bins(num)]
+        if data_beam == "none":
+            band = np.zeros_like(band)
+        # the last row is empty: the data of an idle slot
+        self.pool_band = np.ascontiguousarray(np.vstack([band, np.zeros((1, band.shape[1]), band.dtype)]))
+        self.idle_row = band.shape[0]
+        n = num.n_fft
+        self.k = np.fft.fftfreq(n, 1.0 / n)
+        self.f_k = self.k * SUBCARRIER_SPACING_HZ
+        self.basis = np.exp(-2j * np.pi * np.outer(profile.delays_s, self.f_k)).astype(np.complex64)
+        self.exact_spill = exact_spill
+        # the taps' spill (kernels.add_spill): tap l's copy of a symbol begins at most
+        # ⌈τ_l F⌉ samples into its slot; column col_of[l, j] of ``spill_at`` evaluates a
+        # symbol's waveform at sample j - τ_l F (e^{j2π k (j - τ_l F)/n}/n, as the IFFT)
+        fs = num.sample_rate_hz
+        reach = np.ceil(profile.delays_s * fs - 1e-9).astype(np.int64)
+        self.spill_reach = reach
+        self.spill_col_of = np.zeros((reach.size, int(reach.max(initial=0))), dtype=np.int64)
+        cols = []
+        for l, r in enumerate(reach):
+            for j in range(r):
+                self.spill_col_of[l, j] = len(cols)
+                cols.append(j - profile.delays_s[l] * fs)
+        self.spill_at = (np.exp(2j * np.pi * np.outer(self.k, cols) / n) / n).astype(np.complex64)  # [n, Q]
+        self._overlays: dict = {}
+        self._span: tuple | None = None
+
+    def span(self, max_tau_s: float) -> dict:
+        """Symbol layout covering delays up to ``max_tau_s`` (cached by pre-burst length)."""
+        cfg, num = self.cfg, self.cfg.num
+        n = num.n_fft
+        num1 = Numerology(1)
+        n_pre = int(np.ceil(max_tau_s * num1.sample_rate_hz / (N_FFT + 72))) + 1
+        if self._span is not None and self._span["n_pre"] >= n_pre:
+            return self._span
+        n_pre = max(n_pre, 4)
+        last_needed = (
+            cfg.block_start_full[-1] + cfg.lags_full + len(reference_waveform(num1, 0, 0, int(cfg.ssb_first[-1])))
+        )
+        s_end = int(cfg.ssb_first[-1])
+        while num1.symbol_start(s_end) < last_needed:
+            s_end += 1
+        symbols = np.arange(-n_pre, s_end + 1)
+        cps = num.cp_length(symbols)
+        starts = num.symbol_start(symbols) - num.symbol_start(symbols[0])
+        total = int(starts[-1] + n + cps[-1])
+        # read-out (kernels.place): symbol s occupies n + cp_s samples read cyclically from
+        # its IFFT output y_s (0..n-1 then 0..cp_s-1); the CP and the placement offset are
+        # folded into the subcarrier phase ramp
+        # SS-block symbol -> block index
+        block_of = np.full(symbols.size, -1, dtype=np.int64)
+        first_pos = {int(sv): i for i, sv in enumerate(symbols)}
+        for b, f in enumerate(cfg.ssb_first):
+            for off in range(4):
+                if int(f) + off in first_pos:
+                    block_of[first_pos[int(f) + off]] = b
+        cp0 = int(num.cp_length(1))
+        long_rows = np.flatnonzero(cps != cp0)
+        long_ramp = np.exp(-2j * np.pi * np.outer(cps[long_rows] - cp0, np.fft.fftfreq(n, 1.0 / n)) / n).astype(
+            np.complex64
+        )
+        long_of = np.full(symbols.size, -1, dtype=np.int64)
+        long_of[long_rows] = np.arange(long_rows.size)
+        slot = symbols // SYMBOLS_PER_SLOT
+        slot = slot - slot[0]  # each symbol's slot, 0-based
+        self._span = dict(
+            n_pre=n_pre,
+            symbols=symbols,
+            slot=slot,
+            cps=np.ascontiguousarray(cps, dtype=np.int64),
+            starts=np.ascontiguousarray(starts, dtype=np.int64),
+            total=total,
+            cp0=cp0,
+            long_of=long_of,
+            long_ramp=long_ramp,
+            block_of=block_of,
+            s_min=int(symbols[0]),
+        )
+        self._overlays.clear()
+        return self._span
+
+    def overlay(self, n_id1: int, n_id2: int) -> tuple[NDArray, ...]:
+        """Where and what the cell's SS blocks write over the pool data, compact (cached per
+        cell): ``(ov_row [symbols], ov_full, ov_mask, ov_val)`` as :func:`kernels.fill_grid`
+        takes them — the overlay row of each symbol (-1: none), whether it covers the whole
+        band, and its mask and values."""
+        key = (int(n_id1), int(n_id2))
+        if key not in self._overlays:
+            sp = self._span
+            num = self.cfg.num
+            marked, _ = burst_grid(
+                num,
+                sp["symbols"],
+                self.cfg.ssb_first,
+                *key,
+                np.full((1, N_FFT), np.nan + 0j, dtype=np.complex64),
+                np.zeros(sp["symbols"].size, dtype=np.int64),
+            )
+            mask = ~np.isnan(marked.real) & (sp["block_of"][:, None] >= 0)
+            rows = np.flatnonzero(mask.any(axis=1))
+            ov_row = np.full(mask.shape[0], -1, dtype=np.int64)
+            ov_row[rows] = np.arange(rows.size)
+            ov_mask = np.ascontiguousarray(mask[rows])
+            ov_val = np.ascontiguousarray(np.where(ov_mask, marked[rows], 0).astype(np.complex64))
+            self._overlays[key] = (ov_row, ov_mask.all(axis=1), ov_mask, ov_val)
+        return self._overlays[key]
+
+    def draws(self, links: Links, rng: np.random.Generator) -> list[dict]:
+        """The random draws of one burst per RRH: data pool indices, fading (α, φ), and per
+        slot the beam and whether the slot carries data (used by non-serving RRHs)."""
+        sp = self.span(float(np.max(links.tau_s)) if links.n else 0.0)
+        slot = sp["slot"]
+        n_slots = int(slot.max()) + 1
+        out = []
+        for _ in range(links.n):
+            idx = rng.integers(0, self.idle_row, size=sp["symbols"].size)
+            alpha, phi = sos_params(rng, self.profile.powers.size, self.n_sinusoids)
+            out.append({"pool_idx": idx, "alpha": alpha, "phi": phi})
+        for d in out:  # after the data and fading draws, which therefore do not depend on it
+            d["data_beam"] = rng.integers(0, self.cfg.n_blocks, size=n_slots)[slot]
+            d["busy"] = (rng.random(n_slots) < self.load)[slot]
+        return out
+
+    def _add_spill(self, z, u, rows, every, gains, n_c, tau0_s, sp, w_rad_s, t_first_s, phase0_rad) -> None:
+        """Add the delayed taps' spill across symbol boundaries, which the cyclic read-out of
+        each symbol's IFFT (:func:`kernels.place`) leaves out: the first b_l samples of a
+        symbol's slot carry tap l's copy of the previous symbol, not of its own cyclic
+        extension. With Δ_s = u_{s-1} e^{j2π k cp_{s-1}/n} - u_s (the tap-less spectra; a
+        symbol not synthesized is empty), the correction at sample j of slot s is
+        Σ_{l: j < b_l} g_{s,l} δ_s(j - τ_l F), δ_s the IFFT of Δ_s evaluated off the grid:
+        one matrix product with :attr:`spill_at`. Exact (``tests/nr/test_fidelity.py``: the
+        fast path equals the exact reference's per-symbol taps to float32 rounding). b_l uses
+        the epoch's delay τ0 (under ``motion`` a symbol's edge moves by < 0.05 sample)."""
+        num, n = self.cfg.num, self.cfg.num.n_fft
+        fs = num.sample_rate_hz
+        u_all = u if every else np.zeros((sp["symbols"].size, n), dtype=np.complex64)
+        if not every:
+            u_all[rows] = u
+        if "cp_turn" not in sp:  # e^{j2π k cp_s/n} per symbol, cached with the layout
+            cps, inv = np.unique(sp["cps"][:-1], return_inverse=True)
+            sp["cp_turn"] = np.exp(2j * np.pi * np.outer(cps, self.k) / n).astype(np.complex64)[inv]
+        cp_turn = sp["cp_turn"]
+        delta = np.empty_like(u_all)
+        np.multiply(u_all[:-1], cp_turn, out=delta[1:])
+        delta[0] = 0
+        delta -= u_all
+        b = np.ceil((tau0_s + self.profile.delays_s) * fs - 1e-9).astype(np.int64) - n_c
+        b = np.clip(b, 0, self.spill_reach)
+        kernels.add_spill(
+            z,
+            delta @ self.spill_at,
+            self.spill_col_of,
+            b,
+            gains,
+            sp["starts"],
+            n_c,
+            w_rad_s,
+            t_first_s,
+            phase0_rad,
+            1.0 / fs,
+        )
+
+    def __call__(
+        self,
+        links: Links,
+        rng: np.random.Generator,
+        t0_s: float = 0.0,
+        noise: bool = True,
+        d2d_m: NDArray | None = None,
+        draws: list[dict] | None = None,
+        serving: NDArray[np.bool_] | None = None,
+        motion=None,
+    ) -> tuple[NDArray[np.complex64], int]:
+        """The received burst at F_s/D (sum over RRHs in range + AWGN).
+
+        ``serving`` [links]: the links of the serving cell (``data_beam="serving"``; none
+        serving when omitted). ``motion`` (:class:`railradio.nr.motion.BurstMotion`): the
+        links' geometry follows the train through the burst, symbol by symbol — bulk delay
+        (a per-symbol phase ramp), the LOS phase's curvature and the beam gains at each
+        symbol's receive instant — instead of being held at the epoch instant (the
+        production's shortcut, bounded in :mod:`railradio.nr.fidelity`).
+
+        Returns ``(z, s_min)``: samples from the CP start of symbol ``s_min`` (negative:
+        before the burst's first subframe).
+        """
+        num = self.cfg.num
+        n = num.n_fft
+        fs = num.sample_rate_hz
+        sp = self.span(float(np.max(links.tau_s)) if links.n else 0.0)
+        symbols, total = sp["symbols"], sp["total"]
+        z = np.zeros(total, dtype=np.complex64)
+        t_sym = (num.symbol_start(symbols) + sp["cps"] + n / 2) / fs + t0_s
+        if draws is None:
+            draws = self.draws(links, rng)
+        at_train = self._at_train(links, serving)
+        g_syms, geo_h = self._symbol_gains(links, draws, at_train, sp, t_sym, motion)
+        full = np.ones(links.n, dtype=bool) if d2d_m is None else np.asarray(d2d_m) <= self.full_channel_range_m
+        self._add_links(z, links, draws, at_train, g_syms, geo_h, full, sp, t_sym, t0_s)
+        if noise:
+            var = links.noise_psd_w_hz * fs * links.n_chains
+            # complex AWGN: interleaved (re, im) float32 draws, variance var/2 each
+            z += np.float32(np.sqrt(var / 2)) * rng.standard_normal(2 * total, dtype=np.float32).view(np.complex64)
+        return z, sp["s_min"]
+
+    def _at_train(self, links: Links, serving: NDArray[np.bool_] | None) -> NDArray[np.bool_]:
+        """[R] the links whose data go toward the train (by ``data_beam``)."""
+        at_train = np.zeros(links.n, dtype=bool)  # links whose data go toward the train
+        if self.data_beam == "train":
+            at_train[:] = True
+        elif self.data_beam == "serving" and serving is not None:
+            at_train[:] = np.asarray(serving, dtype=bool)
+        return at_train
+
+    def _symbol_gains(
+        self, links: Links, draws: list[dict], at_train: NDArray[np.bool_], sp: dict, t_sym: NDArray[np.float64], motion
+    ) -> tuple[NDArray[np.float32], NDArray[np.complex64] | None]:
+        """Each link's amplitude per symbol, × n for the unnormalized IFFT (float32 [R, S]):
+        an SS-block symbol on its block's beam, another on the link's data beam; and, under
+        ``motion``, the per-symbol geometry phase (complex64 [R, S, n]; else ``None``)."""
+        n = self.cfg.num.n_fft
+        is_ss = sp["block_of"] >= 0
+        ss_amp = links.beam_amp[:, np.maximum(sp["block_of"], 0)]  # [R, S]
+        data_amp = np.empty(ss_amp.shape)
+        for r in range(links.n):  # "none": the data are zero anyway (zero pool)
+            data_amp[r] = links.data_amp[r] if at_train[r] else links.beam_amp[r][draws[r]["data_beam"]]
+        geo_h = None
+        if motion is not None:  # per-symbol geometry at each symbol's receive instant
+            ss_amp, geo_h = self._motion_geometry(links, draws, at_train, sp, t_sym, motion)
+            data_amp = ss_amp
+        g_syms = (np.where(is_ss[None, :], ss_amp, data_amp) * (links.amp * n)[:, None]).astype(
+            np.float32
+        )  # × n: unnormalized IFFT
+        return g_syms, geo_h
+
+    def _motion_geometry(
+        self, links: Links, draws: list[dict], at_train: NDArray[np.bool_], sp: dict, t_sym: NDArray[np.float64], motion
+    ) -> tuple[NDArray[np.float64], NDArray[np.complex64]]:
+        """Under ``motion``, the links' geometry at each symbol's receive instant: the beam
+        amplitude of every symbol's beam [R, S] and the phase of the delay's and LOS phase's
+        change since the epoch instant, e^{j(Δφ - 2π f_k Δτ)} (complex64 [R, S, n])."""
+        symbols = sp["symbols"]
+        is_ss = sp["block_of"] >= 0
+        t_rx = t_sym[None, :] + links.tau_s[:, None]  # [R, S]
+        ba_t = motion.beam_amp(t_rx)  # [R, S, B]
+        beam = np.empty((links.n, symbols.size), dtype=np.int64)
+        for r in range(links.n):
+            b_data = (
+                np.full(symbols.size, int(np.argmin(np.abs(links.beam_amp[r] - links.data_amp[r]))))
+                if at_train[r]
+                else draws[r]["data_beam"]
+            )
+            beam[r] = np.where(is_ss, np.maximum(sp["block_of"], 0), b_data)
+        amp = np.take_along_axis(ba_t, beam[:, :, None], axis=2)[:, :, 0]
+        d_tau = motion.delay_s(t_rx) - links.tau_s[:, None]  # [R, S]
+        geo_h = np.exp(
+            1j * (motion.phase_excess_rad(t_rx)[:, :, None] - 2 * np.pi * d_tau[:, :, None] * self.f_k[None, None, :])
+        ).astype(np.complex64)
+        return amp, geo_h
+
+    def _add_links(
+        self,
+        z: NDArray[np.complex64],
+        links: Links,
+        draws: list[dict],
+        at_train: NDArray[np.bool_],
+        g_syms: NDArray[np.float32],
+        geo_h: NDArray[np.complex64] | None,
+        full: NDArray[np.bool_],
+        sp: dict,
+        t_sym: NDArray[np.float64],
+        t0_s: float,
+    ) -> None:
+        """Add every link's received burst (without noise) to ``z``, link by link."""
+        num, prof = self.cfg.num, self.profile
+        n = num.n_fft
+        fs = num.sample_rate_hz
+        symbols, total = sp["symbols"], sp["total"]
+        # symbols synthesized: all, or with no data traffic only the SS-block symbols (the
+        # others are empty; leaving them out changes the burst only by the float32 rounding
+        # of a different FFT batch, tests/nr/test_simulate.py)
+        rows = np.flatnonzero(sp["block_of"] >= 0) if self.data_beam == "none" else np.arange(symbols.size)
+        every = rows.size == symbols.size
+        x = np.empty((rows.size, n), dtype=np.complex64)
+        u = np.empty_like(x) if self.exact_spill and prof.powers.size else None  # tap-less spectra
+        long_of, starts, cps = (
+            (sp["long_of"], sp["starts"], sp["cps"])
+            if every
+            else (sp["long_of"][rows], sp["starts"][rows], sp["cps"][rows])
+        )
+        amp_l = np.sqrt(prof.powers / self.n_sinusoids)
+        # per-RRH quantities, vectorized over RRHs: delay τ0 = (n_c - ε)/F_s is placed at
+        # n_c, the rest (and the CP start) is a per-symbol phase ramp: sample m of symbol s
+        # is x(t_m - τ0) at m - cp_s + n_c
+        n_cs = np.ceil(links.tau_s * fs - 1e-9).astype(np.int64)  # [R]
+        frac = links.tau_s * fs - n_cs  # [R] in (-1, 0]
+        ramps = np.exp(-2j * np.pi * np.outer(frac + sp["cp0"], self.k) / n).astype(np.complex64)  # [R, n]
+        t_firsts = (num.symbol_start(sp["s_min"]) + n_cs) / fs + t0_s  # [R]
+        for r in range(links.n):
+            n_c = int(n_cs[r])
+            if n_c >= total:
+                continue
+            ov = self.overlay(links.n_id1[r], links.n_id2[r])
+            pool_idx, g_r = draws[r]["pool_idx"], g_syms[r]
+            if not at_train[r] and self.data_beam != "none":  # an idle slot sends no data
+                pool_idx = np.where(draws[r]["busy"], pool_idx, self.idle_row)
+            if not every:
+                ov = (ov[0][rows],) + ov[1:]
+                pool_idx, g_r = pool_idx[rows], g_r[rows]
+            grid = _LinkGrid(pool_idx, ov, ramps[r], g_r, long_of, sp["long_ramp"])
+            gains = h = None
+            if full[r] and prof.powers.size:
+                gains, h = self._tap_gains(links, r, draws[r], amp_l, t_sym)
+            self._fill_link(x, u, grid, h, None if geo_h is None else geo_h[r], every, rows)
+            y = fft_rows(x, inverse=True, out=x)
+            # LOS phase e^{j(2π f t + φ0)} at receive times, applied while placing
+            kernels.place(
+                z, y, starts, cps, n_c, 2 * np.pi * links.f_los_hz[r], float(t_firsts[r]), links.phase0[r], 1.0 / fs
+            )
+            if u is not None and full[r]:
+                self._add_spill(
+                    z,
+                    u,
+                    rows,
+                    every,
+                    gains,
+                    n_c,
+                    float(links.tau_s[r]),
+                    sp,
+                    2 * np.pi * links.f_los_hz[r],
+                    float(t_firsts[r]),
+                    float(links.phase0[r]),
+                )
+
+    def _tap_gains(
+        self, links: Links, r: int, draw: dict, amp_l: NDArray[np.float64], t_sym: NDArray[np.float64]
+    ) -> tuple[NDArray[np.complex64], NDArray[np.complex64]]:
+        """Link ``r``'s Rayleigh tap gains per symbol, relative to its LOS phase (complex64
+        [S, L]), and its channel's frequency response h = gains · basis + √P_LOS [S, n]."""
+        f_lm = links.doppler_hz * np.cos(draw["alpha"])
+        taps = kernels.sos_taps(amp_l, f_lm, draw["phi"], t_sym)
+        taps *= np.exp(-1j * (2 * np.pi * links.f_los_hz[r] * t_sym + links.phase0[r]))[:, None]
+        gains = taps.astype(np.complex64)
+        h = gains @ self.basis
+        h += np.float32(np.sqrt(self.profile.los_power))
+        return gains, h
+
+    def _fill_link(
+        self,
+        x: NDArray[np.complex64],
+        u: NDArray[np.complex64] | None,
+        grid: _LinkGrid,
+        h: NDArray[np.complex64] | None,
+        geo_r: NDArray[np.complex64] | None,
+        every: bool,
+        rows: NDArray[np.int64],
+    ) -> None:
+        """Write one link's received spectra of the synthesized symbols into ``x`` (and the
+        tap-less ones into ``u`` when kept): with its channel response ``h`` (``None``: a far
+        interferer, one tap with the profile's total power) and its per-symbol geometry
+        ``geo_r`` (``None``: held at the epoch instant)."""
+        no_h = np.ones((1, 1), dtype=np.complex64)
+        if h is not None:
+            if u is not None:  # the tap-less spectra kept for the spill, then x = u · h
+                geo = (geo_r if every else geo_r[rows]) if geo_r is not None else no_h
+                self._fill_grid(u, grid, geo, geo_r is not None)
+                np.multiply(u, h if every else h[rows], out=x)
+            else:
+                if geo_r is not None:
+                    h *= geo_r
+                self._fill_grid(x, grid, h if every else h[rows], True)
+        elif geo_r is not None:  # far interferer, its geometry symbol by symbol
+            self._fill_grid(x, grid, geo_r if every else geo_r[rows], True)
+        else:  # far interferer: one tap with the profile's total power, LOS Doppler
+            self._fill_grid(x, grid, no_h, False)
+
+    def _fill_grid(self, out: NDArray[np.complex64], grid: _LinkGrid, h: NDArray[np.complex64], has_h: bool) -> None:
+        """:func:`kernels.fill_grid` of one link's grid into ``out`` with the response ``h``."""
+        kernels.fill_grid(
+            out, self.pool_band, grid.pool_idx, *grid.ov, h, has_h, grid.ramp, grid.g_row, grid.long_of, grid.long_ramp
+        )

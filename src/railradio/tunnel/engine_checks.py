@@ -1,0 +1,239 @@
+"""The ray engines and the channel table checked: image method vs SBR at fixed offsets, one
+slot's far decay against the modal attenuation of the square and the circle, and whether the
+table reaches far enough (its cut-off)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+from railradio.tunnel.channel import beat_length_m, coherent_gain_by_order, offset_grid_m, received, tabulate
+from railradio.tunnel.lifting import lift
+from railradio.tunnel.materials import circular_attenuation_db_per_m, eh11_attenuation_db_per_m
+from railradio.tunnel.rays import image_families
+from railradio.tunnel.study import cable_from_config, eps_from_config, families, local_mean_window, tunnel_from_config
+
+
+def _window_means_db(x_m: np.ndarray, p: np.ndarray, centres_m: np.ndarray, width_m: float) -> np.ndarray:
+    """Mean of p [..., x] over windows of ``width_m`` centred at ``centres_m`` [dB, [..., centre]]."""
+    return np.stack(
+        [10.0 * np.log10(p[..., np.abs(x_m - c) <= width_m / 2.0].mean(axis=-1)) for c in centres_m], axis=-1
+    )
+
+
+def far_decay(cfg: dict[str, Any]) -> xr.Dataset:
+    """One slot's local mean far from it, in the image-method tunnel, for every reflection
+    order up to ``max_order``: the coherent power averaged over windows of one EH11-EH12
+    beat length (:func:`railradio.tunnel.channel.beat_length_m`, which removes the beating
+    of the two lowest modes) centred every quarter beat length over ``rays.far_decay_m``,
+    and its least-squares slope, against the EH11 attenuation of the same square (Emslie,
+    Lagace & Strong 1975).  The slope key takes the highest order; the order at which the
+    window means are within 0.1 dB of it tells whether it converged."""
+    r = cfg["rays"]
+    tun = tunnel_from_config(cfg, "rect")
+    lam = cable_from_config(cfg).wavelength_m
+    eps = eps_from_config(cfg)
+    lb = beat_length_m(tun, lam)
+    lo, hi = (float(v) for v in r["far_decay_m"])
+    centres = np.arange(lo, hi + 1e-9, lb / 4.0)
+    # samples 0.293 m apart (not commensurate with lambda/2) over every window
+    x = np.arange(lo - lb / 2.0, hi + lb / 2.0, 0.293)
+    cum = np.cumsum(coherent_gain_by_order(image_families(tun, r["max_order"]), x, lam, eps, "paraxial"), axis=0)
+    p = np.abs(cum) ** 2
+    lm_db = _window_means_db(x, p, centres, lb)
+    slope = -np.polyfit(centres / 1e3, lm_db.T, 1)[0]  # [order] dB/km
+    conv = np.all(np.abs(lm_db - lm_db[-1]) <= 0.1, axis=1)
+    conv_order = int(np.argmax(conv))
+    eh11 = eh11_attenuation_db_per_m(lam, tun.width_m, tun.height_m, eps) * 1e3
+    return xr.Dataset(
+        {
+            "local_mean_db": (
+                ("order", "centre_m"),
+                lm_db,
+                {
+                    "units": "dB",
+                    "long_name": (
+                        "one slot's coherent power averaged over one beat length (unit EIRP), truncated at "
+                        "each reflection order"
+                    ),
+                },
+            ),
+            "slope_db_per_km": (
+                "order",
+                slope,
+                {"units": "dB/km", "long_name": "least-squares decay of local_mean_db over the centres"},
+            ),
+        },
+        coords={
+            "order": (
+                "order",
+                np.arange(lm_db.shape[0]),
+                {"units": "1", "long_name": "highest reflection order summed"},
+            ),
+            "centre_m": ("centre_m", centres, {"units": "m", "long_name": "window centre (offset from the slot)"}),
+        },
+        attrs={
+            "beat_length_m": lb,
+            "eh11_db_per_km": eh11,
+            "converged_order": conv_order,
+            "slope_db_per_km": float(slope[-1]),
+        },
+    )
+
+
+def far_decay_circle(cfg: dict[str, Any], sample_m: float = 1.0) -> dict[str, float]:
+    """The circular engine (SBR, the configured polarization rule) checked far from the slot
+    against an independent reference: one slot's local mean averaged over windows of the
+    square's beat length (as :func:`far_decay`; samples ``sample_m`` apart), its slope over
+    ``rays.far_decay_m`` at ``max_order`` (the reflection product interpolated in sin b as
+    in the tables), against Marcatili & Schmeltzer's attenuation of
+    EH11 and TE01 in a lossy circular guide of the tunnel's radius (TE01, the least
+    attenuated mode, bounds every mode's decay from below)."""
+    r = cfg["rays"]
+    tun = tunnel_from_config(cfg, "circle")
+    lam = cable_from_config(cfg).wavelength_m
+    eps = eps_from_config(cfg)
+    lb = beat_length_m(tunnel_from_config(cfg, "rect"), lam)
+    lo, hi = (float(v) for v in r["far_decay_m"])
+    centres = np.arange(lo, hi + 1e-9, lb / 4.0)
+    x = np.arange(lo - lb / 2.0, hi + lb / 2.0, sample_m)
+    fam = families(cfg, "circle", "sbr", r["max_order"])
+    p = np.abs(coherent_gain_by_order(fam, x, lam, eps, r["sbr_polarization"]).sum(axis=0)) ** 2
+    lm_db = _window_means_db(x, p, centres, lb)
+    radius = tun.diameter_m / 2.0
+    return {
+        "slope_db_per_km": float(-np.polyfit(centres / 1e3, lm_db, 1)[0]),
+        "eh11_db_per_km": circular_attenuation_db_per_m(lam, radius, "EH11", eps) * 1e3,
+        "te01_db_per_km": circular_attenuation_db_per_m(lam, radius, "TE01", eps) * 1e3,
+        "n_families": len(fam),
+    }
+
+
+def cutoff_check(cfg: dict[str, Any], table: xr.Dataset, x_step_m: float = 2.0, step_m: float = 0.2) -> xr.Dataset:
+    """Is the table long enough?  At receivers every ``x_step_m`` along the tunnel: the
+    share of the local-mean power (summed over slots) from the slots beyond the table's
+    extent c, and the RMS delay spread of the slots within c, within 2c and within c/2.
+    A table covering the whole tunnel leaves no slot beyond it (share 0, the doubled
+    cut-off adds nothing); a shorter one is compared with the channel tabulated to 2c (at
+    the table's order, on a ``step_m`` grid: the local mean and the power delay profile are
+    averages over 40 wavelengths, which a 0.2 m grid samples 66 times)."""
+    r = cfg["rays"]
+    tun = tunnel_from_config(cfg, table.attrs["shape"])
+    cab = cable_from_config(cfg)
+    off = table["offset_m"].values
+    cut = float(off[-1])
+    if cut >= tun.length_m - 1e-9:
+        long = table
+    else:
+        long = tabulate(
+            image_families(tun, table.attrs["reflection_order"]),
+            tun,
+            cab,
+            offset_grid_m(step_m, min(2.0 * cut, tun.length_m), tun.slot_spacing_m),
+            eps=eps_from_config(cfg),
+            polarization="paraxial",
+            delay_bin_s=r["delay_bin_ns"] * 1e-9,
+            n_delay_bins=r["n_delay_bins"],
+            local_mean_window_m=local_mean_window(cfg),
+        )
+    half = table.isel(offset_m=slice(0, int(np.searchsorted(off, cut / 2.0 + 1e-9))))
+    x = np.arange(0.0, tun.length_m + 1e-9, x_step_m)
+    a, c = received(table, tun, cab, x), received(half, tun, cab, x)
+    b = a if long is table else received(long, tun, cab, x)
+    share = 1.0 - 10.0 ** ((a.rssi_mean_dbm - b.rssi_mean_dbm) / 10.0)
+    dims = ("x_m",)
+    return xr.Dataset(
+        {
+            "power_beyond_cutoff_frac": (
+                dims,
+                share,
+                {
+                    "units": "1",
+                    "long_name": "share of the local-mean power (sum over slots) from slots beyond the table's extent",
+                },
+            ),
+            "delay_rms_cutoff_s": (
+                dims,
+                a.delay_rms_s,
+                {"units": "s", "long_name": "RMS delay spread, slots within the table's extent"},
+            ),
+            "delay_rms_doubled_s": (
+                dims,
+                b.delay_rms_s,
+                {"units": "s", "long_name": "RMS delay spread, slots within twice the table's extent"},
+            ),
+            "delay_rms_halved_s": (
+                dims,
+                c.delay_rms_s,
+                {"units": "s", "long_name": "RMS delay spread, slots within half the table's extent"},
+            ),
+        },
+        coords={"x_m": (dims, x, {"units": "m", "long_name": "receiver position along the tunnel"})},
+        attrs={"cutoff_m": cut, "cutoff_power_frac": float(r["cutoff_power_frac"])},
+    )
+
+
+def make_engines(cfg: dict[str, Any], table: xr.Dataset) -> xr.Dataset:
+    """Image method vs SBR in the rectangular tunnel (and SBR in the circle): per-slot
+    local-mean and coherent gain at a set of offsets, same order, same Fresnel rule; the
+    far decay checks (:func:`far_decay`, :func:`far_decay_circle`) and the cut-off check
+    of the image-method ``table`` (:func:`cutoff_check`)."""
+    order = int(table.attrs["reflection_order"])
+    cab = cable_from_config(cfg)
+    eps = eps_from_config(cfg)
+    offs = np.array(cfg["rays"]["engine_offsets_m"], dtype=float)
+    out = {}
+    for label, shape, engine, pol in (
+        ("image_rect", "rect", "image", "paraxial"),
+        ("sbr_rect", "rect", "sbr", "paraxial"),
+        ("sbr_rect_vector", "rect", "sbr", "vector"),
+        ("sbr_circle", "circle", "sbr", cfg["rays"]["sbr_polarization"]),
+    ):
+        rays = lift(families(cfg, shape, engine, order), offs, cab.wavelength_m, eps, pol)
+        out[label] = (
+            10 * np.log10(np.sum(np.abs(rays.amplitude) ** 2, axis=0)),
+            20 * np.log10(np.abs(rays.amplitude.sum(axis=0))),
+            rays.amplitude.shape[0],
+        )
+    labels = list(out)
+    far = far_decay(cfg)
+    cut = cutoff_check(cfg, table)
+    ds = xr.Dataset(
+        {
+            "power_mean_db": (
+                ("model", "offset_m"),
+                np.array([out[k][0] for k in labels]),
+                {"units": "dB", "long_name": "incoherent sum of the rays' powers of one slot (unit EIRP)"},
+            ),
+            "power_coherent_db": (
+                ("model", "offset_m"),
+                np.array([out[k][1] for k in labels]),
+                {"units": "dB", "long_name": "coherent path gain of one slot (unit EIRP)"},
+            ),
+            "n_rays": ("model", np.array([out[k][2] for k in labels]), {"units": "1", "long_name": "rays (families)"}),
+        },
+        coords={
+            "model": ("model", labels, {"units": "1", "long_name": "engine, cross-section, polarization rule"}),
+            "offset_m": ("offset_m", offs, {"units": "m", "long_name": "along-axis offset"}),
+        },
+        attrs={"reflection_order": order},
+    )
+    ds = ds.merge(
+        far.rename({"order": "far_order"}).rename_vars(
+            {"local_mean_db": "far_local_mean_db", "slope_db_per_km": "far_slope_db_per_km"}
+        )
+    )
+    ds = ds.merge(cut)
+    circ = far_decay_circle(cfg)
+    ds.attrs.update(
+        {
+            "reflection_order": order,
+            **{f"far_{k}": v for k, v in far.attrs.items()},
+            **{f"far_circle_{k}": v for k, v in circ.items()},
+            "cutoff_m": cut.attrs["cutoff_m"],
+            "cutoff_power_frac": cut.attrs["cutoff_power_frac"],
+        }
+    )
+    return ds

@@ -1,0 +1,63 @@
+"""The receivers' measurement model and the place's random fields along the tunnel: per-slot
+log-normal shadowing and delay error (docs/model/tunnel.md §3)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.signal import lfilter
+
+DELAY_ERRORS = ("white", "ar1", "slot_bias")
+
+
+@dataclass(frozen=True)
+class MeasurementModel:
+    shadow_sigma_db: float = 4.0
+    shadow_corr_m: float = 10.0
+    delay_sigma_s: float = 20e-9
+    n_slots: int = 8
+    window_m: float = 200.0
+    bandwidth_hz: float = 5e6
+    n_tones: int = 64
+    noise_figure_db: float = 7.0
+    delay_error: str = "white"
+    delay_corr_m: float = 20.0
+
+    def __post_init__(self) -> None:
+        if self.delay_error not in DELAY_ERRORS:
+            raise ValueError(f"delay_error must be one of {DELAY_ERRORS}, got {self.delay_error!r}")
+        if not self.delay_corr_m > 0:
+            raise ValueError(f"delay_corr_m must be positive, got {self.delay_corr_m!r}")
+        if self.n_slots < 3:
+            raise ValueError(f"n_slots must be >= 3, got {self.n_slots!r}")
+        for name in ("shadow_corr_m", "delay_sigma_s", "window_m", "bandwidth_hz"):
+            if not getattr(self, name) > 0:
+                raise ValueError(f"{name} must be positive, got {getattr(self, name)!r}")
+        if self.shadow_sigma_db < 0:
+            raise ValueError("shadow_sigma_db must be >= 0")
+
+
+def shadow_field(
+    rng: np.random.Generator, n_slots: int, length_m: float, sigma_db: float, corr_m: float, step_m: float = 1.0
+) -> np.ndarray:
+    """Per-slot shadowing along the tunnel [slot, x on a ``step_m`` grid] [dB], AR(1) with
+    correlation exp(-dx / corr_m) (Gudmundson)."""
+    n = int(math.ceil(length_m / step_m)) + 1
+    rho = math.exp(-step_m / corr_m)
+    w = rng.standard_normal((n_slots, n))
+    w[:, 1:] *= math.sqrt(1.0 - rho * rho)
+    return sigma_db * lfilter([1.0], [1.0, -rho], w, axis=1)
+
+
+def delay_error_field(
+    rng: np.random.Generator, n_slots: int, length_m: float, mm: MeasurementModel
+) -> np.ndarray | None:
+    """Per-slot delay error along the tunnel [slot, x on a 1 m grid] [s]; None if white."""
+    if mm.delay_error == "white":
+        return None
+    if mm.delay_error == "ar1":
+        return shadow_field(rng, n_slots, length_m, mm.delay_sigma_s, mm.delay_corr_m)
+    n = int(math.ceil(length_m)) + 1
+    return np.repeat(mm.delay_sigma_s * rng.standard_normal((n_slots, 1)), n, axis=1)

@@ -1,0 +1,80 @@
+"""The separable receiver: every slot's RSSI and delay measured on their own, and the snapshot
+fix from them (RSSI ranging + linearized LS, then TDOA Gauss-Newton) [seed 4.2, 6.2]."""
+
+from __future__ import annotations
+
+import numpy as np
+import xarray as xr
+
+from railradio.constants import SPEED_OF_LIGHT_M_S
+from railradio.tunnel.channel import offset_index, slot_powers, window_slots
+from railradio.tunnel.geometry import Cable, Tunnel
+from railradio.tunnel.measurement import MeasurementModel
+from railradio.tunnel.positioning import (
+    gain_to_offset_m,
+    gdop_seed,
+    gdop_tdoa_along,
+    monotone_gain_db,
+    range_diff_from_delays,
+    rssi_ls,
+    tdoa_gauss_newton,
+)
+
+
+def _field_at(field: np.ndarray, slots: np.ndarray, x_m: np.ndarray, step_m: float = 1.0) -> np.ndarray:
+    pos = np.clip(x_m / step_m, 0, field.shape[1] - 1.000001)
+    i0 = pos.astype(np.int64)
+    fr = pos - i0
+    return field[slots, i0] * (1 - fr) + field[slots, i0 + 1] * fr
+
+
+def separable_measurements(
+    table: xr.Dataset,
+    tunnel: Tunnel,
+    cable: Cable,
+    x_rx_m: np.ndarray,
+    shadow: np.ndarray,
+    rng: np.random.Generator,
+    mm: MeasurementModel,
+    propagation: str,
+    delay_field: np.ndarray | None = None,
+) -> dict[str, np.ndarray]:
+    """Per-slot RSSI and delay of the ``n_slots`` strongest measured slots [epoch, n];
+    the delay error is white from ``rng`` or read from ``delay_field`` (see
+    :func:`railradio.tunnel.measurement.delay_error_field`)."""
+    xs, pc_dbm, _ = slot_powers(tunnel, cable)
+    x = np.asarray(x_rx_m, dtype=float)
+    sl, ok = window_slots(tunnel, x, mm.window_m)
+    idx, inside = offset_index(table, x[:, None] - xs[sl])
+    if propagation == "physical":
+        gain_db = 20.0 * np.log10(np.abs(table["taps"].values.sum(axis=1)))[idx]
+    else:
+        gain_db = 10.0 * np.log10(table["power_mean"].values)[idx]
+    rssi = pc_dbm[sl] + gain_db + _field_at(shadow, sl, x[:, None])
+    rssi = np.where(ok & inside, rssi, -np.inf)
+    order = np.argsort(-rssi, axis=1, kind="stable")[:, : mm.n_slots]
+    pick = np.take_along_axis(sl, order, axis=1)
+    rssi = np.take_along_axis(rssi, order, axis=1)
+    if not np.all(np.isfinite(rssi)):
+        raise ValueError(f"fewer than n_slots={mm.n_slots} slots within window_m={mm.window_m}")
+    h = tunnel.cross_distance_m
+    delay = np.sqrt((x[:, None] - xs[pick]) ** 2 + h * h) / SPEED_OF_LIGHT_M_S
+    if delay_field is None:
+        delay = delay + mm.delay_sigma_s * rng.standard_normal(pick.shape)
+    else:
+        delay = delay + _field_at(delay_field, pick, np.broadcast_to(x[:, None], pick.shape))
+    return {"slot": pick, "slot_x_m": xs[pick], "rssi_dbm": rssi, "cable_power_dbm": pc_dbm[pick], "delay_s": delay}
+
+
+def separable_fix(meas: dict, table: xr.Dataset, tunnel: Tunnel, mm: MeasurementModel):
+    """RSSI-LS fix, TDOA fix from it, its variance, both GDOPs [epoch]."""
+    h = tunnel.cross_distance_m
+    off, curve = monotone_gain_db(table)
+    dx = gain_to_offset_m(meas["rssi_dbm"] - meas["cable_power_dbm"], off, curve)
+    x_rssi = rssi_ls(meas["slot_x_m"], np.sqrt(dx**2 + h * h), h)
+    x_rssi = np.clip(x_rssi, 0.0, tunnel.length_m)
+    sig = SPEED_OF_LIGHT_M_S * mm.delay_sigma_s
+    x_tdoa, var = tdoa_gauss_newton(x_rssi, meas["slot_x_m"], range_diff_from_delays(meas["delay_s"]), h, sig)
+    gd_seed = gdop_seed(x_tdoa, tunnel.rx_y_m, meas["slot_x_m"], tunnel.slot_yz[0])
+    gd_tdoa = gdop_tdoa_along(x_tdoa, meas["slot_x_m"], h)
+    return x_rssi, x_tdoa, np.sqrt(var), gd_seed, gd_tdoa

@@ -1,0 +1,173 @@
+"""The wideband receiver: the band-limited CIR of all slots' rays, its strongest peak's delay,
+cable ranging from it and the +- / which-feed ambiguity resolved from all receivers."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+import xarray as xr
+
+from railradio.constants import SPEED_OF_LIGHT_M_S
+from railradio.tunnel.channel import offset_index, slot_powers, window_slots
+from railradio.tunnel.geometry import Cable, Tunnel
+from railradio.tunnel.measurement import MeasurementModel
+
+BOLTZMANN_DBM_HZ = -174.0
+
+
+def tone_response(table: xr.Dataset, mm: MeasurementModel) -> tuple[np.ndarray, np.ndarray]:
+    """Baseband tone frequencies [tone] and every offset's frequency response [offset, tone]
+    (taps at line-of-sight + excess delay: the line-of-sight phase times the taps' transform
+    over the excess-delay grid), computed once per table."""
+    n_t = mm.n_tones
+    f = (np.arange(n_t) - n_t // 2) * (mm.bandwidth_hz / n_t)
+    excess = np.exp(-2j * math.pi * table["excess_delay_s"].values[:, None] * f[None, :])  # [bin, tone]
+    los = np.exp(-2j * math.pi * table["los_delay_s"].values[:, None] * f[None, :])  # [offset, tone]
+    return f, los * (table["taps"].values @ excess)
+
+
+def wideband_delays(
+    table: xr.Dataset,
+    tunnel: Tunnel,
+    cable: Cable,
+    x_rx_m: np.ndarray,
+    rng: np.random.Generator | None,
+    mm: MeasurementModel,
+    tones=None,
+    chunk: int = 1024,
+    oversample: int = 16,
+    thermal_noise: bool = True,
+) -> np.ndarray:
+    """Delay of the strongest peak of the band-limited CIR at each receiver position [s]:
+    ``n_tones`` tones across the bandwidth, thermal noise kT F B (``rng``; none without
+    ``thermal_noise``), zero-padded IFFT (``oversample`` times), parabolic refinement of the
+    peak.  The parabola's own error on a single path is below
+    2 pi^2 / (45 sqrt(3) B oversample^3) (see :func:`peak_interp_bound_s`)."""
+    xs, pc_dbm, tc = slot_powers(tunnel, cable)
+    amp_c = 10.0 ** ((pc_dbm - 30.0) / 20.0) * np.exp(-2j * math.pi * cable.frequency_hz * tc)
+    f, resp = tones if tones is not None else tone_response(table, mm)
+    cab_tones = amp_c[:, None] * np.exp(-2j * math.pi * tc[:, None] * f[None, :])  # [slot, tone]
+    df = f[1] - f[0]
+    noise_w = 10.0 ** ((BOLTZMANN_DBM_HZ + mm.noise_figure_db - 30.0) / 10.0) * mm.bandwidth_hz
+    n_fft = f.size * oversample
+    x_all = np.asarray(x_rx_m, dtype=float)
+    out = np.empty(x_all.size)
+    # receivers per pass: the [receiver, slot, tone] arrays stay near chunk x 20 x 64 elements
+    chunk = max(16, chunk * 1280 // (f.size * (2 * int(mm.window_m // tunnel.slot_spacing_m) + 2)))
+    for a in range(0, x_all.size, chunk):
+        x = x_all[a : a + chunk]
+        sl, ok = window_slots(tunnel, x, mm.window_m)
+        idx, inside = offset_index(table, x[:, None] - xs[sl])
+        w = (ok & inside)[..., None]
+        cab = cab_tones[sl]
+        hf = np.sum(cab * resp[idx] * w, axis=1)
+        if thermal_noise:
+            hf += math.sqrt(noise_w / 2.0) * (rng.standard_normal(hf.shape) + 1j * rng.standard_normal(hf.shape))
+        cir = np.abs(np.fft.ifft(hf, n=n_fft, axis=1)) ** 2
+        k = np.argmax(cir, axis=1)
+        rows = np.arange(x.size)
+        y0, y1, y2 = cir[rows, (k - 1) % n_fft], cir[rows, k], cir[rows, (k + 1) % n_fft]
+        den = y0 - 2 * y1 + y2
+        frac = np.where(den < 0, 0.5 * (y0 - y2) / np.where(den < 0, den, -1.0), 0.0)
+        out[a : a + chunk] = (k + frac) / (n_fft * df)
+    return out
+
+
+def wideband_view(table: xr.Dataset, mm: MeasurementModel) -> MeasurementModel:
+    """The wideband receiver sees every slot of the table (by default the whole tunnel), not
+    only those within ``window_m`` (which chooses the separable receiver's slots); a shorter
+    table's cut-off is measured by :func:`railradio.tunnel.engine_checks.cutoff_check`."""
+    return dataclasses.replace(mm, window_m=max(mm.window_m, float(table["offset_m"].values[-1])))
+
+
+def peak_interp_bound_s(bandwidth_hz: float, oversample: int) -> float:
+    """Largest error of the three-point parabolic peak estimate on a single band-limited
+    path [s].  Near its peak the pulse |sinc(B t)|^2 = 1 - a t^2 + b t^4 with
+    a = pi^2 B^2 / 3, b = 2 pi^4 B^4 / 45; samples at delta + (-D, 0, D), D = 1/(B os),
+    |delta| <= D/2, put the parabola's vertex at -(b/a) delta (4 delta^2 - D^2) to first
+    order in b/a, whose largest magnitude (at delta = D / (2 sqrt 3)) is
+    (b/a) D^3 / (3 sqrt 3) = 2 pi^2 / (45 sqrt(3) B os^3).  (The 64-tone Dirichlet kernel
+    differs from the sinc by O(1/N^2); the next order in b/a D^2 = 2 pi^2/(15 os^2), 0.5 %
+    at os = 16: a 10 % margin covers both.)"""
+    if not bandwidth_hz > 0 or oversample < 2:
+        raise ValueError("bandwidth_hz must be positive and oversample >= 2")
+    return 1.1 * 2.0 * math.pi**2 / (45.0 * math.sqrt(3.0) * bandwidth_hz * oversample**3)
+
+
+def cable_model_delay_s(x_m: np.ndarray, tunnel: Tunnel, cable: Cable) -> np.ndarray:
+    """The receiver's delay model: cable delay to the nearest cable point plus h / c [s]."""
+    return cable.cable_delay_s(x_m, tunnel.length_m) + tunnel.cross_distance_m / SPEED_OF_LIGHT_M_S
+
+
+def wideband_candidates(tau_s: np.ndarray, tunnel: Tunnel, cable: Cable, bias_s: float = 0.0) -> np.ndarray:
+    """Cable ranging x = x_feed +- v c (tau - bias - h/c) for every feed [epoch, 2 n_feeds];
+    which one is right the tracker decides (nearest its prediction)."""
+    feeds = cable.feed_x_m(tunnel.length_m)
+    half = cable.feed_spacing_m / 2.0
+    r = (
+        cable.velocity_factor
+        * SPEED_OF_LIGHT_M_S
+        * (np.asarray(tau_s) - bias_s - tunnel.cross_distance_m / SPEED_OF_LIGHT_M_S)
+    )
+    r = np.clip(r, 0.0, half)
+    cand = np.concatenate([feeds[None, :] - r[:, None], feeds[None, :] + r[:, None]], axis=1)
+    return np.clip(cand, 0.0, tunnel.length_m)
+
+
+def resolve_ambiguity(
+    cand_m: np.ndarray, offsets_m: np.ndarray, feed_spacing_m: float, start_m: tuple[float, float], gate_m: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """Resolve the wideband fixes' +- / which-feed ambiguity from the measurements [seed-free].
+
+    ``cand_m`` [epoch, receiver, candidate]: every receiver's cable-ranging candidates
+    (:func:`wideband_candidates`); receiver k sits ``offsets_m[k]`` behind the head.  Every
+    candidate of every receiver proposes a head position h = c + offset_k; each proposal
+    is scored by the truncated squared misfit of all receivers,
+    sum_k min(min_m |c_km + offset_k - h|, gate_m)^2 (robust to one receiver's wrong peak),
+    and the best proposal wins.  On the two sides of a feed the receivers' delays run in
+    opposite directions along the train, so the +- is decided by the measurements; the
+    misfit is periodic in the feed spacing (identical feed sections), so proposals are only
+    taken within half a feed spacing of the previous epoch's head (continuity; a train
+    moves metres per epoch), starting from ``start_m`` = (lo, hi): the head is in that
+    interval at the first epoch (the entry prior: the first feed section).
+    Returns the head proposal [epoch] and each receiver's chosen candidate [epoch, receiver].
+    """
+    c = np.asarray(cand_m, dtype=float)
+    off = np.asarray(offsets_m, dtype=float)
+    n_e, k, n_c = c.shape
+    if off.shape != (k,):
+        raise ValueError("offsets_m must have one entry per receiver")
+    if not gate_m > 0 or not feed_spacing_m > 0:
+        raise ValueError("gate_m and feed_spacing_m must be positive")
+    prop_all = (c + off[None, :, None]).reshape(n_e, k * n_c)  # head proposals
+    head = np.empty(n_e)
+    lo, hi = start_m
+    half = feed_spacing_m / 2.0
+    for t in range(n_e):
+        p = prop_all[t]
+        ok = (p >= lo) & (p <= hi)
+        if not np.any(ok):  # nothing in the window: keep the previous head
+            head[t] = head[t - 1] if t else 0.5 * (lo + hi)
+        else:
+            p = p[ok]
+            mis = np.min(np.abs(prop_all[t].reshape(k, n_c)[None, :, :] - p[:, None, None]), axis=2)
+            cost = np.sum(np.minimum(mis, gate_m) ** 2, axis=1)
+            head[t] = p[np.argmin(cost)]
+        lo, hi = head[t] - half, head[t] + half
+    want = head[:, None] - off[None, :]
+    pick = np.argmin(np.abs(c - want[..., None]), axis=2)
+    fix = np.take_along_axis(c, pick[..., None], axis=2)[..., 0]
+    return head, fix
+
+
+def ambiguity_wrong(cand_m: np.ndarray, fix_m: np.ndarray, x_true_m: np.ndarray, separation_m: float) -> np.ndarray:
+    """Whether each fix took the wrong candidate [epoch, receiver]: not the candidate nearest
+    the truth, while that one lies more than ``separation_m`` away from the chosen one (near
+    a feed or a section end the two sides coincide and the choice does not matter)."""
+    c = np.asarray(cand_m, dtype=float)
+    best = np.take_along_axis(c, np.argmin(np.abs(c - np.asarray(x_true_m)[..., None]), axis=2)[..., None], axis=2)[
+        ..., 0
+    ]
+    return np.abs(best - np.asarray(fix_m)) > separation_m
