@@ -191,13 +191,13 @@ def test_nr_shards_cover_every_epoch_once():
 
 
 def test_nr_epochs_identical_whatever_the_shards(tmp_path):
-    """Simulated shards written and read back as the workflow does (scripts/nr/common.py's
-    read_shards) give the same per-epoch outputs for 1, 2 and 3 shards."""
+    """Simulated shards written and read back as the workflow does (railradio.nr.runs.read_shards)
+    give the same per-epoch outputs for 1, 2 and 3 shards."""
     from railradio.io import write_dataset
+    from railradio.nr.runs import read_shards
     from railradio.nr.simulate import scenario_from_config, shard_epochs, simulate_epochs
     from railradio.rng import spawn_key
 
-    common = _load(ROOT / "workflow/scripts/nr/common.py")
     c = _ci("nr")
     scn = scenario_from_config(c)
     first, n = 100, 6  # the train is moving: every receiver sees bursts
@@ -209,7 +209,7 @@ def test_nr_epochs_identical_whatever_the_shards(tmp_path):
             ds = simulate_epochs(scn, first + shard_epochs(n, n_shards, s), 5, key)
             paths.append(tmp_path / f"n{n_shards}_s{s}.nc")
             write_dataset(ds, paths[-1], {"n_shards": n_shards}, key, title="test shard")
-        runs[n_shards] = common.read_shards(paths)
+        runs[n_shards] = read_shards(paths)
     ref = runs[1]
     assert ref.sizes["epoch"] == n and int(ref["n_detected"].sum()) > 0
     for n_shards in (2, 3):

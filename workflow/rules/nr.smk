@@ -46,7 +46,7 @@ if NR_CASES:
 
 
 wildcard_constraints:
-    real=r"r\d+|cal",
+    real=r"r\d+",
     shard=r"\d+",
     case=r"[a-z][a-z0-9_]*",
 
@@ -73,6 +73,7 @@ rule nr_shard:
     output:
         "results/nr/estimates/{real}/s{shard}.nc",
     params:
+        real="{real}",
         sim=NR_SIM,
         seed=config["seed"],
         n_epochs=NR_EPOCHS,
@@ -100,19 +101,18 @@ rule nr_cal_shard:
     its own random key); scheduled first so that the calibration overlaps the evaluation
     shards."""
     output:
-        "results/nr/estimates/{real}/s{shard}.nc",
+        "results/nr/estimates/cal/s{shard}.nc",
     params:
+        real="cal",
         sim=NR_SIM,
         seed=config["seed"],
         n_epochs=NR["calibration"]["epochs"],
         n_shards=NR_CAL_SHARDS,
         calibration=NR["calibration"],
     log:
-        "results/logs/nr/shard_{real}_s{shard}.log",
+        "results/logs/nr/shard_cal_s{shard}.log",
     benchmark:
-        "results/benchmarks/nr/shard_{real}_s{shard}.tsv"
-    wildcard_constraints:
-        real="cal",
+        "results/benchmarks/nr/shard_cal_s{shard}.tsv"
     priority: 10
     resources:
         mem_mb=3000,
@@ -253,6 +253,7 @@ rule nr_case_shard:
     output:
         "results/nr/cases/{case}/estimates/{real}/s{shard}.nc",
     params:
+        real="{real}",
         sim=lambda w: nr_sim(NR_CASES[w.case]),
         seed=config["seed"],
         n_epochs=lambda w: NR_CASE_N_CAL[w.case] if w.real == "cal" else NR_CASE_N[w.case],

@@ -13,7 +13,27 @@ STYLE = {"joint": ("o", "C0", "joint decision"), "distance": ("^", "C2", "distan
 def plot_success_vs_sigma(summ: xr.Dataset, pdf_path, png_path=None, figure_max_sigma_m: float = 20.0) -> None:
     """Left: σ ∈ [0, figure_max_sigma_m]; right: the whole σ grid (log axis) with the
     crossover.  Joint and distance with 95 % intervals, A3 as a horizontal band, the
-    nr-driven points at their RMS error."""
+    nr-driven points at their RMS error.
+
+    Parameters
+    ----------
+    summ : xarray.Dataset
+        The chain summary (:func:`railradio.chain.summary.summarize`): ``success``,
+        ``success_lo``, ``success_hi`` [1] over (input, policy), ``err_rms_m`` [m] and
+        ``sigma_m`` [m] over input, ``speed_kmh`` [km/h].  A3's band is taken at the
+        Gauss–Markov input of the smallest σ.
+    pdf_path : str or os.PathLike
+        Path of the PDF.
+    png_path : str or os.PathLike or None, default None
+        Path of the PNG; None: ``pdf_path`` with the suffix ``.png``.
+    figure_max_sigma_m : float, default 20.0
+        Largest σ of the left (linear) panel [m].
+
+    Returns
+    -------
+    None
+        The figure is written to ``pdf_path`` and ``png_path``.
+    """
     fig, axes = plotting.figure(ncols=2, figsize=(8.0, 3.4), sharey=True)
     gm = summ.where(np.isfinite(summ["sigma_m"]), drop=True).sortby("sigma_m")
     sig = gm["sigma_m"].values

@@ -37,16 +37,20 @@ from railradio.handover.params import KMH
 class ErrorSeries:
     """Pooled contiguous segments of the tracker's along-track error.
 
-    err_m
-        [E] error, outages already filled (hold + drift with sign +1), segments concatenated.
-    drift_age_s
+    Parameters
+    ----------
+    err_m : numpy.ndarray of float
+        [E] error, outages already filled (hold + drift with sign +1), segments concatenated [m].
+    drift_age_s : numpy.ndarray of float
         [E] time since the last fix (0 where the epoch has a fix) [s].
-    starts, lengths
+    starts, lengths : numpy.ndarray of int
         [S] first index into err_m and number of epochs of each segment.
-    period_s
+    period_s : float
         tracker epoch period [s].
-    outage_share
-        share of the used epochs with no tracker output (NaN in the source).
+    outage_share : float
+        share of the used epochs with no tracker output (NaN in the source) [1].
+    drift_m_s : float
+        dead-reckoning drift rate used to fill the outages [m/s].
     """
 
     err_m: np.ndarray
@@ -59,6 +63,7 @@ class ErrorSeries:
 
     @property
     def n_epochs(self) -> int:
+        """Number E of pooled epochs."""
         return int(self.err_m.size)
 
 
@@ -88,7 +93,36 @@ def series_from_runs(
 ) -> ErrorSeries:
     """Pool the along-track error of tracker ``filt`` over realizations ``runs`` (nr IMM
     datasets with ``along_err(filter, epoch)``, ``t``, ``x_true``), keeping the epochs whose
-    true speed is within ``halfwidth_kmh`` of ``speed_kmh``."""
+    true speed is within ``halfwidth_kmh`` of ``speed_kmh``.
+
+    Parameters
+    ----------
+    runs : sequence of xarray.Dataset
+        nr IMM datasets (``results/nr/imm/{real}.nc``), at least one, sharing one epoch period:
+        ``along_err`` [m] over (filter, epoch), NaN where the tracker has no output;
+        ``t`` [s] and ``x_true`` [m] over epoch.
+    filt : str
+        Tracker, a ``filter`` of the datasets (e.g. ``"ekf"``).
+    speed_kmh : float
+        Handover speed [km/h].
+    halfwidth_kmh : float
+        Half width of the speed window [km/h], > 0.
+    drift_m_s : float
+        Dead-reckoning drift during outages [m/s], >= 0.
+
+    Returns
+    -------
+    ErrorSeries
+        The pooled segments (each starting at its first fix, outages filled by hold + drift)
+        with the outage share of the window's epochs.
+
+    Raises
+    ------
+    ValueError
+        If ``runs`` is empty, ``halfwidth_kmh`` <= 0, ``drift_m_s`` < 0, a dataset lacks
+        ``along_err`` or the filter ``filt``, the datasets' epoch periods differ, or no epoch
+        with a fix lies in the speed window.
+    """
     if len(runs) == 0:
         raise ValueError("runs must hold at least one nr realization")
     if not halfwidth_kmh > 0:
@@ -139,7 +173,32 @@ def bootstrap(
     series: ErrorSeries, n_runs: int, n_samples: int, sample_period_s: float, rng: np.random.Generator
 ) -> np.ndarray:
     """Along-track error [m] of ``n_runs`` crossings at ``n_samples`` handover samples,
-    [n_runs, n_samples]: one circular block per crossing, zero-order hold (module doc)."""
+    [n_runs, n_samples]: one circular block per crossing, zero-order hold (module doc).
+
+    Parameters
+    ----------
+    series : ErrorSeries
+        The pooled nr error (:func:`series_from_runs`).
+    n_runs : int
+        Crossings, >= 1.
+    n_samples : int
+        Handover samples per crossing, >= 1.
+    sample_period_s : float
+        Handover sample period [s], > 0.
+    rng : numpy.random.Generator
+        The block's generator (start epochs, phases, drift signs).
+
+    Returns
+    -------
+    numpy.ndarray of float
+        Signed along-track position error [m], shape [n_runs, n_samples]; outage epochs
+        drift with a sign drawn per crossing.
+
+    Raises
+    ------
+    ValueError
+        If ``n_runs`` or ``n_samples`` < 1 or ``sample_period_s`` <= 0.
+    """
     if n_runs < 1 or n_samples < 1:
         raise ValueError(f"n_runs and n_samples must be >= 1, got {n_runs!r}, {n_samples!r}")
     if not sample_period_s > 0:
@@ -179,7 +238,32 @@ def speed_mask(ds: xr.Dataset, speed_kmh: float, halfwidth_kmh: float) -> np.nda
 
 def nofix_share(tracks: Sequence[xr.Dataset], receiver: str, speed_kmh: float, halfwidth_kmh: float) -> float:
     """Share of the speed window's epochs in which ``receiver`` detected no RRH (neither an
-    AOD nor a TOA), from the nr track files (``aod_err``/``range_err`` NaN when undetected)."""
+    AOD nor a TOA), from the nr track files (``aod_err``/``range_err`` NaN when undetected).
+
+    Parameters
+    ----------
+    tracks : sequence of xarray.Dataset
+        nr track files (``results/nr/track/{real}.nc``): ``aod_err`` [rad] and ``range_err`` [m]
+        over (receiver, epoch, slot), NaN where not detected; ``t`` [s] and ``x_true`` [m] over
+        epoch.
+    receiver : str
+        A ``receiver`` of the track files.
+    speed_kmh : float
+        Handover speed [km/h].
+    halfwidth_kmh : float
+        Half width of the speed window [km/h].
+
+    Returns
+    -------
+    float
+        Share of the window's epochs, pooled over ``tracks``, without any detection [1], in
+        [0, 1].
+
+    Raises
+    ------
+    ValueError
+        If ``receiver`` is not a receiver of a track file, or no epoch lies in the speed window.
+    """
     n = k = 0
     for ds in tracks:
         if receiver not in ds["receiver"].values:
@@ -196,7 +280,26 @@ def nofix_share(tracks: Sequence[xr.Dataset], receiver: str, speed_kmh: float, h
 
 
 def nr_statistics(series: ErrorSeries, nofix: float) -> dict[str, float]:
-    """Key statistics of the pooled nr error series (outages filled with drift sign +1)."""
+    """Key statistics of the pooled nr error series (outages filled with drift sign +1).
+
+    Parameters
+    ----------
+    series : ErrorSeries
+        The pooled nr error (:func:`series_from_runs`).
+    nofix : float
+        Share of the window's epochs without any detected RRH (:func:`nofix_share`) [1].
+
+    Returns
+    -------
+    dict of str to float
+        ``mean`` (signed), ``std``, ``rms``, ``p95`` (95th percentile of |e|) [m] of
+        ``series.err_m``; ``outage_share`` and ``nofix_share`` [1]; ``epochs`` (E, as float).
+
+    Raises
+    ------
+    ValueError
+        If ``series.err_m`` holds no finite value.
+    """
     st = error_stats(series.err_m)
     st.update(
         {"outage_share": float(series.outage_share), "nofix_share": float(nofix), "epochs": float(series.n_epochs)}

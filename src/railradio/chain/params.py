@@ -24,21 +24,33 @@ def _num(name: str, value: Any, lo: float, hi: float, lo_open: bool = False) -> 
 class ChainParams:
     """The chain study's knobs.
 
-    speed_kmh
-        train speed of the chained handover run [km/h] (the seed's headline 350 km/h).
-    sigmas_m
-        Gauss–Markov position-error σ grid [m], ascending, starting at 0.
-    gm_corr_s
-        correlation time of the swept Gauss–Markov error [s] (the handover default, 1 s).
-    nr_filters
+    Parameters
+    ----------
+    speed_kmh : float, default 350.0
+        train speed of the chained handover run [km/h] (the seed's headline 350 km/h), in (0, 600].
+    sigmas_m : tuple of float, default (0.0, 0.5, 1.0, 2.0, 3.0, 5.0, 7.5, 10.0, 15.0, 20.0)
+        Gauss–Markov position-error σ grid [m], ascending, starting at 0.  At least 2 values,
+        each in [0, 1000], strictly ascending.
+    gm_corr_s : float, default 1.0
+        correlation time of the swept Gauss–Markov error [s] (the handover default, 1 s), in
+        (0, 1e4].
+    nr_filters : tuple of str, default ("ekf",)
         nr trackers whose along-track error is chained (``ekf``: the seed's EKF on the robust
-        receiver's gated AOD+TOA; ``imm``).
-    speed_halfwidth_kmh
-        nr epochs used: true speed within ±this of ``speed_kmh`` [km/h].
-    outage_drift_m_s
-        dead-reckoning drift of the position during an nr outage (epoch without a fix) [m/s].
-    n_blocks
-        handover blocks (``runs_per_block`` crossings each) on the handover sweep's draws.
+        receiver's gated AOD+TOA; ``imm``), a subset of :data:`NR_FILTERS`.
+    speed_halfwidth_kmh : float, default 50.0
+        nr epochs used: true speed within ±this of ``speed_kmh`` [km/h], in (0, 1000].
+    outage_drift_m_s : float, default 0.5
+        dead-reckoning drift of the position during an nr outage (epoch without a fix) [m/s],
+        in [0, 100].
+    n_blocks : int, default 50
+        handover blocks (``runs_per_block`` crossings each) on the handover sweep's draws, >= 1.
+
+    Raises
+    ------
+    ValueError
+        If a parameter is not a finite number (an integer for ``n_blocks``) in its range,
+        ``sigmas_m`` is not strictly ascending or has fewer than 2 values, or ``nr_filters``
+        names an unknown tracker; the message names the parameter.
     """
 
     speed_kmh: float = 350.0
@@ -68,6 +80,13 @@ class ChainParams:
             raise ValueError(f"n_blocks must be an integer >= 1, got {self.n_blocks!r}")
 
     def to_dict(self) -> dict[str, Any]:
+        """The parameters as a plain dict (tuples as lists), for the datasets' provenance.
+
+        Returns
+        -------
+        dict
+            Field name -> value, in the units of the field names (km/h, m, s, m/s).
+        """
         d = asdict(self)
         d["sigmas_m"], d["nr_filters"] = list(self.sigmas_m), list(self.nr_filters)
         return d
@@ -79,7 +98,27 @@ WORKFLOW_KEYS = ("n_batches", "figure_max_sigma_m")
 
 def params_from_config(cfg: dict[str, Any]) -> ChainParams:
     """:class:`ChainParams` from the config's ``chain`` section (workflow keys ignored,
-    unknown keys rejected)."""
+    unknown keys rejected).
+
+    Parameters
+    ----------
+    cfg : dict
+        The config's ``chain`` section: fields of :class:`ChainParams` (units as named:
+        ``speed_kmh`` [km/h], ``sigmas_m`` [m], ``gm_corr_s`` [s], ...; lists allowed for
+        ``sigmas_m`` and ``nr_filters``) plus the workflow keys :data:`WORKFLOW_KEYS`
+        (``n_batches``, ``figure_max_sigma_m``), which are ignored.
+
+    Returns
+    -------
+    ChainParams
+        The checked parameters; fields missing from ``cfg`` take their defaults.
+
+    Raises
+    ------
+    ValueError
+        If ``cfg`` holds an unknown key, or a value is out of the range :class:`ChainParams`
+        checks.
+    """
     kw = {k: v for k, v in cfg.items() if k not in WORKFLOW_KEYS}
     extra = set(kw) - set(ChainParams.__dataclass_fields__)
     if extra:

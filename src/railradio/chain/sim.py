@@ -41,7 +41,18 @@ OUTCOMES = {
 
 
 def gm_label(sigma_m: float) -> str:
-    """Input label of a Gauss–Markov σ: ``gm_2`` or ``gm_7.5``."""
+    """Input label of a Gauss–Markov σ: ``gm_2`` or ``gm_7.5``.
+
+    Parameters
+    ----------
+    sigma_m : float
+        Stationary standard deviation σ of the Gauss–Markov error [m].
+
+    Returns
+    -------
+    str
+        ``"gm_"`` followed by σ formatted with ``{:g}``.
+    """
     return f"gm_{float(sigma_m):g}"
 
 
@@ -71,7 +82,43 @@ def simulate_block(
     gm_corr_s: float,
     nr: dict[str, ErrorSeries],
 ) -> dict[str, dict]:
-    """Outcomes per input label -> policy -> name -> [B, N] array, plus ``err`` -> [B, K] error."""
+    """Outcomes per input label -> policy -> name -> [B, N] array, plus ``err`` -> [B, K] error.
+
+    Parameters
+    ----------
+    scn : Scenario
+        The handover scenario (``railradio.handover.params``), with the joint policy's
+        weights set.
+    speed_kmh : float
+        Train speed [km/h].
+    seed : int
+        The config's master seed, >= 0.
+    block : int
+        Block index (>= 0) of the handover sweep's stream ``sweep``; selects the draws.
+    n_runs : int
+        Crossings B in the block, >= 1.
+    sigmas_m : iterable of float
+        Gauss–Markov σ grid [m], each finite and >= 0; one input ``gm_<σ>`` each.
+    gm_corr_s : float
+        Correlation time of the Gauss–Markov error [s], > 0.
+    nr : dict of str to ErrorSeries
+        nr filter name -> its pooled error series (:func:`railradio.chain.nr_error.series_from_runs`);
+        one input ``nr_<filter>`` each (may be empty).
+
+    Returns
+    -------
+    dict
+        Input label (``gm_<σ>`` by :func:`gm_label`, then ``nr_<filter>``) -> {policy
+        (:data:`POLICIES`) -> {outcome (:data:`OUTCOMES`: ``success``, ``pingpong`` [1],
+        ``delay_s`` [s]) -> float array [B runs, N nodes]}, ``"err"`` -> along-track position
+        error fed [m], [B, K handover samples]}.
+
+    Raises
+    ------
+    ValueError
+        If a σ is negative or not finite, ``gm_corr_s`` <= 0 (with a σ > 0), ``n_runs`` < 1,
+        ``block`` < 0 or ``seed`` is not a non-negative integer.
+    """
     kin = kinematics(scn, speed_kmh)
     draws = draw_block(seed, speed_kmh, block, n_runs, kin, scn.train.n_nodes)
     ctx = build_context(scn, kin, draws)
@@ -99,7 +146,44 @@ def simulate_blocks(
     gm_corr_s: float,
     nr: dict[str, ErrorSeries],
 ) -> xr.Dataset:
-    """Per-handover outcomes over (input, policy, run, node) and the per-run error moments."""
+    """Per-handover outcomes over (input, policy, run, node) and the per-run error moments.
+
+    Parameters
+    ----------
+    scn : Scenario
+        The handover scenario (``railradio.handover.params``), with the joint policy's
+        weights set.
+    speed_kmh : float
+        Train speed [km/h].
+    seed : int
+        The config's master seed, >= 0.
+    blocks : range
+        The blocks of the shard (contiguous, non-empty), each run by :func:`simulate_block`.
+    n_runs : int
+        Crossings per block (the config's ``runs_per_block``), >= 1.
+    sigmas_m : iterable of float
+        Gauss–Markov σ grid [m], each finite and >= 0; one input ``gm_<σ>`` each.
+    gm_corr_s : float
+        Correlation time of the Gauss–Markov error [s], > 0.
+    nr : dict of str to ErrorSeries
+        nr filter name -> its pooled error series (:func:`railradio.chain.nr_error.series_from_runs`);
+        one input ``nr_<filter>`` each (may be empty).
+
+    Returns
+    -------
+    xarray.Dataset
+        Over (input, policy, run, node): ``success``, ``pingpong`` [1] (int8, 0/1) and
+        ``delay_s`` [s] (NaN: failed); over (input, run): ``err_mean_m`` [m] and ``err_ms_m2``
+        [m²], the per-crossing mean and mean square of the position error fed.  Coordinates
+        ``input``, ``sigma_m`` [m] (over input; NaN for nr inputs), ``policy``, ``run``
+        (global crossing index block·n_runs + j), ``node`` (1 = head); scalar ``speed_kmh``
+        [km/h].
+
+    Raises
+    ------
+    ValueError
+        If ``blocks`` is empty, or as :func:`simulate_block`.
+    """
     if len(blocks) == 0:
         raise ValueError("blocks must not be empty")
     parts = [simulate_block(scn, speed_kmh, seed, b, n_runs, sigmas_m, gm_corr_s, nr) for b in blocks]

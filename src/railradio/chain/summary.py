@@ -15,7 +15,24 @@ from railradio.keynumbers import KeySpec
 
 def summarize(shards: Sequence[xr.Dataset]) -> xr.Dataset:
     """Success / ping-pong rates (95 % Wilson, clustered n_eff), mean delay and the RMS of
-    the position error actually fed, per (input, policy), from the concatenated shards."""
+    the position error actually fed, per (input, policy), from the concatenated shards.
+
+    Parameters
+    ----------
+    shards : sequence of xarray.Dataset
+        Datasets of :func:`railradio.chain.sim.simulate_blocks` (disjoint runs, the same
+        inputs, policies and nodes), concatenated along ``run``.
+
+    Returns
+    -------
+    xarray.Dataset
+        Over (input, policy): ``success``, ``pingpong`` [1] with ``_lo``, ``_hi`` (95 %
+        interval bounds) and ``_se`` (cluster-robust standard error), ``delay_ms`` [ms] (mean
+        delay of the successful handovers) and ``delay_ms_se``; over (input): ``err_mean_m``,
+        ``err_rms_m``, ``err_std_m`` [m] of the position error fed; coordinates ``input``,
+        ``sigma_m`` [m] (NaN for nr inputs), ``policy``; scalars ``speed_kmh`` [km/h] and
+        ``n_handovers`` [1] (node handovers per (input, policy)).
+    """
     ds = xr.concat(list(shards), dim="run", data_vars="minimal", coords="minimal", compat="override")
     labels, policies = list(ds["input"].values), list(ds["policy"].values)
     out: dict[str, np.ndarray] = {}
@@ -115,7 +132,36 @@ def _put(
 
 
 def key_numbers(summ: xr.Dataset, nr_stats: dict[str, dict[str, float]], figure_max_sigma_m: float) -> dict[str, Any]:
-    """Key numbers ``chain.*`` (the chain is ours: no source value)."""
+    """Key numbers ``chain.*`` (the chain is ours: no source value).
+
+    Parameters
+    ----------
+    summ : xarray.Dataset
+        The chain summary (:func:`summarize`); A3's reference is its Gauss–Markov input of
+        the smallest σ.
+    nr_stats : dict of str to dict
+        nr filter -> its statistics (:func:`railradio.chain.nr_error.nr_statistics`), for
+        every ``nr_<filter>`` input of ``summ``.
+    figure_max_sigma_m : float
+        Largest σ of the figure's left panel [m]; the ``*_fig`` keys cover σ <= it.
+
+    Returns
+    -------
+    dict of str to dict
+        Key name -> its JSON entry (:meth:`railradio.keynumbers.KeySpec.entry`; a non-finite
+        value or standard error is null): A3, joint and distance success and ping-pong rates
+        [1], the Gauss–Markov σ crossovers with A3 [m] and their status (0 found, 1 above,
+        -1 never), the nr inputs' error statistics [m] and shares [1], ``chain.sigma_max_m``
+        [m] and ``chain.n_handovers`` [1].
+
+    Raises
+    ------
+    ValueError
+        If ``summ`` holds fewer than 2 Gauss–Markov σ, or a success rate on the σ grid or
+        A3's is not finite (:func:`crossover`).
+    KeyError
+        If ``nr_stats`` lacks the filter of an ``nr_<filter>`` input.
+    """
     out: dict[str, Any] = {}
     v = float(summ["speed_kmh"])
     gm = summ.where(np.isfinite(summ["sigma_m"]), drop=True).sortby("sigma_m")

@@ -54,14 +54,21 @@ class ArcGeometry:
 
     Parameters
     ----------
-    d_m
+    d_m : float
         Distance of both base stations from the track, along its normal [m], > 0.
-    radius_m
+    radius_m : float, default math.inf
         Radius of the track's circular arc [m]; ``math.inf`` is the straight track.  Must
         exceed ``d_m`` (the BSs lie inside the curve) and the baseline D must subtend less
         than π (R > D/π), so that the range difference decreases along [0, D].
-    cell_radius_factor
-        R_c / d (seed: 2), > 1.
+    cell_radius_factor : float, default 2.0
+        R_c / d (seed: 2), > 1 [1].
+
+    Raises
+    ------
+    ValueError
+        If ``d_m`` or ``cell_radius_factor`` is out of range (as in :class:`CellGeometry`),
+        ``radius_m`` is not > 0 (NaN included), or a finite ``radius_m`` is <= ``d_m`` or
+        <= D/π.
     """
 
     d_m: float
@@ -154,7 +161,18 @@ class ArcGeometry:
         return np.hypot(px - x1, py - y1), np.hypot(px - x2, py - y2)
 
     def range_difference_m(self, s_m: ArrayLike) -> NDArray[np.float64]:
-        """Δ(s) = r2 - r1 [m]."""
+        """Δ(s) = r2 - r1 [m].
+
+        Parameters
+        ----------
+        s_m : array_like of float
+            Arc length(s) s of the train along the track [m], any shape.
+
+        Returns
+        -------
+        numpy.ndarray of float
+            The range difference r2 - r1 [m], the shape of ``s_m``.
+        """
         r1, r2 = self.ranges_m(s_m)
         return r2 - r1
 
@@ -219,15 +237,32 @@ def tdoa_on_arc(
     every Δ̂ in (Δ(s_b), Δ(s_a)).  Started by inverse linear interpolation of Δ tabulated
     on the branch (a few Newton steps then reach ``tol_m``).
 
+    Parameters
+    ----------
+    delta_m : array_like of float
+        Measured range difference Δ̂ = r2 - r1 [m], any shape.
+    geom : ArcGeometry
+        The layout on the arc.
+    tol_m : float, default 1e-9
+        Convergence tolerance on the step of the iteration [m], > 0 (a trial also stops when
+        Δ(s) equals Δ̂ to rounding).  Unused on the straight track.
+    max_iter : int, default 200
+        Largest number of safeguarded Newton iterations.  Unused on the straight track.
+
     Returns
     -------
-    s_m
-        The solution [m].  Where Δ̂ is outside the branch's range there is no solution;
-        there s_m is the nearer end of the branch (the point of the arc whose range
-        difference is nearest Δ̂) — ∓inf on the straight track, where this is exactly
-        :func:`railradio.fusion.tdoa_on_track`.
-    no_solution
-        Boolean mask of the trials without solution.
+    s_m : numpy.ndarray of float
+        The solution [m], the shape of ``delta_m``.  Where Δ̂ is outside the branch's range
+        there is no solution; there s_m is the nearer end of the branch (the point of the
+        arc whose range difference is nearest Δ̂) — ∓inf on the straight track, where this is
+        exactly :func:`railradio.fusion.tdoa_on_track`.
+    no_solution : numpy.ndarray of bool
+        Boolean mask of the trials without solution, the shape of ``delta_m``.
+
+    Raises
+    ------
+    ValueError
+        If ``tol_m`` is not > 0.
     """
     if not tol_m > 0:
         raise ValueError(f"tol_m must be > 0, got {tol_m!r}")

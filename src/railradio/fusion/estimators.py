@@ -28,19 +28,19 @@ def tdoa_on_track(delta_m: ArrayLike, geom: CellGeometry) -> tuple[NDArray[np.fl
 
     Parameters
     ----------
-    delta_m
+    delta_m : array_like of float
         Measured range difference r2 - r1 = c·t_{2,1} [m], any shape.
-    geom
-        The cell geometry.
+    geom : CellGeometry
+        The cell geometry (d and the baseline D [m]).
 
     Returns
     -------
-    x_m
-        Position on the track [m].  Where |Δ| >= D there is no solution (Δ(x) only
-        tends to ±D as x → ∓∞); there ``x_m`` is ∓inf (the hyperbola's limit), to be
-        clipped to the cell segment by :func:`clip_to_segment`.
-    no_solution
-        Boolean mask of |Δ| >= D.
+    x_m : numpy.ndarray of float
+        Position on the track [m], the shape of ``delta_m``.  Where |Δ| >= D there is no
+        solution (Δ(x) only tends to ±D as x → ∓∞); there ``x_m`` is ∓inf (the hyperbola's
+        limit), to be clipped to the cell segment by :func:`clip_to_segment`.
+    no_solution : numpy.ndarray of bool
+        Boolean mask of |Δ| >= D, the shape of ``delta_m``.
     """
     delta = np.asarray(delta_m, dtype=float)
     big_d = geom.baseline_m
@@ -57,6 +57,21 @@ def tdoa_on_track_rootfind(delta_m: float, geom: CellGeometry, span_m: float = 1
 
     A brute-force check of :func:`tdoa_on_track`, and the per-trial baseline of the
     benchmark.  Returns ±inf where |Δ| >= D, like the closed form.
+
+    Parameters
+    ----------
+    delta_m : float
+        Measured range difference r2 - r1 = c·t_{2,1} [m], a scalar.
+    geom : CellGeometry
+        The cell geometry.
+    span_m : float, default 1e7
+        Half width of the search bracket [-span_m, span_m] along the track [m].
+
+    Returns
+    -------
+    float
+        Position x on the track [m] (Brent, xtol 1e-9 m).  -sign(Δ)·inf where |Δ| >= D
+        (no solution) or where the root lies beyond the bracket.
     """
     big_d = geom.baseline_m
     if abs(delta_m) >= big_d:

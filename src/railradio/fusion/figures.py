@@ -22,6 +22,31 @@ def plot_sweep(ds: xr.Dataset, parameter: str, pdf_path: str, png_path: str | No
     """Plot one sweep dataset (:func:`railradio.fusion.sweep_dataset`) to PDF and PNG.
 
     Error bars are ±2 Monte Carlo standard errors (mostly smaller than the markers).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A sweep dataset: ``rmse``, ``rmse_se`` [m] over (estimator, ``parameter``) and
+        ``crlb_m`` [m] over ``parameter``.
+    parameter : {"d_m", "sigma_tdoa_s", "sigma_aoa_rad"}
+        The swept coordinate; the x axis shows d [m], c·σ_TDOA [m] (σ_TDOA [s] times the
+        speed of light) or σ_AOA [rad].
+    pdf_path : str
+        Path of the PDF.
+    png_path : str or None, default None
+        Path of the PNG; None: ``pdf_path`` with the suffix ``.png``.
+    log_y : bool, default True
+        Logarithmic RMSE axis.
+
+    Returns
+    -------
+    None
+        The figure is written to ``pdf_path`` and ``png_path``.
+
+    Raises
+    ------
+    ValueError
+        If ``parameter`` is not one of the three swept coordinates.
     """
     if parameter not in SWEEP_AXES:
         raise ValueError(f"parameter must be one of {sorted(SWEEP_AXES)}, got {parameter!r}")

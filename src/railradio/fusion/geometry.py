@@ -22,10 +22,15 @@ class CellGeometry:
 
     Parameters
     ----------
-    d_m
+    d_m : float
         Perpendicular distance of both base stations from the track [m], > 0.
-    cell_radius_factor
-        R / d, the cell radius in units of d (seed: 2), > 1.
+    cell_radius_factor : float, default 2.0
+        R / d, the cell radius in units of d (seed: 2), > 1 [1].
+
+    Raises
+    ------
+    ValueError
+        If ``d_m`` is not a finite number > 0, or ``cell_radius_factor`` not a finite number > 1.
     """
 
     d_m: float
@@ -68,7 +73,18 @@ class CellGeometry:
         return np.hypot(x, self.d_m), np.hypot(self.baseline_m - x, self.d_m)
 
     def range_difference_m(self, x_m: ArrayLike) -> NDArray[np.float64]:
-        """Range difference r2 - r1 [m] (seed eq. 4), c times the TDOA t_{2,1}."""
+        """Range difference r2 - r1 [m] (seed eq. 4), c times the TDOA t_{2,1}.
+
+        Parameters
+        ----------
+        x_m : array_like of float
+            Train position(s) (x, 0) along the track [m], any shape.
+
+        Returns
+        -------
+        numpy.ndarray of float
+            r2 - r1 [m], the shape of ``x_m``; in (-D, D), strictly decreasing in x.
+        """
         r1, r2 = self.ranges_m(x_m)
         return r2 - r1
 

@@ -39,7 +39,26 @@ SPECS = {
 
 
 def key_numbers(reference: xr.Dataset, sweeps: dict[str, xr.Dataset]) -> dict[str, Any]:
-    """Key numbers from the reference point and the three sweep datasets."""
+    """Key numbers from the reference point and the three sweep datasets.
+
+    Parameters
+    ----------
+    reference : xarray.Dataset
+        The :func:`~railradio.fusion.montecarlo.simulate_point` dataset of the reference
+        point (the key names ``fusion.d1500.*`` assume the config's d = 1500 m).
+    sweeps : dict of str to xarray.Dataset
+        Config sweep name (``"d_m"``, ``"sigma_tdoa_us"``, ``"sigma_aoa_rad"``) -> its
+        :func:`~railradio.fusion.montecarlo.sweep_dataset`; ``"d_m"`` must be present.
+
+    Returns
+    -------
+    dict of str to dict
+        Key name ``fusion.*`` (:data:`SPECS`) -> its JSON entry
+        (:meth:`railradio.keynumbers.KeySpec.entry`: ``value``, ``unit``, ``source_value``,
+        ``source_relation``, ``description``, ``mc_stderr``, ``digits``): RMSEs and CRLB at
+        the reference point [m] (with Monte Carlo standard errors), and the claims' shares
+        and ratios [1].
+    """
     s = summarize(reference)
     out = {
         "fusion.d1500.rmse_tdoa_m": SPECS["fusion.d1500.rmse_tdoa_m"].entry(s["rmse_tdoa_m"], s["rmse_tdoa_se_m"]),

@@ -56,19 +56,29 @@ class PointParams:
 
     Parameters
     ----------
-    d_m
-        Base-station distance from the track [m].
-    sigma_tdoa_s
-        Standard deviation of the TDOA t_{2,1} [s] (seed eq. 2; 0.1 µs ↔ 29.98 m).
-    sigma_aoa_rad
-        Standard deviation of the AOA at the serving BS [rad].
-    n_positions, n_trials
-        Train positions and trials per position.
-    cell_radius_factor
-        R / d (seed: 2).
-    position_sampling
+    d_m : float
+        Base-station distance from the track [m], > 0 (checked when :attr:`geometry` is built).
+    sigma_tdoa_s : float
+        Standard deviation of the TDOA t_{2,1} [s] (seed eq. 2; 0.1 µs ↔ 29.98 m), finite, > 0.
+    sigma_aoa_rad : float
+        Standard deviation of the AOA at the serving BS [rad], finite, > 0.
+    n_positions, n_trials : int
+        Train positions (>= 1) and trials per position (>= 2) [1].
+    cell_radius_factor : float, default 2.0
+        R / d (seed: 2) [1], > 1 (checked when :attr:`geometry` is built).
+    position_sampling : {"grid", "random"}, default "grid"
         ``"grid"``: midpoints of n_positions equal cells of [0, sqrt(R² - d²)]
         (stratified, lower Monte Carlo error); ``"random"``: uniform draws.
+    clip : {"no_solution", "segment"}, default "no_solution"
+        Which estimates are projected onto the serving cell's segment [-sqrt(R² - d²),
+        sqrt(R² - d²)]: ``"no_solution"`` only those without a solution (a TDOA with
+        |Δ| >= D, a non-finite AOA position); ``"segment"`` every estimate off the segment.
+
+    Raises
+    ------
+    ValueError
+        If a σ is not a finite number > 0, ``n_positions`` < 1, ``n_trials`` < 2, or
+        ``position_sampling`` or ``clip`` is not one of its allowed values.
     """
 
     d_m: float
@@ -96,6 +106,7 @@ class PointParams:
 
     @property
     def geometry(self) -> CellGeometry:
+        """The point's :class:`CellGeometry` (``d_m``, ``cell_radius_factor``)."""
         return CellGeometry(self.d_m, self.cell_radius_factor)
 
     @property
@@ -113,6 +124,29 @@ def sweep_points(study_cfg: dict, sweep: str) -> list[dict]:
     ``sweep`` is ``"reference"`` (one point) or a key of ``study_cfg["sweeps"]``; each
     point is the reference with the swept value replaced, plus the Monte Carlo settings,
     key-sorted (what Snakemake fingerprints and what seeds the point).
+
+    Parameters
+    ----------
+    study_cfg : dict
+        The config's ``fusion`` section: ``reference`` (``d_m`` [m], ``sigma_tdoa_us`` [µs],
+        ``sigma_aoa_rad`` [rad]), ``sweeps`` (config sweep name -> list of values, in the
+        reference's units) and the Monte Carlo settings ``n_positions``, ``n_trials``,
+        ``position_sampling``, ``cell_radius_factor``, ``clip``.
+    sweep : str
+        ``"reference"`` or a key of ``study_cfg["sweeps"]`` (``"d_m"``, ``"sigma_tdoa_us"``,
+        ``"sigma_aoa_rad"``).
+
+    Returns
+    -------
+    list of dict
+        One plain-value dict per point, in the order of the sweep's values (one for
+        ``"reference"``), with the keys of ``reference`` and the Monte Carlo settings; the
+        config's units (σ_TDOA in µs).  :func:`point_params` converts one to SI.
+
+    Raises
+    ------
+    ValueError
+        If ``sweep`` is neither ``"reference"`` nor a key of ``study_cfg["sweeps"]``.
     """
     if sweep != "reference" and sweep not in study_cfg["sweeps"]:
         raise ValueError(f"sweep must be 'reference' or one of {sorted(study_cfg['sweeps'])}, got {sweep!r}")
@@ -128,7 +162,25 @@ def sweep_points(study_cfg: dict, sweep: str) -> list[dict]:
 
 
 def point_params(point: dict) -> PointParams:
-    """:class:`PointParams` (SI units) of a point of :func:`sweep_points`."""
+    """:class:`PointParams` (SI units) of a point of :func:`sweep_points`.
+
+    Parameters
+    ----------
+    point : dict
+        One point of :func:`sweep_points`: ``d_m`` [m], ``sigma_tdoa_us`` [µs],
+        ``sigma_aoa_rad`` [rad], ``n_positions``, ``n_trials``, ``cell_radius_factor``,
+        ``position_sampling``, ``clip``.
+
+    Returns
+    -------
+    PointParams
+        The point in SI units (``sigma_tdoa_s`` = ``sigma_tdoa_us`` · 1e-6 [s]).
+
+    Raises
+    ------
+    ValueError
+        If a value is out of the range :class:`PointParams` checks.
+    """
     return PointParams(
         d_m=float(point["d_m"]),
         sigma_tdoa_s=float(point["sigma_tdoa_us"]) * 1e-6,
@@ -240,20 +292,30 @@ def simulate_point(params: PointParams, seed: int, key: tuple[int, ...], chunk_p
 
     Parameters
     ----------
-    params
+    params : PointParams
         The sweep point.
-    seed, key
-        Config seed and the point's spawn key; positions use ``key + (0,)``, the trials of
-        position j ``key + (1, j)``.
-    chunk_positions
-        Positions processed at once (memory/speed only; results do not depend on it).
+    seed, key : int and tuple of int
+        Config seed (>= 0) and the point's spawn key; positions use ``key + (0,)``, the
+        trials of position j ``key + (1, j)``.
+    chunk_positions : int, default 50
+        Positions processed at once (memory/speed only; results do not depend on it), >= 1.
 
     Returns
     -------
     xarray.Dataset
         Dimensions ``estimator`` × ``position``: ``mse`` [m²], ``bias`` [m],
         ``sq_err_var`` [m⁴] (variance of the squared error, for Monte Carlo errors),
-        clip counts, and ``crlb_var`` [m²] = 1/J(x).
+        clip counts, and ``crlb_var`` [m²] = 1/J(x).  In detail: ``mse``, ``bias``,
+        ``sq_err_var`` over (estimator, position) with ``estimator`` = :data:`ESTIMATORS`;
+        ``n_tdoa_no_solution``, ``n_tdoa_clipped``, ``n_aoa_clipped`` [1] (trial counts) and
+        ``crlb_var`` over (position); coordinate ``x_true`` [m] (true train position); scalars
+        ``d_m`` [m], ``sigma_tdoa_s`` [s], ``sigma_delta_m`` [m], ``sigma_aoa_rad`` [rad],
+        ``n_trials`` [1], ``baseline_m`` [m].
+
+    Raises
+    ------
+    ValueError
+        If ``chunk_positions`` < 1 or ``seed`` is not a non-negative integer.
     """
     x_true, cat = run_positions(
         params, seed, key, 2, lambda xs, z: _chunk_stats(params, xs, z[0], z[1]), chunk_positions
@@ -352,7 +414,28 @@ SUMMARY_ATTRS = {
 
 
 def sweep_dataset(points: list[xr.Dataset], parameter: str) -> xr.Dataset:
-    """Collect sweep points into ``rmse`` [estimator, point] etc. along ``parameter``."""
+    """Collect sweep points into ``rmse`` [estimator, point] etc. along ``parameter``.
+
+    Parameters
+    ----------
+    points : list of xarray.Dataset
+        The datasets of :func:`simulate_point` of one sweep, at least one, in any order.
+    parameter : str
+        The swept SI variable of the points, the sweep's coordinate: ``"d_m"``,
+        ``"sigma_tdoa_s"`` or ``"sigma_aoa_rad"`` (:data:`SWEEP_PARAMETER` of the config
+        sweep name).
+
+    Returns
+    -------
+    xarray.Dataset
+        Dimensions ``estimator`` × ``parameter``, sorted by ``parameter`` (units of its
+        attrs: m, s or rad): ``rmse`` and ``rmse_se`` [m] (position RMSE over trials and
+        positions, seed eq. 11, and its Monte Carlo standard error) over (estimator,
+        parameter); ``crlb_m`` [m] (sqrt of the mean of 1/J over positions) and
+        ``frac_tdoa_no_solution``, ``frac_tdoa_clipped``, ``frac_aoa_clipped`` [1] (shares of
+        trials) over (parameter); and the other two of ``d_m`` [m], ``sigma_tdoa_s`` [s],
+        ``sigma_aoa_rad`` [rad] over (parameter).
+    """
     summaries = [summarize(p) for p in points]
     values = [float(p[parameter]) for p in points]
     ds = xr.Dataset(

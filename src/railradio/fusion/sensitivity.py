@@ -83,6 +83,29 @@ def sens_points(study_cfg: dict, kind: str) -> list[dict]:
     from the study.  ``curve``: ``radius_m`` None (the straight base) then each of
     ``sensitivity.radii_m``; ``rho``: each of ``sensitivity.rho``.  Every point is
     validated here (a radius the layout cannot take raises ValueError naming it).
+
+    Parameters
+    ----------
+    study_cfg : dict
+        The config's ``fusion`` section: ``reference`` (``d_m`` [m], ``sigma_tdoa_us`` [µs],
+        ``sigma_aoa_rad`` [rad]), ``position_sampling``, ``cell_radius_factor``, ``clip``, and
+        ``sensitivity`` with ``n_positions``, ``n_trials``, ``radii_m`` [m] and ``rho`` [1].
+    kind : {"curve", "rho"}
+        The sweep.
+
+    Returns
+    -------
+    list of dict
+        One plain-value, key-sorted dict per point: ``d_m``, ``sigma_tdoa_us``,
+        ``sigma_aoa_rad``, ``position_sampling``, ``cell_radius_factor``, ``clip``,
+        ``n_positions``, ``n_trials``, ``kind`` and the swept ``radius_m`` [m] (None: the
+        straight track) or ``rho`` [1]; the config's units (σ_TDOA in µs).
+
+    Raises
+    ------
+    ValueError
+        If ``kind`` is not ``"curve"`` or ``"rho"``, or a point is invalid (see
+        :func:`point_params`).
     """
     if kind not in KINDS:
         raise ValueError(f"kind must be one of {KINDS}, got {kind!r}")
@@ -105,7 +128,25 @@ def sens_points(study_cfg: dict, kind: str) -> list[dict]:
 @dataclass(frozen=True)
 class SensPoint:
     """One point of a sensitivity sweep: the main study's :class:`PointParams` plus the swept
-    value (``radius_m``: math.inf for the straight track; ``rho``: TDOA error correlation)."""
+    value (``radius_m``: math.inf for the straight track; ``rho``: TDOA error correlation).
+
+    Parameters
+    ----------
+    base : PointParams
+        The reference point and the Monte Carlo settings (SI units).
+    kind : {"curve", "rho"}
+        The sweep the point belongs to.
+    radius_m : float, default math.inf
+        Track radius of curvature R [m] (``curve``); math.inf is the straight track.
+    rho : float, default 0.0
+        Correlation coefficient of the two TDOA errors [1] (``rho``), in (-1, 1).
+
+    Raises
+    ------
+    ValueError
+        If ``kind`` is not one of ``"curve"``, ``"rho"``, ``rho`` is not in (-1, 1), or (for
+        ``curve``) the layout cannot take ``radius_m`` (:class:`~railradio.fusion.arc.ArcGeometry`).
+    """
 
     base: PointParams
     kind: str
@@ -122,11 +163,30 @@ class SensPoint:
 
     @property
     def arc(self) -> ArcGeometry:
+        """The point's :class:`~railradio.fusion.arc.ArcGeometry` (d, R, cell radius factor)."""
         return ArcGeometry(self.base.d_m, self.radius_m, self.base.cell_radius_factor)
 
 
 def point_params(point: dict) -> SensPoint:
-    """:class:`SensPoint` (SI units) of a point of :func:`sens_points`."""
+    """:class:`SensPoint` (SI units) of a point of :func:`sens_points`.
+
+    Parameters
+    ----------
+    point : dict
+        One point of :func:`sens_points` (config units: ``sigma_tdoa_us`` [µs]).
+
+    Returns
+    -------
+    SensPoint
+        ``base`` in SI units (``sigma_tdoa_s`` = ``sigma_tdoa_us`` · 1e-6 [s]); ``curve``:
+        ``radius_m`` [m] (a None radius -> math.inf); ``rho``: ``rho`` [1].
+
+    Raises
+    ------
+    ValueError
+        If a value is out of the range :class:`PointParams`, :class:`SensPoint` or
+        :class:`~railradio.fusion.arc.ArcGeometry` checks.
+    """
     base = PointParams(
         d_m=float(point["d_m"]),
         sigma_tdoa_s=float(point["sigma_tdoa_us"]) * 1e-6,
@@ -145,7 +205,19 @@ def point_params(point: dict) -> SensPoint:
 
 def point_key(point: dict) -> tuple[int, ...]:
     """Spawn key of a point: its parameters without the swept value (common random numbers
-    along the sweep), tagged as a sensitivity point."""
+    along the sweep), tagged as a sensitivity point.
+
+    Parameters
+    ----------
+    point : dict
+        One point of :func:`sens_points`.
+
+    Returns
+    -------
+    tuple of int
+        ``spawn_key("fusion", stable_id({"sensitivity": point without radius_m and rho}))``:
+        the same key for every point of one sweep.
+    """
     unswept = {k: v for k, v in point.items() if k not in ("radius_m", "rho")}
     return spawn_key("fusion", stable_id({"sensitivity": unswept}))
 
@@ -240,6 +312,35 @@ def simulate_sens_point(p: SensPoint, seed: int, key: tuple[int, ...], chunk_pos
     Positions use ``key + (0,)``, the trials of position j ``key + (1, j)``: 2 (curve) or 3
     (ρ) rows of standard normals, the first two in the main study's order (range
     difference, angle; for ρ: Δ2, Δ0, angle).
+
+    Parameters
+    ----------
+    p : SensPoint
+        The sensitivity point.
+    seed : int
+        The config's master seed, >= 0.
+    key : tuple of int
+        The point's spawn key (:func:`point_key`).
+    chunk_positions : int, default 50
+        Positions processed at once (memory/speed only; results do not depend on it), >= 1.
+
+    Returns
+    -------
+    xarray.Dataset
+        Over (estimator, position), ``estimator`` = ``ESTIMATORS[p.kind]``: ``mse`` [m²],
+        ``bias`` [m], ``sq_err_var`` [m⁴] (errors along the track); over (position):
+        ``crlb_var`` [m²] (1/J of the arc or of the correlated-TDOA model) and the trial
+        counts [1] (curve: ``n_mismatch_tdoa_no_solution``, ``n_mismatch_clipped``,
+        ``n_arc_tdoa_no_solution``, ``n_arc_clipped``; ρ: ``n_tdoa_no_solution``,
+        ``n_clipped``); coordinate ``x_true`` [m] (true train position along the track, arc
+        length); scalars ``d_m`` [m], ``sigma_tdoa_s`` [s], ``sigma_delta_m`` [m],
+        ``sigma_aoa_rad`` [rad], ``n_trials`` [1], ``radius_m`` [m], ``curvature_per_m`` [1/m],
+        ``rho`` [1] and (curve) ``sagitta_m`` [m].
+
+    Raises
+    ------
+    ValueError
+        If ``chunk_positions`` < 1 or ``seed`` is not a non-negative integer.
     """
     estimators = ESTIMATORS[p.kind]
     n_rows = 2 if p.kind == "curve" else 3
@@ -352,7 +453,30 @@ def summarize_sens(ds: xr.Dataset) -> dict[str, float]:
 
 def sens_sweep_dataset(points: list[xr.Dataset], kind: str) -> xr.Dataset:
     """Collect the points of one sensitivity sweep along ``curvature_per_m`` (curve) or
-    ``rho``: ``rmse``, ``rmse_se``, ``bias_rms`` [estimator, point], ``crlb_m``, shares."""
+    ``rho``: ``rmse``, ``rmse_se``, ``bias_rms`` [estimator, point], ``crlb_m``, shares.
+
+    Parameters
+    ----------
+    points : list of xarray.Dataset
+        The datasets of :func:`simulate_sens_point` of one sweep, at least one, in any order.
+    kind : {"curve", "rho"}
+        The sweep.
+
+    Returns
+    -------
+    xarray.Dataset
+        Dimensions ``estimator`` × ``curvature_per_m`` [1/m] (curve) or ``rho`` [1], sorted
+        along the latter: ``rmse``, ``rmse_se``, ``bias_rms`` [m] (along-track RMSE, its
+        Monte Carlo standard error, RMS over positions of the bias) over both; ``crlb_m`` [m]
+        and the shares ``frac_*`` [1] of the counted trials over the sweep; and along it
+        ``d_m`` [m], ``sigma_delta_m`` [m], ``sigma_aoa_rad`` [rad] (curve also ``radius_m``
+        and ``sagitta_m`` [m]).
+
+    Raises
+    ------
+    ValueError
+        If ``kind`` is not ``"curve"`` or ``"rho"``.
+    """
     if kind not in KINDS:
         raise ValueError(f"kind must be one of {KINDS}, got {kind!r}")
     coord = SWEEP_COORD[kind]

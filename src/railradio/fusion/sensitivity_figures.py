@@ -24,6 +24,29 @@ def plot_sensitivity(curve: xr.Dataset, rho: xr.Dataset, pdf_path: str, png_path
     """Two panels from the sweep datasets of :func:`railradio.fusion.sensitivity.sens_sweep_dataset`.
 
     Error bars are ±2 Monte Carlo standard errors (mostly smaller than the markers).
+
+    Parameters
+    ----------
+    curve : xarray.Dataset
+        The curvature sweep (dimension ``curvature_per_m`` [1/m]; estimators
+        ``mismatch_fused``, ``arc_fused``): panel (a), x axis in 1/km.
+    rho : xarray.Dataset
+        The correlation sweep (dimension ``rho`` [1]; estimators ``one_tdoa``, ``naive``,
+        ``whitened``): panel (b).
+    pdf_path : str
+        Path of the PDF.
+    png_path : str or None, default None
+        Path of the PNG; None: ``pdf_path`` with the suffix ``.png``.
+
+    Returns
+    -------
+    None
+        The figure is written to ``pdf_path`` and ``png_path``.
+
+    Raises
+    ------
+    ValueError
+        If ``curve`` has no dimension ``curvature_per_m`` or ``rho`` no dimension ``rho``.
     """
     if "curvature_per_m" not in curve.dims or "rho" not in rho.dims:
         raise ValueError("curve must be the curvature sweep and rho the correlation sweep")

@@ -51,7 +51,29 @@ def _spec(name: str, unit: str, description: str, digits: int = 3) -> KeySpec:
 
 
 def key_numbers(curve: xr.Dataset, rho: xr.Dataset) -> dict[str, Any]:
-    """Key numbers from the two sweep datasets of :func:`railradio.fusion.sensitivity.sens_sweep_dataset`."""
+    """Key numbers from the two sweep datasets of :func:`railradio.fusion.sensitivity.sens_sweep_dataset`.
+
+    Parameters
+    ----------
+    curve : xarray.Dataset
+        The ``curve`` sweep (along ``curvature_per_m`` [1/m]).
+    rho : xarray.Dataset
+        The ``rho`` sweep (along ``rho`` [1]).
+
+    Returns
+    -------
+    dict of str to dict
+        Key name ``sens.fusion.*`` (module docstring) -> its JSON entry
+        (:meth:`railradio.keynumbers.KeySpec.entry`: ``value``, ``unit``, ``source_value``,
+        ``source_relation``, ``description``, ``mc_stderr``, ``digits``); RMSEs (with Monte
+        Carlo standard errors), RMS biases, CRLBs and sagittas, all in m.
+
+    Raises
+    ------
+    ValueError
+        If the ``one_tdoa`` RMSE differs along the ρ sweep (common random numbers broken), or
+        a key name has characters unsafe for the LaTeX macros (e.g. a negative ρ).
+    """
     out: dict[str, Any] = {}
     d = float(curve["d_m"].values[0])
     for i in range(curve.sizes["curvature_per_m"]):

@@ -45,7 +45,29 @@ class SeedModel:
 
 
 def offset_grid_m(step_m: float, max_offset_m: float, slot_spacing_m: float) -> np.ndarray:
-    """Offsets 0, step, ..., max_offset [m]; the step must divide the slot spacing."""
+    """Offsets 0, step, ..., max_offset [m]; the step must divide the slot spacing.
+
+    Parameters
+    ----------
+    step_m : float
+        Grid step [m]; positive, and the slot spacing must be an integer multiple of it
+        (to 1e-9 relative), so every slot-receiver pair of a receiver on the grid falls on it.
+    max_offset_m : float
+        Largest offset [m]; positive (rounded to the nearest multiple of ``step_m``).
+    slot_spacing_m : float
+        Slot spacing of the cable [m].
+
+    Returns
+    -------
+    numpy.ndarray
+        Offsets 0, step, ..., n step with n = round(max_offset_m / step_m) [m].
+
+    Raises
+    ------
+    ValueError
+        When ``step_m`` or ``max_offset_m`` is not positive, or ``step_m`` does not divide
+        ``slot_spacing_m``.
+    """
     if not step_m > 0 or not max_offset_m > 0:
         raise ValueError("step_m and max_offset_m must be positive")
     ratio = slot_spacing_m / step_m
@@ -201,6 +223,62 @@ def tabulate(
     (uniform in sin b, in which the Fresnel coefficients are smooth) and interpolated;
     spreading and phase are exact at every offset.  ``rng`` draws the seed model's
     multipath losses (one per reflected ray and offset: every slot-receiver pair its own).
+
+    Parameters
+    ----------
+    fam : Families
+        2-D ray families from the slot to the receiver
+        (:func:`railradio.tunnel.rays.image_families` or :func:`~railradio.tunnel.rays.sbr_families`).
+    tunnel : Tunnel
+        The tunnel of ``fam``: its slot-receiver distance in the cross-section (the
+        line-of-sight delay) and slot spacing (the slot EIRP).
+    cable : Cable
+        The cable: wavelength, slot EIRP (physical), coupling loss (seed's model).
+    offsets_m : numpy.ndarray
+        Along-axis offsets |x_rx - x_slot| [m], a uniform grid from 0 (:func:`offset_grid_m`).
+    eps : complex or None
+        Relative permittivity of the wall [1] (real part > 1, imaginary part <= 0); None:
+        perfectly absorbing walls (only the line of sight).  Physical propagation only.
+    polarization : {'paraxial', 'vector'}
+        Polarization rule of the reflection product (:mod:`railradio.tunnel.lifting`).
+        Physical propagation only.
+    propagation : {'physical', 'seed'}
+        The physical ray channel, or the seed's simplified model (seed 2.2-2.4).
+    seed_model : SeedModel or None
+        Losses of the seed's model (None: the defaults of :class:`SeedModel`).
+    rng : numpy.random.Generator or None
+        Source of the seed model's random multipath losses; required for ``propagation='seed'``.
+    delay_bin_s : float
+        Width of the excess-delay bins of the taps [s]; positive.
+    n_delay_bins : int
+        Number of excess-delay bins (the last collects every later ray); >= 2.
+    n_sin_grid : int
+        Elevations (uniform in sin b on [0, 1]) on which the reflection product is evaluated.
+    chunk : int
+        Offsets evaluated at a time by the seed's model (memory only).
+    local_mean_window_m : float or None
+        Length of the local-mean window [m]; required (> 0) for physical propagation,
+        ignored by the seed's model.
+
+    Returns
+    -------
+    xarray.Dataset
+        Dims ``offset_m`` (coordinate: the offsets [m]) and ``excess_delay_s`` (bin starts
+        over the line of sight [s]).  Variables: ``taps`` [offset_m, excess_delay_s]
+        (complex amplitude gain relative to the cable power at the slot [1]),
+        ``power_mean`` (local-mean power gain [1]), ``power_incoherent`` (incoherent sum of
+        the rays' powers [1]), ``delay_mean_s`` (power-weighted mean delay from the slot
+        [s]), ``delay_rms_s`` (RMS delay spread of one slot [s]), ``los_delay_s``
+        (line-of-sight delay [s]), each [offset_m].  Attributes: ``engine``,
+        ``propagation``, ``polarization``, ``n_families``, ``max_reflections``,
+        ``local_mean_window_m`` (0 for the seed's model), ``shape``.
+
+    Raises
+    ------
+    ValueError
+        When ``propagation`` is unknown; when ``n_delay_bins`` < 2 or ``delay_bin_s`` <= 0;
+        when ``rng`` is None for the seed's model; when ``local_mean_window_m`` is missing or
+        not positive, or ``polarization`` is unknown, for physical propagation.
     """
     if propagation not in PROPAGATIONS:
         raise ValueError(f"propagation must be one of {PROPAGATIONS}, got {propagation!r}")
@@ -393,7 +471,22 @@ class Received:
 
 
 def slot_powers(tunnel: Tunnel, cable: Cable) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Slot x [m], cable power at each slot [dBm], cable delay from its feed [s]."""
+    """Slot x [m], cable power at each slot [dBm], cable delay from its feed [s].
+
+    Parameters
+    ----------
+    tunnel : Tunnel
+        Slot positions and tunnel length.
+    cable : Cable
+        Feeds, longitudinal loss and velocity factor.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``(x_slot_m, cable_power_dbm, cable_delay_s)``, each [slot]: the slot positions
+        along the tunnel [m], the cable power at each slot [dBm] and the delay from its
+        feed along the cable [s].
+    """
     xs = tunnel.slot_x_m
     return xs, cable.cable_power_dbm(xs, tunnel.length_m), cable.cable_delay_s(xs, tunnel.length_m)
 
@@ -425,7 +518,33 @@ def received(
 ) -> Received:
     """RSSI (coherent and local mean), RMS delay spread and the number of rays (taps of
     one slot in one 10-ns delay bin) above ``strong_dbm`` at receiver positions ``x_rx_m``;
-    every slot within the table's range contributes."""
+    every slot within the table's range contributes.
+
+    Parameters
+    ----------
+    table : xarray.Dataset
+        Tabulated slot-to-receiver channel of :func:`tabulate` (``taps``, ``power_mean``,
+        ``delay_mean_s``, ``delay_rms_s`` on a uniform ``offset_m`` grid from 0).
+    tunnel : Tunnel
+        Slot positions and tunnel length.
+    cable : Cable
+        Cable power and delay at each slot (:func:`slot_powers`) and the carrier frequency.
+    x_rx_m : numpy.ndarray
+        Receiver positions along the tunnel [m]; each slot-receiver offset is taken at the
+        nearest grid offset of the table (exact for receivers on the grid).
+    strong_dbm : float
+        Received power of one tap above which it counts as a ray [dBm].
+    chunk : int
+        Receivers evaluated at a time (memory only).
+
+    Returns
+    -------
+    Received
+        Arrays [receiver]: ``rssi_coherent_dbm`` (power of the coherent sum over all slots'
+        taps [dBm]), ``rssi_mean_dbm`` (sum over slots of each slot's local-mean power
+        [dBm]), ``delay_rms_s`` (RMS delay spread of all slots, cable delays included [s]),
+        ``n_strong_rays`` (number of taps above ``strong_dbm`` [1]).
+    """
     xs, pc_dbm, tc = slot_powers(tunnel, cable)
     amp_c = 10.0 ** ((pc_dbm - 30.0) / 20.0) * np.exp(-2j * math.pi * cable.frequency_hz * tc)  # sqrt(W)
     taps = table["taps"].values

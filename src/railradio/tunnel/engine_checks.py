@@ -179,7 +179,36 @@ def make_engines(cfg: dict[str, Any], table: xr.Dataset) -> xr.Dataset:
     """Image method vs SBR in the rectangular tunnel (and SBR in the circle): per-slot
     local-mean and coherent gain at a set of offsets, same order, same Fresnel rule; the
     far decay checks (:func:`far_decay`, :func:`far_decay_circle`) and the cut-off check
-    of the image-method ``table`` (:func:`cutoff_check`)."""
+    of the image-method ``table`` (:func:`cutoff_check`).
+
+    Parameters
+    ----------
+    cfg : dict
+        The ``tunnel`` section of the configuration (``geometry``, ``cable``, ``wall``,
+        ``rays``; ``rays.engine_offsets_m`` [m], ``rays.far_decay_m`` [m],
+        ``rays.max_order``, ``rays.sbr_polarization``, ...).
+    table : xarray.Dataset
+        The image-method table (:func:`railradio.tunnel.study.make_table` ``'image'``); its
+        ``reflection_order`` is used by every engine.
+
+    Returns
+    -------
+    xarray.Dataset
+        Over ``model`` (``image_rect``, ``sbr_rect``, ``sbr_rect_vector``, ``sbr_circle``)
+        and ``offset_m`` [m]: ``power_mean_db`` (incoherent sum of one slot's ray powers,
+        unit EIRP) [dB], ``power_coherent_db`` (coherent path gain) [dB], ``n_rays`` [model];
+        over ``far_order`` and ``centre_m`` [m] (:func:`far_decay`): ``far_local_mean_db``
+        [dB], ``far_slope_db_per_km`` [far_order] [dB/km]; over ``x_m`` [m]
+        (:func:`cutoff_check`): ``power_beyond_cutoff_frac`` [1], ``delay_rms_cutoff_s``,
+        ``delay_rms_doubled_s``, ``delay_rms_halved_s`` [s].  Attributes:
+        ``reflection_order``, ``far_*`` (:func:`far_decay`), ``far_circle_*``
+        (:func:`far_decay_circle`), ``cutoff_m`` [m], ``cutoff_power_frac`` [1].
+
+    Raises
+    ------
+    ValueError
+        When the configuration is invalid for the tunnel, cable or ray engines.
+    """
     order = int(table.attrs["reflection_order"])
     cab = cable_from_config(cfg)
     eps = eps_from_config(cfg)

@@ -11,6 +11,29 @@ TRAINS = ("metro", "hst", "freight")
 
 
 def rssi_map(maps: dict[str, xr.Dataset], coverage_dbm: float, blind_dbm: float, pdf, png) -> None:
+    """Figure ``tunnel_rssi_map``: the local-mean RSSI along the tunnel of every map (top),
+    and a zoom on x = 1000-1100 m of the image map's coherent and local-mean RSSI and the
+    SBR map's coherent RSSI (bottom); coverage threshold dashed, blind-spot level dotted.
+
+    Parameters
+    ----------
+    maps : dict
+        Table name -> map of :func:`railradio.tunnel.study.make_map` (``x_m``,
+        ``rssi_mean_dbm``, ``rssi_coherent_dbm``); needs ``image``, ``sbr`` optional.
+    coverage_dbm : float
+        Coverage threshold [dBm].
+    blind_dbm : float
+        Blind-spot level [dBm].
+    pdf : str or os.PathLike
+        Output PDF path.
+    png : str or os.PathLike
+        Output PNG path.
+
+    Returns
+    -------
+    None
+        The figure is written to ``pdf`` and ``png``.
+    """
     fig, (ax, az) = figure(nrows=2, figsize=(7.0, 5.6))
     labels = {"image": "physical, image method (square)", "sbr": "physical, SBR (circle)", "seed": "seed's model"}
     for name, ds in maps.items():
@@ -36,6 +59,24 @@ def rssi_map(maps: dict[str, xr.Dataset], coverage_dbm: float, blind_dbm: float,
 
 
 def delay_spread(maps: dict[str, xr.Dataset], pdf, png) -> None:
+    """Figure ``tunnel_delay_spread``: the RMS delay spread along the tunnel of every map
+    (left) and its distribution over the tunnel (right, CDF, logarithmic delay axis).
+
+    Parameters
+    ----------
+    maps : dict
+        Table name -> map of :func:`railradio.tunnel.study.make_map` (``x_m``, ``delay_rms_s``
+        [s], plotted in ns).
+    pdf : str or os.PathLike
+        Output PDF path.
+    png : str or os.PathLike
+        Output PNG path.
+
+    Returns
+    -------
+    None
+        The figure is written to ``pdf`` and ``png``.
+    """
     fig, (ax, ac) = figure(ncols=2, figsize=(7.5, 3.2))
     for name, ds in maps.items():
         v = ds["delay_rms_s"].values * 1e9
@@ -52,6 +93,27 @@ def delay_spread(maps: dict[str, xr.Dataset], pdf, png) -> None:
 
 
 def gdop(run: xr.Dataset, pdf, png, span_m: float = 200.0) -> None:
+    """Figure ``tunnel_gdop``: the head receiver's dilution of precision over ``span_m`` from
+    x = 2000 m, the seed's 2-D GDOP (seed 4.1.1) against the along-track TDOA dilution
+    sigma_x / (c sigma_tau) (logarithmic axis).
+
+    Parameters
+    ----------
+    run : xarray.Dataset
+        A run of :func:`railradio.tunnel.simulate.run_train` (the workflow passes the HST,
+        physical, separable run) with ``x_rx_true`` [m], ``gdop_seed`` and ``gdop_tdoa`` [1].
+    pdf : str or os.PathLike
+        Output PDF path.
+    png : str or os.PathLike
+        Output PNG path.
+    span_m : float
+        Length of the plotted stretch of head-receiver positions [m].
+
+    Returns
+    -------
+    None
+        The figure is written to ``pdf`` and ``png``.
+    """
     fig, ax = figure(figsize=(6.4, 3.4))
     x = run["x_rx_true"].values[:, 0]
     sel = (x >= 2000) & (x <= 2000 + span_m)
@@ -70,6 +132,27 @@ def _cdf(ax, v, **kw):
 
 
 def position_error_cdf(runs: dict[tuple[str, str], xr.Dataset], pdf, png) -> None:
+    """Figure ``tunnel_position_error_cdf``: one panel per train type, the CDFs of the
+    position errors [m] (logarithmic axis, 2 m and 5 m marked): head and tail KF, rigid-train
+    KF, particle filter and head snapshot of the physical separable run, and the train-error
+    KF of the correlated delay-error, wideband and seed-channel runs where present.
+
+    Parameters
+    ----------
+    runs : dict
+        (train, variant) -> run of :func:`railradio.tunnel.simulate.run_train`; needs
+        ``physical_separable`` for every train of :data:`TRAINS`, the other variants of
+        :data:`railradio.tunnel.study.VARIANTS` optional.
+    pdf : str or os.PathLike
+        Output PDF path.
+    png : str or os.PathLike
+        Output PNG path.
+
+    Returns
+    -------
+    None
+        The figure is written to ``pdf`` and ``png``.
+    """
     fig, axes = figure(ncols=3, figsize=(9.0, 3.3), sharey=True)
     for ax, tr in zip(axes, TRAINS, strict=True):
         ds = runs[(tr, "physical_separable")]
@@ -105,6 +188,25 @@ def position_error_cdf(runs: dict[tuple[str, str], xr.Dataset], pdf, png) -> Non
 
 
 def ray_engines(eng: xr.Dataset, pdf, png) -> None:
+    """Figure ``tunnel_ray_engines``: one slot's path gain over the along-axis offset for
+    every engine model (sum of ray powers; the image method's coherent gain in grey, top),
+    and the SBR engines in the square minus the image method (bottom) [dB].
+
+    Parameters
+    ----------
+    eng : xarray.Dataset
+        The engine checks of :func:`railradio.tunnel.engine_checks.make_engines`
+        (``power_mean_db``, ``power_coherent_db`` [model, offset_m] [dB]).
+    pdf : str or os.PathLike
+        Output PDF path.
+    png : str or os.PathLike
+        Output PNG path.
+
+    Returns
+    -------
+    None
+        The figure is written to ``pdf`` and ``png``.
+    """
     fig, (ax, ad) = figure(nrows=2, figsize=(6.4, 5.0), sharex=True)
     off = eng["offset_m"].values
     for m in eng["model"].values:
@@ -137,6 +239,35 @@ def seed_vs_physical(
     pdf,
     png,
 ) -> None:
+    """Figure ``tunnel_seed_vs_physical``: one slot's local-mean gain relative to the cable
+    power over the offset for every table, beside the coupling loss alone (left), and the
+    distribution of the local-mean RSSI over the tunnel for every map with the coverage
+    threshold (right).
+
+    Parameters
+    ----------
+    tables : dict
+        Table name -> table of :func:`railradio.tunnel.study.make_table` (``offset_m`` [m],
+        ``power_mean`` [1]); needs ``image``.
+    maps : dict
+        Table name -> map of :func:`railradio.tunnel.study.make_map` (``rssi_mean_dbm`` [dBm]).
+    h_m : float
+        Distance between slot line and receiver in the cross-section [m] (the coupling-loss
+        curve's distance is sqrt(offset^2 + h_m^2)).
+    coupling_db : float
+        Coupling loss L_c at 1 m from the cable [dB].
+    coverage_dbm : float
+        Coverage threshold [dBm].
+    pdf : str or os.PathLike
+        Output PDF path.
+    png : str or os.PathLike
+        Output PNG path.
+
+    Returns
+    -------
+    None
+        The figure is written to ``pdf`` and ``png``.
+    """
     fig, (ax, ac) = figure(ncols=2, figsize=(8.0, 3.4))
     labels = {"image": "physical (image, square)", "sbr": "physical (SBR, circle)", "seed": "seed's model"}
     for name, t in tables.items():
@@ -167,8 +298,30 @@ def seed_vs_physical(
 def sensitivity(sens: dict[str, xr.Dataset], shadow_sigma_db, delay_sigma_ns, delay_errors, pdf, png) -> None:
     """95th-percentile KF train error against the shadowing sigma and the delay-error sigma
     (one train type per colour), the delay sweep with each delay-error model (line style);
-    error bars: Monte Carlo standard error over the realizations."""
-    from railradio.tunnel.study import _label
+    error bars: Monte Carlo standard error over the realizations.
+
+    Parameters
+    ----------
+    sens : dict
+        Train type -> sensitivity cases of :func:`railradio.tunnel.sensitivity.make_sensitivity`
+        (``err_p95_m`` [case] and ``rep_err_p95_m`` [case, realization] [m]).
+    shadow_sigma_db : sequence of float
+        The swept shadowing sigmas [dB] (``sensitivity.shadow_sigma_db``, naming the cases).
+    delay_sigma_ns : sequence of float
+        The swept delay-error sigmas [ns] (``sensitivity.delay_sigma_ns``).
+    delay_errors : sequence of str
+        The delay-error models (``white``, ``ar1``, ``slot_bias``; ``sensitivity.delay_errors``).
+    pdf : str or os.PathLike
+        Output PDF path.
+    png : str or os.PathLike
+        Output PNG path.
+
+    Returns
+    -------
+    None
+        The figure is written to ``pdf`` and ``png``.
+    """
+    from railradio.tunnel.sensitivity import case_label
 
     fig, (a_s, a_d) = figure(ncols=2, figsize=(7.5, 3.2))
     styles = {"white": "-", "ar1": "--", "slot_bias": ":"}
@@ -183,11 +336,11 @@ def sensitivity(sens: dict[str, xr.Dataset], shadow_sigma_db, delay_sigma_ns, de
 
     for c, tr in enumerate(t for t in TRAINS if t in sens):
         ds = sens[tr]
-        y, se = curve(ds, [f"shadow_sigma_db_{_label(v)}" for v in shadow_sigma_db])
+        y, se = curve(ds, [f"shadow_sigma_db_{case_label(v)}" for v in shadow_sigma_db])
         a_s.errorbar(shadow_sigma_db, y, yerr=se, color=f"C{c}", marker="o", ms=3, capsize=2, label=tr)
         for e in delay_errors:
             suffix = "" if e == "white" else f"_{e}"
-            y, se = curve(ds, [f"delay_sigma_ns_{_label(v)}{suffix}" for v in delay_sigma_ns])
+            y, se = curve(ds, [f"delay_sigma_ns_{case_label(v)}{suffix}" for v in delay_sigma_ns])
             a_d.errorbar(
                 delay_sigma_ns,
                 y,

@@ -548,6 +548,56 @@ def key_numbers(
     peak_bias: xr.Dataset | None = None,
     side_wall_map: xr.Dataset | None = None,
 ) -> dict[str, Any]:
+    """The key numbers ``tunnel.*`` (:data:`SPECS`, with the sensitivity cases' keys of
+    :func:`sens_spec`) from the study's intermediates, beside the seed's design targets.
+
+    Parameters
+    ----------
+    runs : dict
+        (train, variant) -> run of :func:`railradio.tunnel.simulate.run_train`; needs
+        ``physical_separable`` for every train of :data:`TRAINS` (``hst`` also gives the CEP
+        and dilutions); the other variants of :data:`railradio.tunnel.study.VARIANTS` are
+        optional (their keys null when missing).
+    maps : dict
+        Table name -> map of :func:`railradio.tunnel.study.make_map`; needs ``image``,
+        ``sbr`` and ``seed``.
+    tables : dict
+        Table name -> table of :func:`railradio.tunnel.study.make_table`; needs ``image``
+        and ``sbr``.
+    engines : xarray.Dataset
+        The engine checks of :func:`railradio.tunnel.engine_checks.make_engines`.
+    coverage_dbm : float
+        Coverage threshold of the local-mean RSSI [dBm].
+    blind_dbm : float
+        Blind-spot level of the local-mean RSSI [dBm].
+    min_rays : int
+        Fewest strong rays (the maps' ``n_strong_rays``) outside a blind spot.
+    wavelength_m : float
+        Carrier wavelength [m] (EH11 attenuation).
+    side_m : float
+        Side of the square tunnel of equal area [m] (EH11 attenuation).
+    eps : complex
+        Relative permittivity of the wall [1] (Fresnel losses, EH11 attenuation).
+    sens : dict or None
+        Train -> sensitivity cases of :func:`railradio.tunnel.sensitivity.make_sensitivity`;
+        None: no sensitivity keys.
+    peak_bias : xarray.Dataset or None
+        The peak-bias cases of :func:`railradio.tunnel.peak_bias.make_peak_bias`; None: not reported.
+    side_wall_map : xarray.Dataset or None
+        The map of the side-wall table (:func:`railradio.tunnel.study.make_map`); None: not reported.
+
+    Returns
+    -------
+    dict
+        Key name -> JSON entry of :meth:`railradio.keynumbers.KeySpec.entry` (``value`` in
+        the key's ``unit``, ``mc_stderr`` where realizations give one, the source's value
+        and relation, description, digits).
+
+    Raises
+    ------
+    ValueError
+        When a key's value is not finite.
+    """
     out: dict[str, Any] = {}
     pooled_wb = _run_keys(out, runs)
     _wideband_keys(out, pooled_wb)

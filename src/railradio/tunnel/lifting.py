@@ -137,12 +137,39 @@ class Rays:
     amplitude: np.ndarray
     """complex amplitude relative to an isotropic source of unit EIRP (free space: lambda/(4 pi d))"""
     delay_s: np.ndarray
+    """delay d / c along the 3-D ray from the slot [s]"""
     n_reflections: np.ndarray
     """[ray]"""
 
 
 def lift(fam: Families, dx_m, wavelength_m: float, eps: complex, polarization: str) -> Rays:
-    """3-D rays of every family at along-axis offsets ``dx_m`` (exact, no grid)."""
+    """3-D rays of every family at along-axis offsets ``dx_m`` (exact, no grid).
+
+    Parameters
+    ----------
+    fam : Families
+        2-D ray families from the slot to the receiver (:mod:`railradio.tunnel.rays`).
+    dx_m : float or array_like
+        Along-axis offsets x_rx - x_slot [m] (only |dx| matters), 1-D.
+    wavelength_m : float
+        Free-space wavelength [m].
+    eps : complex or None
+        Relative permittivity of the wall [1] (real part > 1, imaginary part <= 0);
+        None: perfectly absorbing walls (every reflected ray has amplitude 0).
+    polarization : {'paraxial', 'vector'}
+        Polarization rule of the reflection product (module docstring).
+
+    Returns
+    -------
+    Rays
+        ``amplitude`` [ray, offset] (complex, relative to an isotropic source of unit EIRP
+        [1]), ``delay_s`` [ray, offset] (delay from the slot [s]), ``n_reflections`` [ray].
+
+    Raises
+    ------
+    ValueError
+        When ``polarization`` is unknown or ``eps`` is not a lossy permittivity as above.
+    """
     dx = np.abs(np.asarray(dx_m, dtype=float))[None, :]
     ell = fam.ell_m[:, None]
     d = np.sqrt(ell**2 + dx**2)

@@ -16,7 +16,9 @@ from __future__ import annotations
 import numpy as np
 
 CONCRETE_900MHZ = complex(5.31, -0.60)
-"""Relative permittivity of the concrete lining at 900 MHz [ITU-R P.2040-1]."""
+"""Relative permittivity of the concrete lining at 900 MHz [ITU-R P.2040-1].
+
+Dimensionless, eps' - j eps'' with the exp(+j omega t) convention of this module (Im < 0 for a lossy wall)."""
 
 
 def _check_eps(eps: complex) -> complex:

@@ -14,6 +14,40 @@ DELAY_ERRORS = ("white", "ar1", "slot_bias")
 
 @dataclass(frozen=True)
 class MeasurementModel:
+    """The receivers' measurement model (docs/model/tunnel.md §3).
+
+    Parameters
+    ----------
+    shadow_sigma_db : float
+        Standard deviation of the per-slot log-normal shadowing [dB]; >= 0.
+    shadow_corr_m : float
+        Correlation distance of the shadowing along the tunnel [m]; positive.
+    delay_sigma_s : float
+        Standard deviation of the separable receiver's per-slot delay error [s]; positive.
+    n_slots : int
+        Number of the strongest measured slots used per fix (separable receiver); >= 3.
+    window_m : float
+        Half-width of the window of slots around the receiver that are considered [m];
+        positive.
+    bandwidth_hz : float
+        Bandwidth B of the wideband receiver [Hz]; positive.
+    n_tones : int
+        Number of sounding tones across B (wideband receiver).
+    noise_figure_db : float
+        Receiver noise figure F [dB] (thermal noise kT F B of the wideband receiver).
+    delay_error : {'white', 'ar1', 'slot_bias'}
+        Time structure of the delay error (:data:`DELAY_ERRORS`; simulate module docstring).
+    delay_corr_m : float
+        Correlation distance of the ``ar1`` delay error along the track [m]; positive.
+
+    Raises
+    ------
+    ValueError
+        When ``delay_error`` is unknown, ``n_slots`` < 3, ``shadow_sigma_db`` < 0, or
+        ``delay_corr_m``, ``shadow_corr_m``, ``delay_sigma_s``, ``window_m`` or
+        ``bandwidth_hz`` is not positive.
+    """
+
     shadow_sigma_db: float = 4.0
     shadow_corr_m: float = 10.0
     delay_sigma_s: float = 20e-9

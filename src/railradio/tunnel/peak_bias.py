@@ -26,7 +26,35 @@ def make_peak_bias(cfg: dict[str, Any], table: xr.Dataset, step_m: float = 9.7) 
     minus the cable-point model delay (cable delay to x + h/c) at receivers every ``step_m``
     along the tunnel (not a divisor of the slot spacing: every offset to the nearest slot
     occurs), for the cases of :data:`PEAK_BIAS_CASES` (same estimator, same
-    bandwidth and tones; the line-of-sight table has absorbing walls)."""
+    bandwidth and tones; the line-of-sight table has absorbing walls).
+
+    Parameters
+    ----------
+    cfg : dict
+        The ``tunnel`` section of the configuration (``geometry``, ``cable``, ``wall``,
+        ``rays``, ``measurement``: ``bandwidth_hz`` [Hz], ``n_tones``, ``window_m`` [m], ...).
+    table : xarray.Dataset
+        The physical channel table of the configured engine
+        (:func:`railradio.tunnel.study.make_table`); its cross-section (attribute
+        ``shape``) must be 'rect', because the line-of-sight table is built with the
+        image method on its offsets.
+    step_m : float
+        Spacing of the receivers along the tunnel [m]; the receivers keep a margin from
+        either end (the larger of the table's extent and ``measurement.window_m``, or
+        ``window_m`` alone when the tunnel is shorter than twice that).
+
+    Returns
+    -------
+    xarray.Dataset
+        ``peak_bias_s`` [case, x_m]: noiseless CIR-peak delay minus the cable-point model
+        delay [s]; ``case`` the labels of :data:`PEAK_BIAS_CASES`, ``x_m`` the receiver
+        positions [m].  Attributes: ``bandwidth_hz`` [Hz], ``n_tones``, ``window_m`` [m].
+
+    Raises
+    ------
+    ValueError
+        When the table's cross-section is not 'rect'.
+    """
     tun = tunnel_from_config(cfg, table.attrs["shape"])
     cab = cable_from_config(cfg)
     mm = measurement_from_config(cfg)

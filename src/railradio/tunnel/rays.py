@@ -137,6 +137,25 @@ def image_families(tunnel: Tunnel, order: int) -> Families:
     at 0 and A and the source at s, the images are 2kA + s (2|k| reflections) and
     2kA - s (|2k - 1| reflections).  The reflection sequence of each image (which wall,
     in which order) follows from where the unfolded straight line crosses the walls.
+
+    Parameters
+    ----------
+    tunnel : Tunnel
+        The tunnel; its cross-section must be ``'rect'``.
+    order : int
+        Largest reflection order |m| + |n| [1]; a non-negative integer.
+
+    Returns
+    -------
+    Families
+        One family per image, sorted by reflection count and then 2-D length; planar
+        walls, so ``spread`` = 1 and ``caustic_phase_rad`` = 0; ``engine`` 'image',
+        ``stats`` {'order', 'n_families'}.
+
+    Raises
+    ------
+    ValueError
+        When ``tunnel.shape`` is not 'rect' or ``order`` is not a non-negative integer.
     """
     if tunnel.shape != "rect":
         raise ValueError("tunnel.shape must be 'rect' for the image method")
@@ -226,6 +245,32 @@ def trace_2d(tunnel: Tunnel, phi: np.ndarray, max_refl: int, rx_radius_m: float,
     Returns the captures (ray index, reflections so far, path length at the closest
     approach, signed miss distance) and, with ``history``, per ray the normals and
     directions at each reflection [n_rays, max_refl, 2].
+
+    Parameters
+    ----------
+    tunnel : Tunnel
+        The tunnel: cross-section, slot and receiver positions (y, z).
+    phi : numpy.ndarray
+        Launch angles [rad] measured from +y toward +z, [n_rays].
+    max_refl : int
+        Number of reflections traced; a ray is tested for capture on each of its
+        ``max_refl + 1`` straight legs.
+    rx_radius_m : float
+        Radius of the reception circle around the receiver [m].
+    history : bool
+        Also return the wall normals and ray directions at every reflection.
+
+    Returns
+    -------
+    captures : tuple of numpy.ndarray
+        ``(j, nb, ell_m, miss_m)``, each [capture], one capture per leg that passes within
+        ``rx_radius_m`` of the receiver: the ray index into ``phi``, the number of
+        reflections before that leg, the path length to the point of closest approach [m],
+        and the signed distance of the receiver from the ray (u x (rx - p)) [m].
+    history : tuple
+        ``(normals, directions)``, each [n_rays, max_refl, 2]: the inward unit normal (y, z)
+        of the wall at every reflection and the unit direction of the ray arriving at it;
+        ``(None, None)`` without ``history``.
     """
     n = phi.size
     p = np.tile(np.asarray(tunnel.slot_yz, dtype=float), (n, 1))
@@ -377,7 +422,34 @@ def _retrace_central(
 
 
 def sbr_families(tunnel: Tunnel, n_rays: int, max_refl: int, rx_radius_m: float) -> Families:
-    """Shooting and bouncing rays in the cross-section (see the module docstring)."""
+    """Shooting and bouncing rays in the cross-section (see the module docstring).
+
+    Parameters
+    ----------
+    tunnel : Tunnel
+        The tunnel, either cross-section.
+    n_rays : int
+        Number of 2-D rays launched uniformly in angle over 2 pi; an integer >= 16.
+    max_refl : int
+        Largest number of reflections traced [1]; a non-negative integer.
+    rx_radius_m : float
+        Radius of the reception circle around the receiver [m]; in (0, the receiver's
+        distance to the wall).
+
+    Returns
+    -------
+    Families
+        The families found, sorted by reflection count and then 2-D length (families
+        whose central ray could not be re-traced are dropped); ``engine`` 'sbr', ``stats``
+        with ``n_rays``, ``max_refl``, ``rx_radius_m``, ``n_captures``, ``n_families``,
+        ``n_single_ray_families``, ``n_lost_families``, ``max_central_miss_m`` [m].
+
+    Raises
+    ------
+    ValueError
+        When ``n_rays`` is not an integer >= 16, ``max_refl`` is not a non-negative
+        integer, or ``rx_radius_m`` is outside (0, the receiver's distance to the wall).
+    """
     if not isinstance(n_rays, (int, np.integer)) or n_rays < 16:
         raise ValueError(f"n_rays must be an integer >= 16, got {n_rays!r}")
     if not isinstance(max_refl, (int, np.integer)) or max_refl < 0:

@@ -19,7 +19,8 @@ from railradio.tunnel.study import (
 )
 
 
-def _label(v: float) -> str:
+def case_label(v: float) -> str:
+    """A sweep value as a case-name fragment: 3.5 -> "3p5", -1 -> "m1"."""
     return f"{v:g}".replace(".", "p").replace("-", "m")
 
 
@@ -27,19 +28,35 @@ def sensitivity_cases(cfg: dict[str, Any]) -> dict[str, dict[str, Any]]:
     """Sensitivity cases (shadowing and delay-error sigma swept over the seed's
     ranges; the delay-error model): label -> overrides of the measurement section, each
     case changing one thing from the defaults, and the delay-sigma sweep repeated with each
-    correlated delay-error model (``delay_sigma_ns_<v>_<model>``)."""
+    correlated delay-error model (``delay_sigma_ns_<v>_<model>``).
+
+    Parameters
+    ----------
+    cfg : dict
+        The ``tunnel`` section of the configuration; ``sensitivity`` holds the swept
+        ``shadow_sigma_db`` [dB] and ``delay_sigma_ns`` [ns] values and the
+        ``delay_errors`` models (``white``, ``ar1``, ``slot_bias``).
+
+    Returns
+    -------
+    dict
+        Case label (``shadow_sigma_db_<v>``, ``delay_sigma_ns_<v>``, ``delay_error_<model>``,
+        ``delay_sigma_ns_<v>_<model>``; in ``<v>`` a '.' is written 'p' and a '-' 'm') ->
+        keyword overrides for :func:`railradio.tunnel.study.measurement_from_config`, in
+        the units of the ``measurement`` section.
+    """
     sv = cfg["sensitivity"]
     cases: dict[str, dict[str, Any]] = {}
     for v in sv["shadow_sigma_db"]:
-        cases[f"shadow_sigma_db_{_label(v)}"] = {"shadow_sigma_db": float(v)}
+        cases[f"shadow_sigma_db_{case_label(v)}"] = {"shadow_sigma_db": float(v)}
     for v in sv["delay_sigma_ns"]:
-        cases[f"delay_sigma_ns_{_label(v)}"] = {"delay_sigma_ns": float(v)}
+        cases[f"delay_sigma_ns_{case_label(v)}"] = {"delay_sigma_ns": float(v)}
     for e in sv["delay_errors"]:
         cases[f"delay_error_{e}"] = {"delay_error": e}
     for e in sv["delay_errors"]:  # the delay-sigma sweep with each correlated error model
         if e != "white":
             for v in sv["delay_sigma_ns"]:
-                cases[f"delay_sigma_ns_{_label(v)}_{e}"] = {"delay_sigma_ns": float(v), "delay_error": e}
+                cases[f"delay_sigma_ns_{case_label(v)}_{e}"] = {"delay_sigma_ns": float(v), "delay_error": e}
     return cases
 
 
@@ -52,7 +69,39 @@ def make_sensitivity(
     percentile of the train error and the availabilities, and each realization's 95th
     percentile (their spread gives the Monte Carlo standard error).  With ``side_wall_table``
     (the channel with the cable on the side wall) also the case ``slot_side_wall``: default
-    measurements, that geometry and channel."""
+    measurements, that geometry and channel.
+
+    Parameters
+    ----------
+    cfg : dict
+        The ``tunnel`` section of the configuration (``geometry``, ``cable``, ``wall``,
+        ``rays``, ``seed_model``, ``measurement``, ``trains``, ``positioning``,
+        ``tracking``, ``realizations``, ``sensitivity``).
+    table : xarray.Dataset
+        The physical channel table of the configured engine
+        (:func:`railradio.tunnel.study.make_table`).
+    train_name : str
+        Train type, a key of ``cfg['trains']``.
+    seed : int
+        Root seed of the workflow (the same random streams as the main run).
+    side_wall_table : xarray.Dataset or None
+        The engine's table with the cable on the side wall; None leaves out ``slot_side_wall``.
+
+    Returns
+    -------
+    xarray.Dataset
+        Over ``case`` (labels of :func:`sensitivity_cases`, then ``slot_side_wall``):
+        ``err_p95_m`` (pooled 95th percentile of the KF train error) [m], ``avail_lt_5m``
+        and ``avail_lt_2m`` (share of epochs with train error below 5 m, 2 m) [1];
+        ``rep_err_p95_m`` [case, realization] (each realization's 95th percentile) [m].
+        Attribute ``train``.
+
+    Raises
+    ------
+    ValueError
+        When a case gives an invalid measurement model, or too few slots lie within the
+        measurement window.
+    """
     tun = tunnel_from_config(cfg, table.attrs["shape"])
     cab = cable_from_config(cfg)
     train = train_from_config(cfg, train_name)

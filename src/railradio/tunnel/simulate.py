@@ -58,6 +58,7 @@ from railradio.tunnel.wideband import (
 )
 
 TRAIN_IDS = {"metro": 1, "hst": 2, "freight": 3}
+"""Train type -> its number in the random-stream keys (``spawn_key('tunnel', ...)``; another name: 9)."""
 MEASUREMENTS = ("separable", "wideband")
 VARIANT_IDS = {
     ("physical", "separable"): 1,
@@ -65,12 +66,33 @@ VARIANT_IDS = {
     ("seed", "separable"): 3,
     ("seed", "wideband"): 4,
 }
+"""(propagation, measurement) -> its number in the random-stream keys (``spawn_key('tunnel', ...)``)."""
 SHADOW_KEY = {"evaluation": 100, "calibration": 101}
 DELAY_KEY = {"evaluation": 102, "calibration": 103}
 
 
 @dataclass(frozen=True)
 class Train:
+    """A train type crossing the tunnel at constant speed with receivers along its length.
+
+    Parameters
+    ----------
+    name : str
+        Train type (``metro``, ``hst``, ``freight``; keys :data:`TRAIN_IDS`).
+    length_m : float
+        Train length L, head to tail [m]; positive.
+    speed_kmh : float
+        Constant speed [km/h]; positive.
+    n_receivers : int
+        Number K of receivers evenly along the train, the first at the head and the last
+        at the tail; >= 2.
+
+    Raises
+    ------
+    ValueError
+        When ``n_receivers`` < 2 or ``length_m`` or ``speed_kmh`` is not positive.
+    """
+
     name: str
     length_m: float
     speed_kmh: float
@@ -264,6 +286,58 @@ def run_train(
     realizations 1 .. R-1 repeat the head and tail KF with their own shadowing,
     delay-error field and noise (:func:`kf_realizations`): ``rep_err*`` [realization,
     epoch] hold all R for the pooled key numbers and their Monte Carlo spread.
+
+    Parameters
+    ----------
+    table : xarray.Dataset
+        Tabulated slot-to-receiver channel (:func:`railradio.tunnel.study.make_table`) of
+        the run's propagation.
+    tunnel : Tunnel
+        The tunnel of the table's cross-section.
+    cable : Cable
+        The leaky cable.
+    train : Train
+        The train type crossing the tunnel.
+    mm : MeasurementModel
+        The receivers' measurement model (:mod:`railradio.tunnel.measurement`).
+    propagation : {'physical', 'seed'}
+        The table's propagation model (selects the random streams).
+    measurement : {'separable', 'wideband'}
+        The receiver's measurement model (module docstring).
+    tracking : dict
+        The ``tracking`` section of the configuration: ``rate_hz`` (epoch rate) [Hz],
+        ``accel_sigma_m_s2`` (white-acceleration process noise) [m/s^2],
+        ``max_speed_m_s`` (initial speed uncertainty) [m/s], ``n_particles`` (particle
+        filter), ``calibration_m`` (travel of the calibration run) [m].
+    seed : int
+        Root seed of the workflow.
+    realizations : int
+        Number R of Monte Carlo realizations; >= 1 (more than 1 only adds KF runs of a
+        separable receiver).
+
+    Returns
+    -------
+    xarray.Dataset
+        Dims ``time_s`` (time since the tail entered [s]), ``receiver`` (index from the
+        head, with ``receiver_offset_m`` behind the head [m]) and ``realization``.  Main
+        variables [m] unless stated: ``x_head_true`` [time_s], ``x_rx_true``, ``snapshot``,
+        ``snapshot_rssi``, ``sigma_tdoa``, ``gdop_seed`` [1], ``gdop_tdoa`` [1],
+        ``wideband_delay`` [s], ``wideband_delay_error`` [s], ``snapshot_err``,
+        ``snapshot_rssi_err`` [time_s, receiver]; the tracks ``kf_head``, ``kf_tail``,
+        ``kf_head_var`` [m^2], ``kf_head_nis`` [1], ``rigid_head``, ``rigid_tail``,
+        ``pf_head``, ``pf_tail`` and their errors ``{kf,rigid,pf}_err_head``,
+        ``{kf,rigid,pf}_err_tail``, ``{kf,rigid,pf}_err`` (train error) [time_s];
+        ``rep_err_head``, ``rep_err_tail``, ``rep_err`` [realization, time_s]; wideband:
+        ``ambiguity_wrong`` [time_s, receiver] [1].  Attributes: ``train``, ``length_m``,
+        ``speed_kmh``, ``propagation``, ``measurement``, ``r0_m2`` [m^2],
+        ``wideband_bias_s`` [s].
+
+    Raises
+    ------
+    ValueError
+        When ``realizations`` < 1.
+    KeyError
+        When (``propagation``, ``measurement``) is not a key of :data:`VARIANT_IDS`.
     """
     if realizations < 1:
         raise ValueError(f"realizations must be >= 1, got {realizations!r}")

@@ -34,11 +34,28 @@ TABLES = {
 """table name -> (cross-section, engine, propagation); ``*_side_wall``: the same engine with the
 cable at ``sensitivity.side_wall_slot_z_m`` (:func:`side_wall_config`)."""
 SIDE_WALL = "_side_wall"
+"""Suffix of the table names whose cable runs on the side wall (:data:`TABLES`, :func:`channel_config`)."""
 
 
 def channel_config(cfg: dict[str, Any], name: str, keys: list[str]) -> dict[str, Any]:
     """The sections ``keys`` of the tunnel config for table ``name`` (side-wall tables: the
-    slot line moved, :func:`side_wall_config`); the other tables' config stays unchanged."""
+    slot line moved, :func:`side_wall_config`); the other tables' config stays unchanged.
+
+    Parameters
+    ----------
+    cfg : dict
+        The ``tunnel`` section of the configuration.
+    name : str
+        Table name (a key of :data:`TABLES`); a name containing :data:`SIDE_WALL` takes the
+        side-wall slot line.
+    keys : list of str
+        Sections of ``cfg`` to keep (e.g. ``geometry``, ``cable``, ``wall``, ``rays``).
+
+    Returns
+    -------
+    dict
+        Section name -> section, for the sections ``keys``.
+    """
     c = side_wall_config(cfg) if SIDE_WALL in name else cfg
     return {k: c[k] for k in keys}
 
@@ -56,6 +73,7 @@ VARIANTS = {
     "physical_wideband": ("physical", "wideband"),
     "seed_separable": ("seed", "separable"),
 }
+"""Run variant -> (propagation of the channel table, measurement model of the receiver)."""
 VARIANT_DELAY_ERROR = {"physical_separable_ar1": "ar1", "physical_separable_slot_bias": "slot_bias"}
 """Runs of the separable receiver with a correlated delay error instead of the configured
 one (white, the source's reading [ours]); the same draws otherwise."""
@@ -63,6 +81,27 @@ TABLE_OF_PROPAGATION = {"physical": None, "seed": "seed"}  # physical: the confi
 
 
 def tunnel_from_config(cfg: dict[str, Any], shape: str = "circle") -> Tunnel:
+    """The tunnel of ``cfg['geometry']`` with cross-section ``shape``.
+
+    Parameters
+    ----------
+    cfg : dict
+        The ``tunnel`` section of the configuration; ``geometry`` holds ``length_m``,
+        ``diameter_m``, ``slot_spacing_m``, ``rx_y_m``, ``rx_z_m``, ``slot_z_m`` [m] and
+        ``slot_height_frac`` [1].
+    shape : {'circle', 'rect'}
+        Cross-section: the true circle, or the square of equal area (image method).
+
+    Returns
+    -------
+    Tunnel
+        The tunnel.
+
+    Raises
+    ------
+    ValueError
+        When the geometry is invalid (see :class:`~railradio.tunnel.geometry.Tunnel`).
+    """
     g = cfg["geometry"]
     return Tunnel(
         g["length_m"],
@@ -77,6 +116,26 @@ def tunnel_from_config(cfg: dict[str, Any], shape: str = "circle") -> Tunnel:
 
 
 def cable_from_config(cfg: dict[str, Any]) -> Cable:
+    """The leaky cable of ``cfg['cable']``.
+
+    Parameters
+    ----------
+    cfg : dict
+        The ``tunnel`` section of the configuration; ``cable`` holds ``frequency_hz`` [Hz],
+        ``feed_power_dbm`` [dBm], ``feed_spacing_m`` [m], ``loss_db_per_100m`` [dB/100 m],
+        ``velocity_factor`` [1], ``coupling_loss_db`` [dB], ``coupling_ref_m`` [m] and
+        ``coupling_ref_gain_dbi`` [dBi].
+
+    Returns
+    -------
+    Cable
+        The cable (its loss converted to dB/m).
+
+    Raises
+    ------
+    ValueError
+        When the cable parameters are invalid (see :class:`~railradio.tunnel.geometry.Cable`).
+    """
     c = cfg["cable"]
     return Cable(
         c["frequency_hz"],
@@ -91,11 +150,46 @@ def cable_from_config(cfg: dict[str, Any]) -> Cable:
 
 
 def eps_from_config(cfg: dict[str, Any]) -> complex:
+    """The wall's relative permittivity eps_real - j eps_imag of ``cfg['wall']``.
+
+    Parameters
+    ----------
+    cfg : dict
+        The ``tunnel`` section of the configuration; ``wall`` holds ``eps_real`` and
+        ``eps_imag`` (the loss, given as a positive number) [1].
+
+    Returns
+    -------
+    complex
+        Relative permittivity [1] in the exp(+j omega t) convention (imaginary part <= 0).
+    """
     return complex(cfg["wall"]["eps_real"], -cfg["wall"]["eps_imag"])
 
 
 def measurement_from_config(cfg: dict[str, Any], **overrides: Any) -> MeasurementModel:
-    """The measurement model of ``cfg['measurement']``, with keys of that section overridden."""
+    """The measurement model of ``cfg['measurement']``, with keys of that section overridden.
+
+    Parameters
+    ----------
+    cfg : dict
+        The ``tunnel`` section of the configuration; ``measurement`` holds
+        ``shadow_sigma_db`` [dB], ``shadow_corr_m`` [m], ``delay_sigma_ns`` [ns],
+        ``n_slots``, ``window_m`` [m], ``bandwidth_hz`` [Hz], ``n_tones``,
+        ``noise_figure_db`` [dB], ``delay_error`` and ``delay_corr_m`` [m].
+    **overrides
+        Keys of the ``measurement`` section replaced (e.g. ``delay_error='ar1'``,
+        ``delay_sigma_ns=35.0``), in that section's units.
+
+    Returns
+    -------
+    MeasurementModel
+        The measurement model (the delay sigma converted to s).
+
+    Raises
+    ------
+    ValueError
+        When the model is invalid (see :class:`~railradio.tunnel.measurement.MeasurementModel`).
+    """
     m = cfg["measurement"] | overrides
     return MeasurementModel(
         m["shadow_sigma_db"],
@@ -112,6 +206,26 @@ def measurement_from_config(cfg: dict[str, Any], **overrides: Any) -> Measuremen
 
 
 def train_from_config(cfg: dict[str, Any], name: str) -> Train:
+    """The train type ``name`` of ``cfg['trains']`` with ``positioning.n_receivers`` receivers.
+
+    Parameters
+    ----------
+    cfg : dict
+        The ``tunnel`` section of the configuration; ``trains[name]`` holds ``length_m`` [m]
+        and ``speed_kmh`` [km/h].
+    name : str
+        Train type (``metro``, ``hst``, ``freight``).
+
+    Returns
+    -------
+    Train
+        The train.
+
+    Raises
+    ------
+    ValueError
+        When the train is invalid (see :class:`~railradio.tunnel.simulate.Train`).
+    """
     t = cfg["trains"][name]
     return Train(name, t["length_m"], t["speed_kmh"], cfg["positioning"]["n_receivers"])
 
@@ -169,7 +283,28 @@ def choose_order(cfg: dict[str, Any]) -> tuple[int, np.ndarray, np.ndarray]:
 
 def make_order(cfg: dict[str, Any]) -> xr.Dataset:
     """The reflection order of :func:`choose_order` with the worst omitted field per order
-    (one file per cable placement, read by every table of that placement)."""
+    (one file per cable placement, read by every table of that placement).
+
+    Parameters
+    ----------
+    cfg : dict
+        The ``tunnel`` section of the configuration (``geometry``, ``cable``, ``wall``,
+        ``rays``; ``rays.max_order``, ``rays.convergence_field_db`` [dB],
+        ``rays.convergence_step_m`` [m]).
+
+    Returns
+    -------
+    xarray.Dataset
+        ``omitted_field_db`` [order]: the worst field of the omitted higher orders over the
+        table's offsets relative to the local mean [dB], ``order`` being the highest
+        reflection order summed.  Attributes: ``reflection_order`` (the chosen order),
+        ``max_offset_m`` [m], ``convergence_field_db`` [dB].
+
+    Raises
+    ------
+    ValueError
+        When the coherent gain has not converged by ``rays.max_order``.
+    """
     order, worst_db, offs = choose_order(cfg)
     return xr.Dataset(
         {
@@ -196,7 +331,35 @@ def make_order(cfg: dict[str, Any]) -> xr.Dataset:
 
 def make_table(cfg: dict[str, Any], name: str, seed: int, order: xr.Dataset) -> xr.Dataset:
     """The tabulated slot-to-receiver channel ``name`` (see :data:`TABLES`) at the
-    reflection order of ``order`` (:func:`make_order` for the table's cable placement)."""
+    reflection order of ``order`` (:func:`make_order` for the table's cable placement).
+
+    Parameters
+    ----------
+    cfg : dict
+        The ``tunnel`` section of the configuration (``geometry``, ``cable``, ``wall``,
+        ``rays``, ``seed_model``); side-wall tables: the config of :func:`channel_config`.
+    name : str
+        Table name, a key of :data:`TABLES` (cross-section, engine, propagation).
+    seed : int
+        Root seed of the workflow (draws the seed model's multipath losses only).
+    order : xarray.Dataset
+        The reflection order of :func:`make_order` (``reflection_order`` attribute,
+        ``omitted_field_db``).
+
+    Returns
+    -------
+    xarray.Dataset
+        The table of :func:`~railradio.tunnel.channel.tabulate` (``taps``, ``power_mean``,
+        ``power_incoherent``, ``delay_mean_s``, ``delay_rms_s``, ``los_delay_s`` over
+        ``offset_m`` [m] and ``excess_delay_s`` [s]) with ``omitted_field_db`` [order] [dB]
+        and the attributes ``reflection_order``, ``slot_eirp_offset_db`` (slot EIRP relative
+        to the cable power [dB]) and the engine's statistics prefixed ``sbr_``.
+
+    Raises
+    ------
+    ValueError
+        When the configuration is invalid for the tunnel, cable, ray engine or table.
+    """
     shape, engine, prop = TABLES[name]
     omitted = order["omitted_field_db"]
     order = int(order.attrs["reflection_order"])
@@ -234,7 +397,26 @@ def make_table(cfg: dict[str, Any], name: str, seed: int, order: xr.Dataset) -> 
 
 
 def make_map(cfg: dict[str, Any], table: xr.Dataset, name: str) -> xr.Dataset:
-    """RSSI (coherent, local mean), RMS delay spread, strong-ray count along the tunnel."""
+    """RSSI (coherent, local mean), RMS delay spread, strong-ray count along the tunnel.
+
+    Parameters
+    ----------
+    cfg : dict
+        The ``tunnel`` section of the configuration (``geometry``, ``cable`` and
+        ``coverage``: ``map_step_m`` [m], ``blind_spot_dbm`` [dBm], the level of a strong ray).
+    table : xarray.Dataset
+        The tabulated channel ``name`` (:func:`make_table`).
+    name : str
+        Table name, a key of :data:`TABLES` (its cross-section).
+
+    Returns
+    -------
+    xarray.Dataset
+        Over ``x_m`` (receiver position along the tunnel, every ``map_step_m`` [m]):
+        ``rssi_coherent_dbm`` [dBm], ``rssi_mean_dbm`` (local mean; physical: the coherent
+        power averaged over the table's local-mean window) [dBm], ``delay_rms_s`` [s],
+        ``n_strong_rays`` [1].  Attributes: ``table``, ``shape``, ``cross_distance_m`` [m].
+    """
     shape = TABLES[name][0]
     tun = tunnel_from_config(cfg, shape)
     cab = cable_from_config(cfg)

@@ -1,25 +1,21 @@
 """Adapter: one realization's geometry and link budget -> results/nr/bounds/{real}.nc."""
 
 import json
-import sys
 
 import numpy as np
 import xarray as xr
-
-sys.path.insert(0, str(__import__("pathlib").Path(__file__).parent))
-from common import scenario
 
 from railradio.constants import SPEED_OF_LIGHT_M_S
 from railradio.io import write_dataset
 from railradio.nr.bounds import INTEGER_SAMPLE_SIGMA_M, burst_e_over_n0, change_epochs, pcrb_m, peb_m, toa_crb_s
 from railradio.nr.link import ShadowingMap, link_budget
-from railradio.nr.simulate import KEY_SHADOWING
+from railradio.nr.simulate import KEY_SHADOWING, scenario_from_config
 from railradio.rng import spawn_key
 from railradio.workflow import setup_script
 
 smk = snakemake  # noqa: F821
 log = setup_script(smk.log[0])
-scn = scenario(smk)
+scn = scenario_from_config(dict(smk.params.sim))
 dep = scn.deployment
 dh = dep.h_bs_m - dep.h_ut_m
 cal = json.loads(open(smk.input.calibration, encoding="utf-8").read())[smk.params.calibrated]

@@ -1,9 +1,16 @@
-"""Adapter: a sensitivity case's calibration run -> its calibration.json (calibrate.py on
-the case's calibration epochs, TOAs with the calibration run's own clock errors)."""
+"""Adapter: a sensitivity case's calibration run -> its calibration (the main run's
+calibration on the case's epochs, TOAs with the case's clock errors)."""
 
-import sys
+from railradio.io import write_json
+from railradio.nr.runs import calibrate_receivers, case_estimates, point_model, read_shards
+from railradio.nr.simulate import scenario_from_config
+from railradio.workflow import setup_script
 
-sys.path.insert(0, str(__import__("pathlib").Path(__file__).parent))
-from case_common import run_main_script
-
-run_main_script(snakemake, "calibrate.py", rid=1000)  # noqa: F821
+smk = snakemake  # noqa: F821
+log = setup_script(smk.log[0])
+p = smk.params
+ds = case_estimates(read_shards(smk.input), p.n_epochs, p.seed, 1000, p.sync)  # 1000: the calibration run's ID
+out = calibrate_receivers(
+    point_model(ds, p.tracker), scenario_from_config(dict(p.sim)), p.tracker, p.selection, p.variants, log
+)
+write_json(smk.output[0], out)

@@ -1,21 +1,16 @@
 """Adapter: raw IQ and per-block correlations of sample epochs -> results/nr/samples.nc."""
 
-import sys
-
 import numpy as np
-
-sys.path.insert(0, str(__import__("pathlib").Path(__file__).parent))
-from common import scenario
 
 from railradio.io import write_dataset
 from railradio.nr.cellsearch import warmup_start
-from railradio.nr.simulate import Synthesis, simulate_epochs
+from railradio.nr.simulate import Synthesis, scenario_from_config, simulate_epochs
 from railradio.rng import spawn_key
 from railradio.workflow import setup_script
 
 smk = snakemake  # noqa: F821
 setup_script(smk.log[0])
-scn = scenario(smk)
+scn = scenario_from_config(dict(smk.params.sim))
 key = spawn_key("nr", 0)  # realization r0: the same draws as its shard
 epochs = np.asarray(smk.params.epochs)
 ds = simulate_epochs(scn, epochs, smk.params.seed, key, keep_corr_epochs=tuple(int(e) for e in epochs))

@@ -1,20 +1,17 @@
-"""Adapter: one track shard -> results/nr/estimates/{real}/s{shard}.nc."""
+"""Adapter: one track shard of realization r<i> or of the calibration run (params.real) ->
+results/nr/estimates/{real}/s{shard}.nc (nr_shard, nr_cal_shard, nr_case_shard)."""
 
 import dataclasses
-import sys
-
-sys.path.insert(0, str(__import__("pathlib").Path(__file__).parent))
-from common import scenario
 
 from railradio.io import write_dataset
-from railradio.nr.simulate import calibration_trajectory, shard_epochs, simulate_epochs
+from railradio.nr.simulate import calibration_trajectory, scenario_from_config, shard_epochs, simulate_epochs
 from railradio.rng import spawn_key
 from railradio.workflow import setup_script
 
 smk = snakemake  # noqa: F821
 log = setup_script(smk.log[0])
-scn = scenario(smk)
-real = smk.wildcards.real
+scn = scenario_from_config(dict(smk.params.sim))
+real = smk.params.real  # r<i> or cal
 if real == "cal":  # the calibration run's own trajectory
     scn = dataclasses.replace(
         scn,

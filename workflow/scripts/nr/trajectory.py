@@ -1,19 +1,15 @@
 """Adapter: config -> results/nr/trajectory.nc."""
 
-import sys
-
 import numpy as np
 import xarray as xr
 
-sys.path.insert(0, str(__import__("pathlib").Path(__file__).parent))
-from common import scenario
-
 from railradio.io import write_dataset
+from railradio.nr.simulate import scenario_from_config
 from railradio.workflow import setup_script
 
 smk = snakemake  # noqa: F821
 setup_script(smk.log[0])
-scn = scenario(smk)
+scn = scenario_from_config(dict(smk.params.sim))
 t = scn.trajectory.times_s()[: smk.params.n_epochs]
 x, v, a = scn.trajectory.state(t)
 ds = xr.Dataset(

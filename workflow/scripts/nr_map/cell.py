@@ -1,17 +1,13 @@
 """Adapter: a map cell's segment and calibration estimates -> results/nr/map/{cell}/track.nc
 (each receiver's AOD, TOA and AOD+TOA EKF, calibrated on the cell's own calibration run)."""
 
-import sys
-
 import numpy as np
 import xarray as xr
-
-sys.path.insert(0, str(__import__("pathlib").Path(__file__).parents[1] / "nr"))
-from common import read_shards
 
 from railradio.io import write_dataset
 from railradio.nr.calibration import calibrate, measurement_errors, selected
 from railradio.nr.reproduction_map import VARIANTS
+from railradio.nr.runs import read_shards
 from railradio.nr.simulate import scenario_from_config
 from railradio.nr.tracking import track
 from railradio.workflow import setup_script
