@@ -154,7 +154,23 @@ def position_correction_m(
 
 
 def sigma0_and_gaph(radio: Radio, joint: Joint) -> tuple[float, float]:
-    """(σ0, GapH) [dB] for the scenario's measurement noise and filter."""
+    """(σ0, GapH) [dB] for the scenario's measurement noise and filter.
+
+    Parameters
+    ----------
+    radio : Radio
+        Measurement noise σ_m [dB], measurement period [s] and L3 filter coefficient k.
+    joint : Joint
+        ``measurements`` (``l3`` or ``raw``) and the GapH rule (Γ [dB], κ [1], variant, floor [dB]).
+
+    Returns
+    -------
+    sigma0_db : float
+        Standard deviation σ0 [dB] of a measured gap serving − target: √2·σ_m for raw samples,
+        the L3-filtered gap's stationary std otherwise.
+    gaph_db : float
+        The gap threshold GapH [dB] of :func:`gap_threshold_db` at that σ0.
+    """
     from railradio.handover.radio import filtered_gap_noise_std_db, l3_coefficient_at
 
     a = l3_coefficient_at(radio.l3_k, radio.meas_period_s, radio.l3_reference_period_s)

@@ -80,7 +80,36 @@ def rms_per_node(err: np.ndarray) -> np.ndarray:
 def correction_dataset(scn, speeds_kmh: list[float], seed: int, n_blocks: int, runs_per_block: int):
     """RMS errors per node of :data:`PARTS` at each speed, on the sweep's first ``n_blocks``
     blocks of crossings (the same draws as the sweep), with the predicted-against-true
-    scatter of every node: an :class:`xarray.Dataset`."""
+    scatter of every node: an :class:`xarray.Dataset`.
+
+    Parameters
+    ----------
+    scn : Scenario
+        The scenario with the joint weights set (``joint.m``, ``joint.alpha``; ``joint.wslr``
+        is the WSLR reading).
+    speeds_kmh : list of float
+        Train speeds [km/h], each 1–1000.
+    seed : int
+        Root seed of the sweep.
+    n_blocks : int
+        Blocks of crossings per speed (blocks 0…n_blocks − 1 of the ``sweep`` stream).
+    runs_per_block : int
+        Train crossings per block, ≥ 1.
+
+    Returns
+    -------
+    xarray.Dataset
+        ``rms_db`` [dB] (speed, part, node): RMS over crossings of each part's error (NaN for
+        the head); ``pred_db`` and ``true_db`` [dB] (speed, run, node): predicted ĉ_i and true
+        deviation d_i; ``corr`` [1] (speed): their correlation.  Coordinates ``speed``
+        [km/h], ``part`` (:data:`PARTS`), ``node`` (1 = head), ``run``.
+
+    Raises
+    ------
+    ValueError
+        If ``joint.m`` or ``joint.alpha`` is not set or invalid, a speed is out of range, or
+        ``runs_per_block`` < 1.
+    """
     import xarray as xr
 
     from railradio.handover.model import build_context, draw_block
@@ -145,7 +174,26 @@ def correction_dataset(scn, speeds_kmh: list[float], seed: int, n_blocks: int, r
 def correction_key_numbers(ds) -> dict:
     """Key numbers ``handover.correction.*``: per speed the RMS errors averaged over the
     nodes behind the head, the share of those nodes the correction helps (its error below
-    the midpoint trigger's) and the correlation of predicted and true deviations."""
+    the midpoint trigger's) and the correlation of predicted and true deviations.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A dataset of :func:`correction_dataset`.
+
+    Returns
+    -------
+    dict of str to dict
+        Key name -> JSON entry (:meth:`railradio.keynumbers.KeySpec.entry`): per speed tag
+        ``v<speed>``, ``handover.correction.<part>_rms_db.v<speed>`` [dB] for each of
+        :data:`PARTS`, ``handover.correction.helps_node_frac.v<speed>`` [1] and
+        ``handover.correction.corr.v<speed>`` [1].
+
+    Raises
+    ------
+    ValueError
+        If a value is not finite (e.g. a NaN correlation with too few samples).
+    """
     from railradio.keynumbers import KeySpec
 
     out = {}
@@ -176,7 +224,17 @@ def correction_key_numbers(ds) -> dict:
 
 
 def plot_correction(ds, pdf: str, png: str) -> None:
-    """RMS error per node of each predictor, one panel per speed."""
+    """RMS error per node of each predictor, one panel per speed.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A dataset of :func:`correction_dataset` (``rms_db`` [dB] over speed, part, node).
+    pdf : str
+        Path of the PDF to write.
+    png : str
+        Path of the PNG to write.
+    """
     from railradio import plotting
 
     speeds = ds["speed"].values

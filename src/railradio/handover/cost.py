@@ -69,7 +69,46 @@ def cost_grid(
     full_grid_max_m: int = 3,
     full_grid_step: float = 0.05,
 ) -> xr.Dataset:
-    """The cost J over (method, m, α), its Monte Carlo standard error, and the full-grid check."""
+    """The cost J over (method, m, α), its Monte Carlo standard error, and the full-grid check.
+
+    Parameters
+    ----------
+    scn : Scenario
+        The scenario (``joint.m`` and ``joint.alpha`` are not used; ``joint.wslr`` picks the
+        method of the full-grid check).
+    speed_kmh : float
+        Train speed of the cost runs [km/h], 1 ≤ v ≤ 1000.
+    seed : int
+        Root seed; the runs use the separate ``cost`` random stream.
+    n_blocks : int
+        Blocks of crossings, ≥ 1.
+    runs_per_block : int
+        Train crossings per block, ≥ 1.
+    m_values : list of int
+        Numbers of joint nodes m to evaluate (each ≥ 1).
+    alphas : numpy.ndarray
+        Geometric weight parameters α [1], each in (0, 1).
+    full_grid_max_m : int, optional
+        The full per-element weight grid is checked for 2 ≤ m ≤ this (default 3).
+    full_grid_step : float, optional
+        Step of the full weight grid [1], in (0, 1) (default 0.05).
+
+    Returns
+    -------
+    xarray.Dataset
+        Over dims ``wslr`` (``regression``, ``mean``), ``m`` and ``alpha`` [all 1]: ``cost``
+        J = E[C/N] + E[F] and ``cost_se`` (wslr, m, alpha); ``cost_min_m``, ``cost_min_m_se``
+        (wslr, m); ``within_1se`` (wslr, m, alpha, bool); ``cost_min_full_grid``,
+        ``full_grid_gain``, ``full_grid_gain_se`` (m; NaN where not computed); ``best_m``,
+        ``best_alpha`` (wslr); scalars ``speed_kmh`` [km/h], ``n_runs`` and ``full_grid_step``;
+        attribute ``config_wslr``.
+
+    Raises
+    ------
+    ValueError
+        If ``n_blocks`` or ``runs_per_block`` < 1, an α is outside (0, 1), ``full_grid_step``
+        is outside (0, 1) (when the full grid is computed), or the speed is out of range.
+    """
     if n_blocks < 1 or runs_per_block < 1:
         raise ValueError("n_blocks and runs_per_block must be >= 1")
     alphas = np.asarray(alphas, dtype=float)
@@ -226,7 +265,27 @@ def _cost_dataset(
 
 
 def best_weights(ds: xr.Dataset, method: str) -> tuple[int, float]:
-    """(m*, α*) of a cost dataset for a WSLR method."""
+    """(m*, α*) of a cost dataset for a WSLR method.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A cost dataset of :func:`cost_grid` (variables ``best_m``, ``best_alpha`` over ``wslr``).
+    method : str
+        WSLR reading, ``regression`` or ``mean`` (usually ``scn.joint.wslr``).
+
+    Returns
+    -------
+    m : int
+        Cost-minimizing number of joint nodes.
+    alpha : float
+        Cost-minimizing geometric weight parameter α [1], in (0, 1).
+
+    Raises
+    ------
+    KeyError
+        If ``method`` is not on the dataset's ``wslr`` coordinate.
+    """
     return int(ds["best_m"].sel(wslr=method)), float(ds["best_alpha"].sel(wslr=method))
 
 

@@ -26,7 +26,38 @@ def simulate_block(
     policies: tuple[str, ...],
     stream: str = "sweep",
 ) -> dict[str, dict[str, tuple]]:
-    """Outcomes of every policy on one block: policy -> name -> (dims, array, units, long_name)."""
+    """Outcomes of every policy on one block: policy -> name -> (dims, array, units, long_name).
+
+    Parameters
+    ----------
+    scn : Scenario
+        The scenario; the joint policy needs ``scn.joint.m`` and ``scn.joint.alpha`` set.
+    speed_kmh : float
+        Train speed [km/h], 1 ≤ v ≤ 1000.
+    seed : int
+        Root seed of the study's random numbers.
+    block : int
+        Block index (≥ 0); with ``speed_kmh`` and ``stream`` it selects the spawn keys.
+    n_runs : int
+        Train crossings in the block (≥ 1).
+    policies : tuple of str
+        Registered policy names (``joint``, ``a3``, ``distance``), all run on the same draws.
+    stream : str, optional
+        Random stream, ``sweep`` (evaluation runs, default) or ``cost`` (cost-grid runs).
+
+    Returns
+    -------
+    dict of str to dict of str to tuple
+        Per policy, :func:`railradio.handover.policies.run_policy`'s outcomes: name ->
+        (dims, array, units, long_name), arrays [n_runs, N] over ("run", "node") (a few joint
+        extras over ("run",)).
+
+    Raises
+    ------
+    ValueError
+        If the speed is outside 1–1000 km/h, ``block`` is negative, ``n_runs`` < 1,
+        ``stream`` or a policy name is unknown, or the joint policy's (m, α) are not set.
+    """
     kin = kinematics(scn, speed_kmh)
     draws = draw_block(seed, speed_kmh, block, n_runs, kin, scn.train.n_nodes, stream)
     ctx = build_context(scn, kin, draws)
@@ -50,7 +81,41 @@ def simulate_blocks(
     stream: str = "sweep",
 ) -> xr.Dataset:
     """Per-handover outcomes of ``blocks`` at one speed, as a dataset over (run, node)
-    per policy (variables ``<policy>__<name>``)."""
+    per policy (variables ``<policy>__<name>``).
+
+    Parameters
+    ----------
+    scn : Scenario
+        The scenario; the joint policy needs ``scn.joint.m`` and ``scn.joint.alpha`` set.
+    speed_kmh : float
+        Train speed [km/h], 1 ≤ v ≤ 1000.
+    seed : int
+        Root seed of the study's random numbers.
+    blocks : range
+        Contiguous, non-empty range of block indices (≥ 0), e.g. from :func:`shard_blocks`.
+    runs_per_block : int
+        Train crossings per block (≥ 1).
+    policies : tuple of str
+        Registered policy names (``joint``, ``a3``, ``distance``), all run on the same draws.
+    stream : str, optional
+        Random stream, ``sweep`` (evaluation runs, default) or ``cost`` (cost-grid runs).
+
+    Returns
+    -------
+    xarray.Dataset
+        Variables ``<policy>__<name>`` with ``units`` and ``long_name`` attributes, mostly over
+        dims (``run``, ``node``): e.g. ``success`` [1], ``attempts`` [1], ``pingpong`` [1],
+        ``delay_s``, ``delay_all_s``, ``delay_trigger_s``, ``command_time_s`` [s],
+        ``command_x_m``, ``completion_x_m`` [m], ``rsrp_gap_db`` [dB]; the joint policy adds
+        band and fit variables over (``run``,).  Coordinates ``run`` (global crossing index
+        block·runs_per_block + j) and ``node`` (1 = head); scalar ``speed_kmh`` [km/h];
+        attribute ``policies`` (comma-separated).
+
+    Raises
+    ------
+    ValueError
+        If ``blocks`` is empty, or for the reasons listed under :func:`simulate_block`.
+    """
     if len(blocks) == 0:
         raise ValueError("blocks must not be empty")
     per_policy: dict[str, list] = {p: [] for p in policies}
@@ -74,7 +139,27 @@ def simulate_blocks(
 
 
 def shard_blocks(n_blocks: int, n_batches: int, batch: int) -> range:
-    """The contiguous blocks of shard ``batch`` of ``n_batches`` (as even as possible)."""
+    """The contiguous blocks of shard ``batch`` of ``n_batches`` (as even as possible).
+
+    Parameters
+    ----------
+    n_blocks : int
+        Total number of blocks of crossings at one speed.
+    n_batches : int
+        Number of shards (Snakemake jobs), 1 ≤ n_batches ≤ n_blocks.
+    batch : int
+        Index of this shard, 0 ≤ batch < n_batches.
+
+    Returns
+    -------
+    range
+        Block indices of the shard; the shards of all batches partition 0…n_blocks − 1.
+
+    Raises
+    ------
+    ValueError
+        If ``n_batches`` is not in 1..n_blocks or ``batch`` not in 0..n_batches − 1.
+    """
     if not 1 <= n_batches <= n_blocks:
         raise ValueError(f"n_batches must be in 1..n_blocks={n_blocks}, got {n_batches!r}")
     if not 0 <= batch < n_batches:
@@ -84,5 +169,16 @@ def shard_blocks(n_blocks: int, n_batches: int, batch: int) -> range:
 
 
 def speed_label(speed_kmh: float) -> str:
-    """Wildcard text of a speed: ``350`` or ``312.5``."""
+    """Wildcard text of a speed: ``350`` or ``312.5``.
+
+    Parameters
+    ----------
+    speed_kmh : float
+        Train speed [km/h].
+
+    Returns
+    -------
+    str
+        The speed in ``%g`` format (no trailing ``.0``), used in file names and wildcards.
+    """
     return f"{float(speed_kmh):g}"

@@ -213,4 +213,9 @@ FIGURES = {
     "handover_interruption_vs_speed": ("summary", plot_interruption_vs_speed),
     "handover_sensitivity": ("sensitivity", plot_sensitivity),
 }
-"""Figure name -> (input dataset, plotting function)."""
+"""Figure name -> (input dataset, plotting function).
+
+The input is ``cost`` (:func:`railradio.handover.cost.cost_grid`), ``summary`` (rates and
+means per policy and speed) or ``sensitivity`` (per policy and variant); every plotting
+function takes ``(dataset, pdf_path, png_path=None)`` and writes the figure.
+"""

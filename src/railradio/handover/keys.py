@@ -268,7 +268,40 @@ def sens_specs(sens: xr.Dataset) -> dict[str, KeySpec]:
 def key_numbers(
     summary: xr.Dataset, cost: xr.Dataset, sens: xr.Dataset, gaph_db: float, sigma0_db: float, wslr: str, radio=None
 ) -> dict[str, Any]:
-    """All handover.* key numbers (mc_stderr from the clustered standard errors)."""
+    """All handover.* key numbers (mc_stderr from the clustered standard errors).
+
+    Parameters
+    ----------
+    summary : xarray.Dataset
+        Rates and means per policy and speed (:func:`railradio.handover.summary.metrics_dataset`
+        over (``policy``, ``speed_kmh``), speeds in km/h).
+    cost : xarray.Dataset
+        The cost dataset of :func:`railradio.handover.cost.cost_grid`.
+    sens : xarray.Dataset
+        Rates and means per policy and sensitivity ``variant`` (with ``switch``, ``value`` and
+        the scalar ``speed_kmh`` [km/h]).
+    gaph_db : float
+        The gap threshold GapH [dB] (from :func:`railradio.handover.band.sigma0_and_gaph`).
+    sigma0_db : float
+        Standard deviation σ0 of a measured gap [dB].
+    wslr : str
+        WSLR reading of the study, ``regression`` or ``mean``.
+    radio : Radio or None, optional
+        The radio parameters; when given, the analytic ``handover.bound.*`` keys are added.
+
+    Returns
+    -------
+    dict of str to Any
+        Key name -> JSON entry (value, unit, source value and relation, description,
+        mc_stderr, digits), for ``handover.*`` keys: cost-grid argmin and minima, per-policy
+        rates and delays at 100, 250 and 350 km/h, the claim checks, GapH, σ0, bounds and the
+        sensitivity keys ``handover.sens.<variant>.*``.
+
+    Raises
+    ------
+    ValueError
+        If a key's value is not finite.
+    """
     out: dict[str, Any] = {}
 
     def put(name, value, se=None):

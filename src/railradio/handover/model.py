@@ -58,7 +58,36 @@ def block_keys(speed_kmh: float, block: int, stream: str = "sweep") -> tuple[tup
 def draw_block(
     seed: int, speed_kmh: float, block: int, n_runs: int, kin: Kinematics, n_nodes: int, stream: str = "sweep"
 ) -> Draws:
-    """The draws of block ``block`` (``n_runs`` crossings) at ``speed_kmh``."""
+    """The draws of block ``block`` (``n_runs`` crossings) at ``speed_kmh``.
+
+    Parameters
+    ----------
+    seed : int
+        Root seed of the study's random numbers.
+    speed_kmh : float
+        Train speed [km/h]; keys the measurement and GNSS noise (not the shadowing field).
+    block : int
+        Block index, ≥ 0.
+    n_runs : int
+        Train crossings in the block B, ≥ 1.
+    kin : Kinematics
+        Kinematics of the crossing at this speed (number of samples K, shadowing grid size G).
+    n_nodes : int
+        Relay-AP nodes N of the train.
+    stream : str, optional
+        ``sweep`` (evaluation runs, default) or ``cost`` (the separate cost-grid runs).
+
+    Returns
+    -------
+    Draws
+        float32 standard normals [1]: ``field_white`` [B, 2, G], ``meas_white``
+        [B, N, 2, K] and ``gnss_white`` [B, K].
+
+    Raises
+    ------
+    ValueError
+        If ``n_runs`` < 1, ``block`` is not a non-negative integer or ``stream`` is unknown.
+    """
     if n_runs < 1:
         raise ValueError(f"n_runs must be >= 1, got {n_runs!r}")
     key_field, key_noise = block_keys(speed_kmh, block, stream)
@@ -126,7 +155,31 @@ class BlockContext:
 
 
 def build_context(scn: Scenario, kin: Kinematics, draws: Draws) -> BlockContext:
-    """Shadowing, measurements, L3 filter and the position input of one block."""
+    """Shadowing, measurements, L3 filter and the position input of one block.
+
+    Parameters
+    ----------
+    scn : Scenario
+        The scenario (radio links, measurement noise, L3 filter, GNSS/INS error).
+    kin : Kinematics
+        Sample times and true node positions of the crossing (from
+        :func:`railradio.handover.train.kinematics`).
+    draws : Draws
+        Standard normals of the block (from :func:`draw_block` with the same ``kin``).
+
+    Returns
+    -------
+    BlockContext
+        ``zeta_db`` shadowing [dB] [B, 2, G]; ``meas_dbm`` raw RSRP measurements [dBm] and
+        ``filt_dbm`` L3-filtered RSRP [dBm], both [B, N, 2, K] (link 0 serving, 1 target);
+        ``gnss_err_m`` along-track position error [m] [B, K]; ``l3_a`` the L3 filter
+        coefficient a [1] at the measurement period.
+
+    Raises
+    ------
+    ValueError
+        If ``draws.meas_white`` is not [B, N, 2, K] for the scenario's N and ``kin``'s K.
+    """
     rd = scn.radio
     n_nodes = scn.train.n_nodes
     if draws.meas_white.shape[1:] != (n_nodes, 2, kin.n_samples):

@@ -339,7 +339,22 @@ class A3:
 
 @dataclass(frozen=True)
 class Scenario:
-    """Everything one simulation needs except the speed and the random draws."""
+    """Everything one simulation needs except the speed and the random draws.
+
+    Parameters
+    ----------
+    radio : Radio
+        The two cells, their links and the measurements (SI units: m, s, Hz, dB, dBm).
+    train : Train
+        The train's relay-AP nodes and its GNSS/INS position input.
+    execution : Execution
+        Handover execution, retries, failure rule and re-establishment.
+    joint : Joint
+        The position-power joint decision (``m`` and ``alpha`` may be ``None`` until the
+        cost grid's argmin is set with :meth:`with_weights`).
+    a3 : A3
+        The A3 event baseline.
+    """
 
     radio: Radio = field(default_factory=Radio)
     train: Train = field(default_factory=Train)
@@ -348,7 +363,25 @@ class Scenario:
     a3: A3 = field(default_factory=A3)
 
     def with_weights(self, m: int, alpha: float) -> Scenario:
-        """The same scenario with the joint policy's (m, α) set."""
+        """The same scenario with the joint policy's (m, α) set.
+
+        Parameters
+        ----------
+        m : int
+            Number of joint nodes whose deviations feed the WSLR, 1 ≤ m ≤ 16.
+        alpha : float
+            Geometric weight parameter α [1], 0 < α < 1.
+
+        Returns
+        -------
+        Scenario
+            A copy with ``joint.m = int(m)`` and ``joint.alpha = float(alpha)``.
+
+        Raises
+        ------
+        ValueError
+            If ``m`` or ``alpha`` is outside its range (from :class:`Joint`).
+        """
         return replace(self, joint=replace(self.joint, m=int(m), alpha=float(alpha)))
 
     def to_dict(self) -> dict[str, Any]:
@@ -356,10 +389,32 @@ class Scenario:
 
 
 SIM_SECTIONS = ("radio", "train", "execution", "joint", "a3")
+"""The sections of the config's ``handover`` section that make up a :class:`Scenario`."""
 
 
 def scenario_from_config(cfg: dict[str, Any]) -> Scenario:
-    """:class:`Scenario` from the config's ``handover`` section (or a subset of it)."""
+    """:class:`Scenario` from the config's ``handover`` section (or a subset of it).
+
+    Parameters
+    ----------
+    cfg : dict
+        Mapping with optional sub-mappings ``radio``, ``train``, ``execution``, ``joint``
+        and ``a3`` (:data:`SIM_SECTIONS`), each holding field values of the dataclass of the
+        same name in its units (m, s, Hz, dB, dBm, 1); a missing section or key keeps the
+        default.  ``joint.exponent_bounds`` may be a list.  Other keys of ``cfg`` are ignored.
+
+    Returns
+    -------
+    Scenario
+        The checked, frozen scenario.
+
+    Raises
+    ------
+    ValueError
+        If a value is outside its allowed range or choice set (the message names it).
+    TypeError
+        If a section holds a key that is not a field of its dataclass.
+    """
 
     def sub(cls, name):
         values = dict(cfg.get(name, {}))

@@ -82,7 +82,23 @@ def register(cls: type[Policy]) -> type[Policy]:
 
 
 def make_policy(name: str) -> Policy:
-    """The registered policy called ``name``."""
+    """The registered policy called ``name``.
+
+    Parameters
+    ----------
+    name : str
+        Policy name: ``joint``, ``a3`` or ``distance`` (any registered in :data:`POLICIES`).
+
+    Returns
+    -------
+    Policy
+        A new instance of the policy class.
+
+    Raises
+    ------
+    ValueError
+        If no policy of that name is registered.
+    """
     if name not in POLICIES:
         raise ValueError(f"policy must be one of {sorted(POLICIES)}, got {name!r}")
     return POLICIES[name]()
@@ -363,6 +379,29 @@ def run_policy(policy: Policy, ctx: BlockContext) -> dict[str, tuple]:
     """Command, execute and check ping-pong for every node crossing of the block.
 
     Returns name -> (dims, array, units, long_name), dims over ("run", "node").
+
+    Parameters
+    ----------
+    policy : Policy
+        The policy (e.g. from :func:`make_policy`).
+    ctx : BlockContext
+        The block's radio and position arrays (from
+        :func:`railradio.handover.model.build_context`).
+
+    Returns
+    -------
+    dict of str to tuple
+        name -> (dims, array, units, long_name), arrays [B, N] over ("run", "node"):
+        ``command_x_m``, ``completion_x_m`` [m]; ``command_time_s``, ``delay_s`` (NaN: failed),
+        ``delay_all_s``, ``delay_trigger_s`` [s]; ``attempts``, ``success``, ``pingpong`` [1]
+        (int8); ``rsrp_gap_db`` [dB]; plus the policy's extras (the joint policy: band edges
+        and midpoint [m] and fit over ("run",), ``trigger_gap_db`` [dB] over ("run", "node"),
+        ``conv_price`` and ``fluct`` [1] over ("run",)).
+
+    Raises
+    ------
+    ValueError
+        For the joint policy, if ``joint.m`` or ``joint.alpha`` is not set.
     """
     cmd = policy.command(ctx)
     kin = ctx.kin

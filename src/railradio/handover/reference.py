@@ -418,7 +418,31 @@ REFERENCE_POLICIES = {"joint": _joint, "a3": _a3, "distance": _distance}
 
 
 def simulate_reference(scn: Scenario, kin: Kinematics, draws: Draws, policies: tuple[str, ...]) -> dict:
-    """Outcomes per policy as arrays [B, N] (keys as :func:`railradio.handover.policies.run_policy`)."""
+    """Outcomes per policy as arrays [B, N] (keys as :func:`railradio.handover.policies.run_policy`).
+
+    Parameters
+    ----------
+    scn : Scenario
+        The scenario; the joint policy needs ``scn.joint.m`` and ``scn.joint.alpha`` set.
+    kin : Kinematics
+        Kinematics of the crossing at one speed.
+    draws : Draws
+        Standard normals of the block (the same the vectorized engine consumes).
+    policies : tuple of str
+        Policy names among ``joint``, ``a3`` and ``distance``.
+
+    Returns
+    -------
+    dict of str to dict of str to numpy.ndarray
+        Per policy, arrays [B, N]: ``k`` (first command sample), ``command_x_m``,
+        ``completion_x_m`` [m], ``attempts`` [1], ``success`` and ``pingpong`` (bool),
+        ``delay_s`` (NaN: failed), ``delay_all_s``, ``delay_trigger_s`` [s], ``rsrp_gap_db`` [dB].
+
+    Raises
+    ------
+    KeyError
+        If a policy name is not one of :data:`REFERENCE_POLICIES`.
+    """
     res = {p: [] for p in policies}
     for b in range(draws.n_runs):
         run = _Run(scn, kin, draws, b)

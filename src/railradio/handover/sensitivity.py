@@ -31,7 +31,26 @@ def variant_id(switch: str, value: Any) -> str:
 
 
 def variants(sens_cfg: dict[str, Any]) -> dict[str, dict[str, Any]]:
-    """``{"reference": {}, id: {"switch": "section.key", "value": v}, ...}`` in config order."""
+    """``{"reference": {}, id: {"switch": "section.key", "value": v}, ...}`` in config order.
+
+    Parameters
+    ----------
+    sens_cfg : dict
+        The config's sensitivity section; ``switches`` maps ``"section.key"`` (section in
+        :data:`~railradio.handover.params.SIM_SECTIONS`) to the list of values to try, in the
+        key's own unit.
+
+    Returns
+    -------
+    dict of str to dict
+        Variant id (:func:`variant_id`, ``reference`` first) -> variant: ``{}`` for the
+        reference, else ``{"switch": "section.key", "value": v}``.
+
+    Raises
+    ------
+    ValueError
+        If a switch is not ``section.key`` with a known section, or a variant id occurs twice.
+    """
     out: dict[str, dict[str, Any]] = {"reference": {}}
     for switch, values in sens_cfg.get("switches", {}).items():
         section = switch.split(".")[0]
@@ -46,7 +65,26 @@ def variants(sens_cfg: dict[str, Any]) -> dict[str, dict[str, Any]]:
 
 
 def apply_variant(scn: Scenario, variant: dict[str, Any]) -> Scenario:
-    """The scenario with the variant's switch set (ValueError from the dataclass if invalid)."""
+    """The scenario with the variant's switch set (ValueError from the dataclass if invalid).
+
+    Parameters
+    ----------
+    scn : Scenario
+        The reference scenario.
+    variant : dict
+        A variant of :func:`variants`: ``{}`` (the reference) or
+        ``{"switch": "section.key", "value": v}``.
+
+    Returns
+    -------
+    Scenario
+        ``scn`` itself for the reference, else a copy with ``section.key = value``.
+
+    Raises
+    ------
+    ValueError
+        If the key is not a field of its section, or the value fails the section's checks.
+    """
     if not variant:
         return scn
     section, key = variant["switch"].split(".")
@@ -57,7 +95,20 @@ def apply_variant(scn: Scenario, variant: dict[str, Any]) -> Scenario:
 
 
 def affected_policies(variant: dict[str, Any], policies: tuple[str, ...]) -> tuple[str, ...]:
-    """Policies whose outcome the variant can change (all for the reference)."""
+    """Policies whose outcome the variant can change (all for the reference).
+
+    Parameters
+    ----------
+    variant : dict
+        A variant of :func:`variants` (``{}`` for the reference).
+    policies : tuple of str
+        The policies of the study.
+
+    Returns
+    -------
+    tuple of str
+        Those of ``policies`` that :data:`AFFECTS` lists for the variant's section, in order.
+    """
     if not variant:
         return tuple(policies)
     section = variant["switch"].split(".")[0]

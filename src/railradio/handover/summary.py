@@ -22,7 +22,34 @@ MEANS = ("delay_ms", "delay_all_ms", "delay_trigger_ms", "rsrp_gap_db", "attempt
 
 
 def policy_metrics(ds: xr.Dataset, policy: str, level: float = 0.95) -> dict[str, float]:
-    """Metrics of one policy from a per-handover dataset (variables ``<policy>__<name>``)."""
+    """Metrics of one policy from a per-handover dataset (variables ``<policy>__<name>``).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        Per-handover outcomes over (``run``, ``node``) of
+        :func:`railradio.handover.engine.simulate_blocks` (shards concatenated along ``run``).
+    policy : str
+        Policy name, e.g. ``joint``, ``a3`` or ``distance``.
+    level : float, optional
+        Confidence level of the Wilson intervals, in (0, 1) (default 0.95).
+
+    Returns
+    -------
+    dict of str to float
+        For the rates ``success``, ``pingpong``, ``retried`` [1]: the rate and ``_se``,
+        ``_lo``, ``_hi`` (interval), ``_neff`` (effective sample size); for the means
+        ``delay_ms``, ``delay_all_ms``, ``delay_trigger_ms`` [ms], ``rsrp_gap_db`` [dB]
+        (of the absolute RSRP-GAP) and ``attempts`` [1]: the mean and ``_se``; ``n_handovers`` and
+        ``n_runs`` [1].
+
+    Raises
+    ------
+    ValueError
+        If ``level`` is not in (0, 1).
+    KeyError
+        If a variable ``<policy>__<name>`` is missing.
+    """
     v = {
         name: ds[f"{policy}__{name}"].values
         for name in ("success", "pingpong", "attempts", "delay_s", "delay_all_s", "delay_trigger_s", "rsrp_gap_db")
@@ -87,7 +114,35 @@ def metrics_dataset(
     metrics: dict[str, dict[str, dict[str, float]]], dim: str, dim_attrs: dict, coord_values: list
 ) -> xr.Dataset:
     """Dataset over (policy, ``dim``) from metrics[group][policy][name], groups in insertion
-    order labelled by ``coord_values``."""
+    order labelled by ``coord_values``.
+
+    Parameters
+    ----------
+    metrics : dict
+        metrics[group][policy][name] -> value, from :func:`policy_metrics`; every group holds
+        the same policies and names as the first.
+    dim : str
+        Name of the group dimension, e.g. ``speed_kmh`` or ``variant``.
+    dim_attrs : dict
+        Attributes (``units``, ``long_name``) of the ``dim`` coordinate.
+    coord_values : list
+        One label per group (e.g. speeds in km/h), in the order of ``metrics``.
+
+    Returns
+    -------
+    xarray.Dataset
+        One variable per metric name over (``policy``, ``dim``) with ``units`` and
+        ``long_name`` from :data:`UNITS` (e.g. ``success`` [1], ``delay_ms`` [ms],
+        ``rsrp_gap_db`` [dB], their ``_se``/``_lo``/``_hi``/``_neff``); coordinates
+        ``policy`` and ``dim``.
+
+    Raises
+    ------
+    ValueError
+        If ``coord_values`` does not label every group.
+    KeyError
+        If a metric name is not in :data:`UNITS` (with its suffixes).
+    """
     keys = list(metrics)
     if len(keys) != len(coord_values):
         raise ValueError("coord_values must label every group of metrics")

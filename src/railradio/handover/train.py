@@ -50,7 +50,28 @@ class Kinematics:
 
 
 def kinematics(scn: Scenario, speed_kmh: float) -> Kinematics:
-    """:class:`Kinematics` of a crossing at ``speed_kmh``."""
+    """:class:`Kinematics` of a crossing at ``speed_kmh``.
+
+    Parameters
+    ----------
+    scn : Scenario
+        The scenario (cell spacing, measurement period T_m, nodes and their spacing,
+        shadowing grid step).
+    speed_kmh : float
+        Train speed [km/h], 1 ≤ v ≤ 1000.
+
+    Returns
+    -------
+    Kinematics
+        ``speed_m_s`` [m/s], ``period_s`` = T_m [s], ``n_samples`` K (samples from t = 0 until
+        the last node reaches the target RRH), ``node_offsets_m`` [m] [N] and the shadowing
+        ``grid`` spanning the nodes' positions plus margins.
+
+    Raises
+    ------
+    ValueError
+        If ``speed_kmh`` is not a finite number in 1–1000 km/h.
+    """
     v = check_speed(speed_kmh)
     tr, rd = scn.train, scn.radio
     train_length = tr.node_spacing_m * (tr.n_nodes - 1)

@@ -38,7 +38,18 @@ INTEGER_SAMPLE_SIGMA_M = SPEED_OF_LIGHT_M_S / SAMPLE_RATE_HZ / np.sqrt(12)
 
 
 def toa_crb_s(e_over_n0: NDArray) -> NDArray[np.float64]:
-    """σ_τ bound [s] for an energy-to-noise-density ratio E/N0 (linear; inf where 0)."""
+    """σ_τ bound [s] for an energy-to-noise-density ratio E/N0 (linear; inf where 0).
+
+    Parameters
+    ----------
+    e_over_n0 : array_like
+        E/N0 (linear, 1; ≥ 0), e.g. :func:`burst_e_over_n0`.
+
+    Returns
+    -------
+    numpy.ndarray
+        Lower bound on the TOA standard deviation, s (same shape; inf where E/N0 = 0).
+    """
     with np.errstate(divide="ignore"):
         return 1.0 / (2 * np.pi * BETA_RMS_HZ * np.sqrt(2.0 * np.asarray(e_over_n0, dtype=float)))
 
@@ -72,7 +83,20 @@ def detected_blocks(e_over_n0_b: NDArray) -> NDArray[np.bool_]:
 
 def burst_e_over_n0(links, n_chains: int | None = None) -> NDArray[np.float64]:
     """[links] Σ_b E_b/N0_b over each link's detected blocks (0 when none is): the TOA
-    information of the burst, :func:`toa_crb_s` of it the bound."""
+    information of the burst, :func:`toa_crb_s` of it the bound.
+
+    Parameters
+    ----------
+    links : railradio.nr.synthesis.Links
+        The epoch's links (amplitudes, beam gains, noise PSD [W/Hz], receive chains).
+    n_chains : int or None
+        Receive chains whose thermal noise adds up (``None``: ``links.n_chains``).
+
+    Returns
+    -------
+    numpy.ndarray
+        [links] Σ_b E_b/N0_b (linear, 1).
+    """
     e = block_e_over_n0(links, n_chains)
     return np.where(detected_blocks(e), e, 0.0).sum(axis=1)
 
@@ -80,7 +104,31 @@ def burst_e_over_n0(links, n_chains: int | None = None) -> NDArray[np.float64]:
 def peb_m(rrh_xy: NDArray, x_m: float, dh_m: float, sigma_r_m: NDArray, sigma_theta_rad: float) -> float:
     """Snapshot 2-D position error [m] of the Fisher information of RRHs at ``rrh_xy`` [n, 2]
     with range and angle error levels ``sigma_r_m``, ``sigma_theta_rad`` (a bound when those
-    are bounds, a prediction when they are measured)."""
+    are bounds, a prediction when they are measured).
+
+    Parameters
+    ----------
+    rrh_xy : numpy.ndarray
+        [n, 2] RRH positions (along-track x, lateral y), m.
+    x_m : float
+        Train position along the track (y = 0), m.
+    dh_m : float
+        RRH height above the train antenna, m.
+    sigma_r_m : numpy.ndarray
+        [n] range error standard deviations, m (> 0).
+    sigma_theta_rad : float
+        AOD error standard deviation, rad (> 0).
+
+    Returns
+    -------
+    float
+        sqrt(trace J⁻¹), m.
+
+    Raises
+    ------
+    numpy.linalg.LinAlgError
+        When the Fisher information is singular.
+    """
     d = np.array([x_m, 0.0])[None, :] - rrh_xy
     rho = np.hypot(d[:, 0], d[:, 1])
     r3 = np.sqrt(rho**2 + dh_m**2)
@@ -94,7 +142,20 @@ def peb_m(rrh_xy: NDArray, x_m: float, dh_m: float, sigma_r_m: NDArray, sigma_th
 
 def change_epochs(phases, dt_s: float) -> NDArray[np.int64]:
     """First epoch of every trajectory phase after the first (the acceleration changes
-    just before it); ``phases`` as in :class:`railradio.nr.geometry.Trajectory`."""
+    just before it); ``phases`` as in :class:`railradio.nr.geometry.Trajectory`.
+
+    Parameters
+    ----------
+    phases : sequence of (float, float)
+        ``[(duration s, acceleration m/s²), ...]``.
+    dt_s : float
+        Epoch interval, s.
+
+    Returns
+    -------
+    numpy.ndarray of int64
+        [len(phases) - 1] epoch indices.
+    """
     ends = np.cumsum([d for d, _ in phases])[:-1]
     return np.ceil(ends / dt_s - 1e-9).astype(np.int64)
 
@@ -120,6 +181,39 @@ def pcrb_m(
     With q = 0 and the true trajectory's phase changes this is the bound of a genie that
     knows when the acceleration changes — a lower bound for any tracker of this
     piecewise-constant-acceleration trajectory [ours].
+
+    Parameters
+    ----------
+    rrh_xy_seq : list of numpy.ndarray
+        Per epoch, the [n_k, 2] positions (x, y) of the RRHs measured, m (n_k may be 0: no update).
+    x_true : numpy.ndarray
+        [epoch] true along-track positions, m.
+    dh_m : float
+        RRH height above the train antenna, m.
+    sigma_toa_s_seq : list of numpy.ndarray
+        Per epoch, the [n_k] TOA error standard deviations, s.
+    sigma_theta_rad : float
+        AOD error standard deviation, rad.
+    dt_s : float
+        Epoch interval, s.
+    q : float
+        White-jerk intensity, m² s⁻⁵ (≥ 0).
+    p0 : numpy.ndarray
+        [6, 6] prior covariance of the state [x, y, v_x, v_y, a_x, a_y] (SI units squared).
+    reset_epochs : numpy.ndarray or None
+        Epochs with an unknown acceleration jump.
+    reset_acc_sigma : float
+        Prior σ of that jump per axis, m/s².
+
+    Returns
+    -------
+    numpy.ndarray
+        [epoch] sqrt(P_xx + P_yy) of the bound, m.
+
+    Raises
+    ------
+    ValueError
+        When ``q`` < 0.
     """
     if q < 0:
         raise ValueError(f"q must be >= 0, got {q!r}")

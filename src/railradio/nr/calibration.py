@@ -16,7 +16,27 @@ from railradio.nr.tracking import TrackerConfig, nees_position, track
 def selected(ds, strength: str = "peak", n_use: int = 3) -> tuple[NDArray, NDArray]:
     """The candidates a receiver measures per epoch: ``(order, ok)``, [epoch, n_use] column
     indices of the ``n_use`` strongest by ``strength`` among those with an AOD and a TOA,
-    and whether each holds a measurement."""
+    and whether each holds a measurement.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        One receiver's estimates (a :func:`railradio.nr.simulate.simulate_epochs` dataset
+        selected at one ``receiver``): ``aod_hat`` [rad], ``toa_hat`` [s], their truths
+        ``aod_true``, ``toa_true``, and the strength variables, dims (``epoch``, ``cand``).
+    strength : str
+        Variable ranking the candidates (the receiver's selection): ``"peak"`` (combined
+        correlation peak), ``"ss_rsrp"`` or ``"best_score"``.
+    n_use : int
+        Candidates measured per epoch.
+
+    Returns
+    -------
+    order : numpy.ndarray of int
+        [epoch, n_use] candidate (``cand``) indices, strongest first.
+    ok : numpy.ndarray of bool
+        [epoch, n_use] whether each holds an AOD and a TOA.
+    """
     ok = np.isfinite(ds["aod_hat"].values) & np.isfinite(ds["toa_hat"].values)
     s = np.where(ok, np.nan_to_num(ds[strength].values, nan=-np.inf), -np.inf)
     order = np.argsort(-s, axis=1)[:, :n_use]
@@ -29,7 +49,31 @@ def measurement_errors(
     """AOD [rad, wrapped] and TOA range [m] errors of the measurements the tracker would use
     (the ``n_use`` strongest detected candidates per epoch); ``flat=False`` returns
     [epoch, n_use] arrays with NaN where fewer were detected. ``with_distance`` also
-    returns (flat only) the true 3-D distances [m] of those measurements."""
+    returns (flat only) the true 3-D distances [m] of those measurements.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        One receiver's estimates (a :func:`railradio.nr.simulate.simulate_epochs` dataset
+        selected at one ``receiver``): ``aod_hat`` [rad], ``toa_hat`` [s], their truths
+        ``aod_true``, ``toa_true``, and the strength variables, dims (``epoch``, ``cand``).
+        Also ``d3d`` [m] with ``with_distance``.
+    strength : str
+        Variable ranking the candidates (the receiver's selection): ``"peak"`` (combined
+        correlation peak), ``"ss_rsrp"`` or ``"best_score"``.
+    n_use : int
+        Candidates measured per epoch.
+    flat : bool
+        Return the detected errors as 1-D arrays (True) or [epoch, n_use] arrays (False).
+    with_distance : bool
+        Also return the true 3-D distances, m (only with ``flat``).
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``(e_aod_rad, e_range_m)`` (AOD error [rad] wrapped to (-π, π], range error c·Δτ [m]),
+        plus ``d3d_m`` [m] with ``with_distance``.
+    """
     aod = ds["aod_hat"].values
     toa = ds["toa_hat"].values
     order, sel_ok = selected(ds, strength, n_use)
@@ -159,6 +203,53 @@ def calibrate(
     costs, whether the winner sits on the searched range's edge and whether the cost is
     monotone toward it (the search reached the limit with the cost falling at every decade
     from the grid's edge on: no q is identified, the finding to report instead of a q).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        One receiver's estimates (a :func:`railradio.nr.simulate.simulate_epochs` dataset
+        selected at one ``receiver``): ``aod_hat`` [rad], ``toa_hat`` [s], their truths
+        ``aod_true``, ``toa_true``, and the strength variables, dims (``epoch``, ``cand``).
+    variant : str
+        Tracker variant: ``aod``, ``toa`` or ``aod_toa``.
+    rrh_x : numpy.ndarray
+        Along-track positions of the RRHs, m (``Deployment.x_m``).
+    rrh_y : float
+        Lateral offset of the RRHs from the track, m (``Deployment.offset_m``).
+    dh_m : float
+        RRH height above the train antenna, m (``h_bs_m - h_ut_m``).
+    dt_s : float
+        Epoch interval, s.
+    q_grid : numpy.ndarray
+        Candidate white-jerk intensities q, m² s⁻⁵ (must not be empty).
+    gate : bool
+        Whether the tracker runs with the χ² innovation gate.
+    strength : str
+        Variable ranking the candidates (the receiver's selection): ``"peak"`` (combined
+        correlation peak), ``"ss_rsrp"`` or ``"best_score"``.
+    fs_hz : float
+        Sample rate F_s, Hz, of the TOA quantization floor 1/(√12 F_s).
+    distance_edges_m : tuple of float
+        Increasing 2-D train–RRH distance bin edges, m (empty: one W for all distances).
+    min_per_bin : int
+        Fewest measurements for a bin's own σ values.
+    gate_prob : float
+        χ² gate probability (1), in (0, 1).
+    search : dict or None
+        Filled with the q search record (see above) when given.
+    start_speed_sigma_m_s : float
+        σ of the initial speed about 0, m/s (> 0).
+
+    Returns
+    -------
+    TrackerConfig
+        The calibrated tracker: ``q`` [m² s⁻⁵], ``sigma_aod_rad`` [rad], ``sigma_toa_s`` [s] and
+        any per-bin values.
+
+    Raises
+    ------
+    ValueError
+        When ``q_grid`` is empty, or (from :class:`TrackerConfig`) a calibrated σ is not > 0.
     """
     e_aod, e_rng, d3 = measurement_errors(ds, strength, with_distance=True)
     dist = np.sqrt(np.maximum(d3**2 - dh_m**2, 0.0))  # 2-D, as the tracker predicts it

@@ -22,7 +22,26 @@ from railradio.nr.workflow import sim_config
 def merged_cases(nr_cfg: dict[str, Any], nr_schema: dict[str, Any]) -> dict[str, dict[str, Any]]:
     """Each sensitivity case as a whole nr config: the main nr config (without its
     ``sensitivity`` section) with the case's override merged in, validated against the nr
-    section's schema (a bad value names ``nr.sensitivity.cases.<case>.<key>``)."""
+    section's schema (a bad value names ``nr.sensitivity.cases.<case>.<key>``).
+
+    Parameters
+    ----------
+    nr_cfg : dict
+        The validated ``nr`` section of the workflow config, with ``sensitivity.cases``.
+    nr_schema : dict
+        The JSON schema of the ``nr`` section.
+
+    Returns
+    -------
+    dict of str to dict
+        Case name -> its whole, validated nr config (config order).
+
+    Raises
+    ------
+    railradio.config.ConfigError
+        From :func:`railradio.config.validate_config` for an override that breaks the
+        schema.
+    """
     base = {k: v for k, v in nr_cfg.items() if k != "sensitivity"}
     return {
         case: validate_config(deep_merge(base, override), nr_schema, root=f"nr.sensitivity.cases.{case}")
@@ -32,19 +51,64 @@ def merged_cases(nr_cfg: dict[str, Any], nr_schema: dict[str, Any]) -> dict[str,
 
 def case_epochs(case_cfg: dict, sens: dict) -> int:
     """Evaluation epochs of a case: ``sens["epochs"]``, fewer where the case sets
-    ``max_epochs`` or its trajectory is shorter."""
+    ``max_epochs`` or its trajectory is shorter.
+
+    Parameters
+    ----------
+    case_cfg : dict
+        The case's merged nr config (:func:`merged_cases`).
+    sens : dict
+        The ``nr.sensitivity`` section (uses ``epochs``).
+
+    Returns
+    -------
+    int
+        Number of evaluation epochs (1, dt_s apart).
+    """
     n = sens["epochs"] if case_cfg["max_epochs"] is None else min(sens["epochs"], case_cfg["max_epochs"])
     return min(n, scenario_from_config(case_cfg).trajectory.n_epochs)
 
 
 def case_cal_epochs(case_cfg: dict, main_cfg: dict) -> int:
-    """Calibration epochs of a case: its ``calibration.epochs``, at most the main run's."""
+    """Calibration epochs of a case: its ``calibration.epochs``, at most the main run's.
+
+    Parameters
+    ----------
+    case_cfg : dict
+        The case's merged nr config.
+    main_cfg : dict
+        The main ``nr`` config.
+
+    Returns
+    -------
+    int
+        Number of calibration epochs (1).
+    """
     return min(case_cfg["calibration"]["epochs"], main_cfg["calibration"]["epochs"])
 
 
 def case_n_shards(case_cfg: dict, main_cfg: dict, sens: dict, real: str, n_cal_shards: int) -> int:
     """Shards of a case's own run (``real`` "cal" or "r0"): as many per epoch as a
-    full-length case has, at least one."""
+    full-length case has, at least one.
+
+    Parameters
+    ----------
+    case_cfg : dict
+        The case's merged nr config.
+    main_cfg : dict
+        The main ``nr`` config.
+    sens : dict
+        The ``nr.sensitivity`` section (uses ``epochs`` and ``n_shards``).
+    real : str
+        ``"cal"`` (the calibration run) or anything else (``"r0"``, the evaluation run).
+    n_cal_shards : int
+        Shards of the main calibration run.
+
+    Returns
+    -------
+    int
+        Number of shards, in ``1..shards`` of a full-length run.
+    """
     if real == "cal":
         n, n_full, shards = case_cal_epochs(case_cfg, main_cfg), main_cfg["calibration"]["epochs"], n_cal_shards
     else:
@@ -58,7 +122,30 @@ def case_inputs(
     """Estimate shards read by a case's calibration (``real="cal"``) or track (``"r0"``):
     the main run's shards covering the case's epochs when the case simulates the same
     bursts and needs no more epochs than the main run has, else those of the first case in
-    ``cases`` (config order) with the same bursts and epochs, else the case's own."""
+    ``cases`` (config order) with the same bursts and epochs, else the case's own.
+
+    Parameters
+    ----------
+    case : str
+        The case name (a key of ``cases``).
+    cases : dict
+        Case name -> merged nr config (:func:`merged_cases`), config order.
+    main_cfg : dict
+        The main ``nr`` config.
+    sens : dict
+        The ``nr.sensitivity`` section.
+    real : str
+        ``"cal"`` (calibration run) or ``"r0"`` (evaluation run).
+    n_main_epochs : int
+        Evaluation epochs of the main run.
+    n_cal_shards : int
+        Shards of the main calibration run.
+
+    Returns
+    -------
+    list of str
+        Paths of the estimate shards (``results/nr/.../estimates/<real>/s<k>.nc``), shard order.
+    """
     cfg = cases[case]
 
     def epochs(c: dict) -> int:
@@ -79,5 +166,16 @@ def case_inputs(
 
 
 def sync_sigma_s(case_cfg: dict) -> float:
-    """RRH clock spread σ [s] of a case (0 without ``sync``)."""
+    """RRH clock spread σ [s] of a case (0 without ``sync``).
+
+    Parameters
+    ----------
+    case_cfg : dict
+        The case's merged nr config (with its ``sync`` section).
+
+    Returns
+    -------
+    float
+        Standard deviation of the RRH clock offsets, s.
+    """
     return float(case_cfg["sync"]["rrh_sigma_s"])

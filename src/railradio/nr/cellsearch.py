@@ -109,7 +109,20 @@ def neighbour_list(dep: Deployment, anchor: int, n: int) -> NDArray[np.int64]:
 
 def warmup_start(epoch: int, acquire_every: int) -> int:
     """The fixed acquisition epoch at or before ``epoch``: where a run that must produce
-    ``epoch`` starts (the epochs in between are replayed, not reported)."""
+    ``epoch`` starts (the epochs in between are replayed, not reported).
+
+    Parameters
+    ----------
+    epoch : int
+        The epoch to produce (≥ 0).
+    acquire_every : int
+        Period of the fixed acquisition epochs, epochs (≥ 1).
+
+    Returns
+    -------
+    int
+        The largest multiple of ``acquire_every`` not above ``epoch``.
+    """
     return int(epoch) - int(epoch) % int(acquire_every)
 
 

@@ -98,7 +98,29 @@ class Correlator:
         :data:`CA_GUARD_FULL` full-rate lags). ``template_decimation``: the rate F_s/D_t of
         the receiver's front end when the correlation runs faster than it (the reference
         waveform is built at F_s/D_t and band-limited-interpolated to ``cfg``'s rate: the
-        correlation is then the band-limited interpolation of the front end's own)."""
+        correlation is then the band-limited interpolation of the front end's own).
+
+        Parameters
+        ----------
+        cfg : ReceiverConfig
+            The receiver configuration; its decimation D sets the correlation rate F_s/D (lags).
+        detector : str
+            ``"seed"``, ``"cfar"`` or ``"cacfar"``.
+        pfa : float
+            False-alarm probability per block of the CFAR tests, in (0, 1).
+        ca_window : int or None
+            CA-CFAR reference lags on each side (lags at F_s/D).
+        ca_guard : int or None
+            CA-CFAR guard lags on each side (lags at F_s/D).
+        template_decimation : int or None
+            D_t, a multiple of D (None: D).
+
+        Raises
+        ------
+        ValueError
+            When ``detector`` is unknown, ``template_decimation`` is not a multiple of D, or
+            ``pfa`` is outside (0, 1).
+        """
         if detector not in DETECTORS:
             raise ValueError(f"detector must be one of {DETECTORS}, got {detector!r}")
         d = cfg.decimation

@@ -106,7 +106,19 @@ COMPARISONS = {
 
 
 def comparisons(scn: Scenario) -> dict[str, Comparison]:
-    """The comparisons that apply to the scenario's production path."""
+    """The comparisons that apply to the scenario's production path.
+
+    Parameters
+    ----------
+    scn : Scenario
+        The scenario whose production path is measured.
+
+    Returns
+    -------
+    dict of str to Comparison
+        The entries of :data:`COMPARISONS` without ``far_taps`` (no far-tap shortcut:
+        ``full_channel_range_m`` infinite) and without ``spill`` (``exact_spill`` set).
+    """
     skip = set() if np.isfinite(scn.full_channel_range_m) else {"far_taps"}
     if scn.exact_spill:
         skip.add("spill")
@@ -170,10 +182,16 @@ class FidelityRun:
 
     Parameters
     ----------
-    scn, seed, key
+    scn, seed, key : Scenario, int, tuple of int
         The scenario, the config seed and the realization's spawn key (as the main run's).
-    selection
+    selection : dict of str to str
         Receiver name -> the strength it selects its cells by (``nr.receiver.selection``).
+
+    Raises
+    ------
+    ValueError
+        When the production path is not decimated (``scn.receiver.decimation`` == 1), or a
+        synthesis decimation does not divide the front end's (:class:`Synthesis`).
     """
 
     def __init__(self, scn: Scenario, seed: int, key: tuple[int, ...], selection: dict[str, str]):
@@ -248,7 +266,25 @@ class FidelityRun:
         """Every variant's decisions at ``epoch`` on the candidate list ``cand`` (the main
         run's cell search there) with the network's serving RRH ``serving`` (the main run's
         serving-cell state there). Returns ``{"decisions": {variant: {receiver: ...}},
-        "truth": {...}, "seconds": {variant: s}}``."""
+        "truth": {...}, "seconds": {variant: s}}``.
+
+        Parameters
+        ----------
+        epoch : int
+            Epoch index of the main run's realization.
+        cand : numpy.ndarray of int64
+            RRH indices of the main run's candidate list at ``epoch``.
+        serving : int
+            The network's serving RRH there.
+
+        Returns
+        -------
+        dict
+            ``decisions`` (variant -> receiver -> decisions), ``truth``, ``seconds`` (variant ->
+            computing time, s), ``detector`` (setting -> ``toa`` [full-rate samples], ``aod`` [rad],
+            ``n_detected`` of our detector with one constant changed; empty without a ``robust``
+            receiver), ``interference_false_alarms`` (on interference-only bursts), ``cand``, ``epoch``.
+        """
         ep = self._inputs(epoch, cand, serving)
         bursts = self._bursts(ep)
         dec, detector, fa_int = self._decisions(ep, bursts)
@@ -407,7 +443,29 @@ def _subset_links(links, keep: NDArray[np.bool_]):
 def sample_epochs(n_run: int, n: int, change_epochs: NDArray, speed_m_s: NDArray) -> NDArray[np.int64]:
     """``n`` epochs of a run of ``n_run``: the acceleration changes (``change_epochs``, those
     inside the run) and the epoch of the highest speed, the rest spread evenly from the first
-    epoch to the last (a rule fixed before any result)."""
+    epoch to the last (a rule fixed before any result).
+
+    Parameters
+    ----------
+    n_run : int
+        Epochs of the run.
+    n : int
+        Epochs to pick, in ``1..n_run``.
+    change_epochs : numpy.ndarray
+        Epochs of the acceleration changes (:func:`railradio.nr.bounds.change_epochs`).
+    speed_m_s : numpy.ndarray
+        [epoch] true speed, m/s.
+
+    Returns
+    -------
+    numpy.ndarray of int64
+        ``n`` distinct epoch indices, increasing.
+
+    Raises
+    ------
+    ValueError
+        When ``n`` is outside ``1..n_run``.
+    """
     if not 1 <= n <= n_run:
         raise ValueError(f"n must be in 1..{n_run}, got {n!r}")
     forced = {int(e) for e in np.asarray(change_epochs) if 0 <= e < n_run}
@@ -426,7 +484,22 @@ def sample_epochs(n_run: int, n: int, change_epochs: NDArray, speed_m_s: NDArray
 def check_production(res: dict, main_row, receivers: list[str]) -> None:
     """Raise when the production path re-run here (``own_noise``: its own draws) differs from
     the main run's estimates at that epoch (``main_row``: one epoch of its shards) — the
-    comparisons would then not be about the production path."""
+    comparisons would then not be about the production path.
+
+    Parameters
+    ----------
+    res : dict
+        One epoch's result of :meth:`FidelityRun.epoch` (with ``own_noise`` decisions).
+    main_row : xarray.Dataset
+        The main run's estimates at that epoch (``toa_hat`` [s], ``aod_hat`` [rad], per receiver).
+    receivers : list of str
+        Receiver names, in the order of ``main_row``'s ``receiver`` dim.
+
+    Raises
+    ------
+    ValueError
+        When a receiver's TOA (within 1e-6 samples) or AOD differs from the main run's.
+    """
     from railradio.nr.numerology import SAMPLE_RATE_HZ as FS
 
     for j, r in enumerate(receivers):

@@ -13,7 +13,23 @@ _DIMS = ("epoch", "cand")
 
 def to_dataset(results: list[dict], receivers: list[str]):
     """The per-epoch results of :meth:`railradio.nr.fidelity.FidelityRun.epoch` as an
-    :class:`xarray.Dataset`."""
+    :class:`xarray.Dataset`.
+
+    Parameters
+    ----------
+    results : list of dict
+        Per-epoch results of :meth:`railradio.nr.fidelity.FidelityRun.epoch` (same variants,
+        receivers and candidate count).
+    receivers : list of str
+        Receiver names.
+
+    Returns
+    -------
+    xarray.Dataset
+        Per (``variant``, ``receiver``, ``epoch``, ``cand``): ``detected`` (per ``block``), ``selected``,
+        ``toa`` [full-rate samples], ``aod`` [rad]; the truth (``d3d`` [m], ``aod_true`` [rad],
+        ``in_range``), per-variant costs (``seconds`` [s]) and the detector-setting variables.
+    """
     import xarray as xr
 
     variants = list(results[0]["decisions"])
@@ -126,7 +142,21 @@ def _cost_and_detector_vars(
 
 
 def from_dataset(ds) -> tuple[dict, dict]:
-    """``(stacked, truth)`` for :func:`railradio.nr.fidelity_stats.summarize` from a (concatenated) fidelity dataset."""
+    """``(stacked, truth)`` for :func:`railradio.nr.fidelity_stats.summarize` from a (concatenated) fidelity dataset.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A fidelity dataset (:func:`to_dataset`, possibly several concatenated along ``epoch``).
+
+    Returns
+    -------
+    stacked : dict
+        Variant -> receiver -> ``detected``, ``selected`` (bool), ``toa`` [full-rate samples],
+        ``aod`` [rad] arrays.
+    truth : dict
+        ``d3d`` [m], ``aod`` [rad] and ``in_range`` (bool), [epoch, cand].
+    """
     stacked = {}
     for v in ds["variant"].values:
         stacked[str(v)] = {}

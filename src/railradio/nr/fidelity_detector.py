@@ -60,7 +60,24 @@ def noise_false_alarms(
 ) -> dict[str, tuple[int, int]]:
     """False alarms of every receiver on noise-only bursts: ``{receiver: (detections,
     block tests)}``. Each burst is complex white noise at the front end's rate with the
-    production burst's length, tested for ``n_cells`` cells drawn from the deployment."""
+    production burst's length, tested for ``n_cells`` cells drawn from the deployment.
+
+    Parameters
+    ----------
+    scn : Scenario
+        The scenario (receivers, deployment, decimation).
+    n_bursts : int
+        Noise-only bursts.
+    rng : numpy.random.Generator
+        Generator of the noise and the cells (keyed by :data:`NOISE_ONLY_ID`).
+    n_cells : int
+        Cells tested per burst (at most the deployment's).
+
+    Returns
+    -------
+    dict of str to tuple of (int, int)
+        Receiver -> (detections, block tests).
+    """
     rx = Receivers(
         scn,
         {n: "peak" for n, _, _ in [("seed", None, None)] + list(scn.variants)},

@@ -29,7 +29,24 @@ COMPARISON_LABEL = {
 
 
 def key_numbers(summary: dict, comps: dict[str, Comparison], n_epochs: int, seconds: dict[str, float]) -> dict:
-    """Key numbers ``nr.fidelity.*`` from :func:`railradio.nr.fidelity_stats.summarize`'s output."""
+    """Key numbers ``nr.fidelity.*`` from :func:`railradio.nr.fidelity_stats.summarize`'s output.
+
+    Parameters
+    ----------
+    summary : dict
+        :func:`railradio.nr.fidelity_stats.summarize`'s output.
+    comps : dict of str to Comparison
+        The comparisons measured (:func:`railradio.nr.fidelity.comparisons`).
+    n_epochs : int
+        Epochs on which every shortcut was measured.
+    seconds : dict of str to float
+        Variant -> mean computing time per epoch, s.
+
+    Returns
+    -------
+    dict of str to dict
+        Key name -> its JSON entry (:meth:`railradio.keynumbers.KeySpec.entry`).
+    """
     from railradio.keynumbers import KeySpec
 
     out = {}
@@ -106,7 +123,21 @@ def key_numbers(summary: dict, comps: dict[str, Comparison], n_epochs: int, seco
 def detector_key_numbers(ds, noise_fa: dict[str, tuple[int, int]]) -> dict:
     """Key numbers ``nr.detector.*``: the false-alarm rates per block on noise-only bursts and
     on interference-only bursts (the anchor silent), and our detector's constants one at a
-    time (the TOA-within-5-m share and the detected blocks per candidate in range)."""
+    time (the TOA-within-5-m share and the detected blocks per candidate in range).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        The fidelity dataset (:func:`railradio.nr.fidelity_dataset.to_dataset`).
+    noise_fa : dict of str to tuple of (int, int)
+        Receiver -> (false alarms, block tests) on noise-only bursts
+        (:func:`railradio.nr.fidelity_detector.noise_false_alarms`).
+
+    Returns
+    -------
+    dict of str to dict
+        Key name -> its JSON entry (:meth:`railradio.keynumbers.KeySpec.entry`).
+    """
     from railradio.handover.stats import clustered_rate, wilson_interval
     from railradio.keynumbers import KeySpec
 

@@ -95,7 +95,30 @@ def summarize(
     distributions' comparison: the two-sample KS p-values of the TOA range and AOD errors,
     the TOA-within-5-m shares and their difference with a paired epoch-bootstrap interval.
 
-    ``truth``: ``d3d`` and ``aod`` [E, C] (true 3-D distance and AOD), ``in_range`` [E, C]."""
+    ``truth``: ``d3d`` and ``aod`` [E, C] (true 3-D distance and AOD), ``in_range`` [E, C].
+
+    Parameters
+    ----------
+    stacked : dict
+        Variant -> receiver -> ``detected``, ``selected``, ``toa`` [full-rate samples], ``aod``
+        [rad] (:func:`railradio.nr.fidelity_dataset.from_dataset`).
+    truth : dict
+        ``d3d`` [m], ``aod`` [rad], ``in_range`` (bool), each [E, C].
+    receivers : list of str
+        Receiver names.
+    comps : dict of str to Comparison or None
+        Comparisons to measure (``None``: all of :data:`railradio.nr.fidelity.COMPARISONS`); those
+        whose variant is absent from ``stacked`` are skipped.
+    seed : int
+        Seed of the bootstrap generator.
+
+    Returns
+    -------
+    dict
+        Comparison -> receiver -> ``{decision: {"frac", "lo", "hi", "n"}}`` (shares, 1) and
+        ``toa_ks_p``, ``aod_ks_p``, ``within5_off``, ``within5_base``, ``within5_diff``,
+        ``within5_diff_lo``, ``within5_diff_hi`` (1).
+    """
     from scipy.stats import ks_2samp
 
     from railradio.handover.stats import clustered_rate

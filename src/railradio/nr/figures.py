@@ -23,6 +23,17 @@ def _cdf(ax, values, **kw):
 
 
 def plot_trajectory(traj: xr.Dataset, pdf: str, png: str) -> None:
+    """The train's trajectory: position [km] and speed [km/h] against time.
+
+    Parameters
+    ----------
+    traj : xarray.Dataset
+        ``t`` [s], ``x`` [m] and ``v`` [m/s] per epoch (the ``nr_trajectory`` rule's output).
+    pdf : str
+        Path of the PDF figure.
+    png : str
+        Path of the PNG copy.
+    """
     fig, ax = plotting.figure()
     ax.plot(traj["t"], traj["x"] / 1e3, label="position")
     ax.set_xlabel("time [s]")
@@ -36,7 +47,18 @@ def plot_trajectory(traj: xr.Dataset, pdf: str, png: str) -> None:
 
 
 def plot_burst_correlation(samples: xr.Dataset, pdf: str, png: str) -> None:
-    """|r̃_i[k]| of the nearest RRH for all SS blocks of one burst, side by side."""
+    """|r̃_i[k]| of the nearest RRH for all SS blocks of one burst, side by side.
+
+    Parameters
+    ----------
+    samples : xarray.Dataset
+        A :func:`railradio.nr.simulate.simulate_epochs` dataset with ``corr_sample`` (dims
+        ``cand``, ``block``, ``lag``) and ``corr_sample_epoch``.
+    pdf : str
+        Path of the PDF figure.
+    png : str
+        Path of the PNG copy.
+    """
     corr = samples["corr_sample"].isel(cand=0).values  # [block, lag]
     fig, ax = plotting.figure(figsize=(6.4, 3.0))
     n_b, n_k = corr.shape
@@ -48,6 +70,18 @@ def plot_burst_correlation(samples: xr.Dataset, pdf: str, png: str) -> None:
 
 
 def plot_measurement_cdf(tracks: list[xr.Dataset], pdf: str, png: str) -> None:
+    """CDFs of the measured RRHs' |AOD error| [deg] and |TOA range error| [m], one curve per
+    receiver, pooled over the realizations, with the half-sample range c/(2F_s) marked.
+
+    Parameters
+    ----------
+    tracks : list of xarray.Dataset
+        The realizations' track datasets (:func:`railradio.nr.runs.track_receivers`).
+    pdf : str
+        Path of the PDF figure.
+    png : str
+        Path of the PNG copy.
+    """
     fig, (a1, a2) = plotting.figure(ncols=2, figsize=(6.8, 3.0))
     for i, rx in enumerate(tracks[0]["receiver"].values):
         aod = np.concatenate([np.abs(np.degrees(t["aod_err"].sel(receiver=rx).values.ravel())) for t in tracks])
@@ -67,6 +101,23 @@ def plot_measurement_cdf(tracks: list[xr.Dataset], pdf: str, png: str) -> None:
 def plot_position_cdf(
     tracks: list[xr.Dataset], pdf: str, png: str, skip_s: float = 5.0, bounds: list[xr.Dataset] | None = None
 ) -> None:
+    """CDFs of the 2-D position error [m] after ``skip_s``, one panel per receiver: the EKF of
+    each measurement set, the gated AOD+TOA EKF, the snapshot LS fix, the integer-sample σ and
+    (with ``bounds``) the PCRB prediction.
+
+    Parameters
+    ----------
+    tracks : list of xarray.Dataset
+        The realizations' track datasets (:func:`railradio.nr.runs.track_receivers`).
+    pdf : str
+        Path of the PDF figure.
+    png : str
+        Path of the PNG copy.
+    skip_s : float
+        Errors before this time are left out, s.
+    bounds : list of xarray.Dataset or None
+        The realizations' bound datasets (``t`` [s], ``pcrb`` [m]), or ``None``.
+    """
     rxs = tracks[0]["receiver"].values
     fig, axes = plotting.figure(ncols=len(rxs), figsize=(3.4 * len(rxs), 3.0), squeeze=False)
     for ax, rx in zip(axes[0], rxs, strict=True):
@@ -95,6 +146,21 @@ def plot_position_cdf(
 
 
 def plot_error_vs_time(track: xr.Dataset, pdf: str, png: str, bounds: xr.Dataset | None = None) -> None:
+    """2-D position error [m] against time of the AOD+TOA EKF (gate off and on) of every
+    receiver, with the PCRB and snapshot PEB predictions when ``bounds`` is given.
+
+    Parameters
+    ----------
+    track : xarray.Dataset
+        One realization's track dataset (:func:`railradio.nr.runs.track_receivers`).
+    pdf : str
+        Path of the PDF figure.
+    png : str
+        Path of the PNG copy.
+    bounds : xarray.Dataset or None
+        The realization's bound dataset (``t`` [s]; ``pcrb``, ``peb``, optional
+        ``pcrb_true_motion`` [m]), or ``None``.
+    """
     fig, ax = plotting.figure(figsize=(6.4, 3.0))
     for i, rx in enumerate(track["receiver"].values):
         for g, style in ((0, "-"), (1, "--")):
@@ -136,7 +202,19 @@ def plot_error_vs_time(track: xr.Dataset, pdf: str, png: str, bounds: xr.Dataset
 def plot_sensitivity(numbers: dict, cases: list[str], pdf: str, png: str) -> None:
     """Sensitivity cases beside the base run: TOA range error p95 and gated EKF mean error
     per receiver (key numbers ``sens.nr.<case>.<receiver>.*``); a tracker whose all-epoch
-    accuracy is null because it loses the train is marked with its lost share."""
+    accuracy is null because it loses the train is marked with its lost share.
+
+    Parameters
+    ----------
+    numbers : dict
+        Key numbers (name -> entry with ``value``), :func:`railradio.nr.keys.sensitivity_key_numbers`.
+    cases : list of str
+        The cases to show, in order (``"base"`` among them).
+    pdf : str
+        Path of the PDF figure.
+    png : str
+        Path of the PNG copy.
+    """
     rxs = sorted({k.split(".")[3] for k in numbers if k.startswith("sens.nr.")} - {"bound"}, key=lambda r: r != "seed")
     panels = (
         ("meas.toa_err_m.p95", "TOA range error p95 [m]"),
@@ -177,7 +255,22 @@ def plot_sweeps(numbers: dict, sweeps: dict, sync_sigma_s: dict, pdf: str, png: 
     the integer-sample floor (widened by the RRH clock offsets where a case has them), the
     share of TOAs within 5 m (outliers: another RRH's peak or a false alarm) and the gated
     EKF AOD+TOA mean error, per receiver (key numbers ``sens.nr.<case>.<receiver>.*``); the
-    sweep's reference point (the base settings) circled."""
+    sweep's reference point (the base settings) circled.
+
+    Parameters
+    ----------
+    numbers : dict
+        Key numbers (name -> entry with ``value``), :func:`railradio.nr.keys.sensitivity_key_numbers`.
+    sweeps : dict
+        Sweep name -> ``{"cases": [case, ...], "reference": case}`` (the ``nr.sensitivity.sweeps``
+        config).
+    sync_sigma_s : dict of str to float
+        Case name -> RRH clock spread σ, s (0 where absent).
+    pdf : str
+        Path of the PDF figure.
+    png : str
+        Path of the PNG copy.
+    """
     rxs = sorted({k.split(".")[3] for k in numbers if k.startswith("sens.nr.")} - {"bound"}, key=lambda r: r != "seed")
     rows = (
         ("meas.toa_err_m.median_abs", "median |TOA error| [m]", True),
@@ -225,7 +318,25 @@ def plot_reproduction_map(numbers: dict, receivers: dict[str, list[str]], pdf: s
     receiver, a row per map cell and a column per source claim, each square coloured by
     the claim's status (holds / not resolved / fails) and labelled with the measured value
     (its bootstrap interval in the key numbers); a lost tracker is labelled with its lost
-    share."""
+    share.
+
+    Parameters
+    ----------
+    numbers : dict
+        Key numbers (name -> entry with ``value``, optional ``lost_frac``),
+        :func:`railradio.nr.reproduction_map.cell_key_numbers` and ``summary_key_numbers``.
+    receivers : dict of str to list of str
+        Receiver name -> the map cells it ran on (rows), :func:`railradio.nr.reproduction_map.cell_receivers`.
+    pdf : str
+        Path of the PDF figure.
+    png : str
+        Path of the PNG copy.
+
+    Raises
+    ------
+    KeyError
+        When a cell's claim or metric key is missing from ``numbers``.
+    """
     from matplotlib.patches import Patch
 
     from railradio.nr.reproduction_map import CLAIMS, FAILS, HOLDS, STATUS_NAMES, UNRESOLVED
@@ -287,7 +398,18 @@ def _square(x: float, y: float, colour: str):
 
 def plot_fidelity(summary: dict, pdf: str, png: str) -> None:
     """Changed-decision shares of every shortcut (railradio.nr.fidelity), per receiver, with
-    their 95 % intervals, the 0.5 % goal and a redraw of the noise as the yardstick."""
+    their 95 % intervals, the 0.5 % goal and a redraw of the noise as the yardstick.
+
+    Parameters
+    ----------
+    summary : dict
+        Comparison -> receiver -> decision -> ``{"frac", "lo", "hi"}`` (changed share and its 95 %
+        interval, 1), :func:`railradio.nr.fidelity_stats.summarize`; must hold ``"noise"``.
+    pdf : str
+        Path of the PDF figure.
+    png : str
+        Path of the PNG copy.
+    """
     from railradio.nr.fidelity import DECISIONS
     from railradio.nr.fidelity_stats import GOAL_CHANGE_FRAC
 

@@ -37,7 +37,27 @@ def change_windows(
     ds: xr.Dataset, window_s: float, before_s: float = 0.0
 ) -> list[tuple[int, NDArray[np.int64], float]]:
     """(change epoch, epoch indices from ``before_s`` before to ``window_s`` after it
-    (clipped to the run), Δa [m/s²]) of every acceleration change inside the run."""
+    (clipped to the run), Δa [m/s²]) of every acceleration change inside the run.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        One realization's IMM dataset (``t`` [s], ``change_epoch``, ``delta_a`` [m/s²]).
+    window_s : float
+        Window after each change, s (> 0).
+    before_s : float
+        Window before each change, s (≥ 0).
+
+    Returns
+    -------
+    list of tuple
+        ``(change epoch, epoch indices, Δa [m/s²])`` per change.
+
+    Raises
+    ------
+    ValueError
+        When ``window_s`` ≤ 0 or ``before_s`` < 0.
+    """
     if not window_s > 0 or before_s < 0:
         raise ValueError(f"window_s must be > 0 and before_s >= 0 [s], got {window_s!r}, {before_s!r}")
     dt = float(ds["t"].values[1] - ds["t"].values[0]) if ds.sizes["epoch"] > 1 else 1.0
@@ -83,7 +103,27 @@ def _stat(values: np.ndarray, how) -> float | None:
 
 def key_numbers(runs: list[xr.Dataset], window_s: float) -> dict[str, Any]:
     """Key numbers of the IMM/RTS study, pooled over the realizations ``runs`` (datasets
-    written by the ``nr_imm`` rule), errors counted after the first SKIP_S seconds."""
+    written by the ``nr_imm`` rule), errors counted after the first SKIP_S seconds.
+
+    Parameters
+    ----------
+    runs : list of xarray.Dataset
+        The realizations' IMM datasets (:func:`railradio.nr.runs.track_imm`), all from one RRH
+        spacing.
+    window_s : float
+        Window after each acceleration change over which the lag is measured, s.
+
+    Returns
+    -------
+    dict of str to dict
+        Key name -> its JSON entry (:meth:`railradio.keynumbers.KeySpec.entry`: ``value``,
+        ``unit``, ``description``, source value and relation, ``mc_stderr``, optional ``lost_frac``).
+
+    Raises
+    ------
+    ValueError
+        When ``runs`` is empty or its runs come from different RRH spacings.
+    """
     if not runs:
         raise ValueError("runs must not be empty")
     w = f"{window_s:g} s"
@@ -202,7 +242,27 @@ def _running_mean(v: np.ndarray, n: int) -> np.ndarray:
 def plot_lag(runs: list[xr.Dataset], pdf: str, png: str, window_s: float = 20.0, smooth_s: float = 1.0) -> None:
     """Error vs time around each acceleration change (±``window_s``), EKF vs IMM vs RTS,
     mean over the realizations and a centered ``smooth_s`` running mean; rows: 2-D error,
-    signed along-track lag, IMM manoeuvre-model probability."""
+    signed along-track lag, IMM manoeuvre-model probability.
+
+    Parameters
+    ----------
+    runs : list of xarray.Dataset
+        The realizations' IMM datasets (:func:`railradio.nr.runs.track_imm`); the change epochs
+        of the first are used.
+    pdf : str
+        Path of the PDF figure.
+    png : str
+        Path of the PNG copy.
+    window_s : float
+        Half-width of the window around each change, s (> 0).
+    smooth_s : float
+        Length of the running mean, s.
+
+    Raises
+    ------
+    ValueError
+        When ``window_s`` ≤ 0 (:func:`change_windows`).
+    """
     wins = change_windows(runs[0], window_s, before_s=window_s)
     if not wins:
         fig, ax = plotting.figure(figsize=(6.4, 2.0))

@@ -205,6 +205,28 @@ BOUND_SPECS = {
 
 
 def key_numbers(tracks: list[xr.Dataset], bounds: list[xr.Dataset] | None = None) -> dict[str, Any]:
+    """Key numbers of the nr tracks pooled over the realizations (docs/model/nr.md §10), each with
+    the standard error of its per-realization values: the PCRB/PEB predictions (``nr.bound.*``,
+    with ``bounds``), the median SIR of the strongest RRH, the loss thresholds, and per receiver
+    (prefix ``nr.`` for the seed, ``nr.<receiver>.`` for a variant) the track-loss, consistency,
+    measurement and accuracy metrics of every tracker (an all-epoch accuracy is null where the
+    track is lost too often, :func:`railradio.nr.loss.accuracy`); errors are counted after
+    :data:`SKIP_S`.
+
+    Parameters
+    ----------
+    tracks : list of xarray.Dataset
+        The realizations' track datasets (:func:`railradio.nr.runs.track_receivers`).
+    bounds : list of xarray.Dataset or None
+        The realizations' bound datasets (``t`` [s] and the bound variables [m] per epoch;
+        the ``nr_bounds`` rule's output), or ``None``: no ``nr.bound.*`` keys.
+
+    Returns
+    -------
+    dict of str to dict
+        Key name -> its JSON entry (:meth:`railradio.keynumbers.KeySpec.entry`: ``value``,
+        ``unit``, ``description``, source value and relation, ``mc_stderr``, optional ``lost_frac``).
+    """
     out: dict[str, Any] = {}
     for name, (var, fn, desc) in BOUND_SPECS.items() if bounds else ():
         vals = [float(fn(b[var].values[b["t"].values >= SKIP_S])) for b in bounds]
@@ -296,7 +318,23 @@ CALIBRATION_SPECS = {
 
 def calibration_key_numbers(cal: dict[str, dict]) -> dict[str, Any]:
     """The calibrated W and q of every tracker (``receiver/variant/gate|nogate`` records of
-    ``calibration.json``) as key numbers."""
+    ``calibration.json``) as key numbers.
+
+    Parameters
+    ----------
+    cal : dict of str to dict
+        ``calibration.json``: tracker name (``receiver/variant/gate|nogate``) -> record
+        (``q`` [m² s⁻⁵], ``sigma_aod_rad`` [rad], ``sigma_toa_s`` [s], optional ``q_search``).
+
+    Returns
+    -------
+    dict of str to dict
+        Key name -> its JSON entry (:meth:`railradio.keynumbers.KeySpec.entry`: ``value``,
+        ``unit``, ``description``, source value and relation, ``mc_stderr``, optional ``lost_frac``).
+        Per tracker ``q``, ``q_at_edge``, ``q_cost_monotone``, ``q_cost``, ``sigma_aod_deg`` [deg],
+        ``sigma_range_m`` [m]; and the counts ``nr.cal.n_trackers``, ``nr.cal.n_q_at_edge``,
+        ``nr.cal.n_q_at_edge_monotone``.
+    """
     out: dict[str, Any] = {}
     for name, rec in cal.items():
         rx, variant, gate = name.split("/")
@@ -359,7 +397,28 @@ def sensitivity_key_numbers(
     ``n_epochs`` epochs (a tracker-only case tracks the main run's whole r0), or per case
     (a dict case -> epochs, ``"base"`` included: the cheap sweep points run fewer): one
     realization each, paired (same bursts' random draws), so no Monte Carlo error is
-    attached."""
+    attached.
+
+    Parameters
+    ----------
+    base : xarray.Dataset
+        Track dataset of the main run's r0 (:func:`railradio.nr.runs.track_receivers`).
+    cases : dict of str to xarray.Dataset
+        Case name -> its track dataset of r0.
+    n_epochs : int or dict of str to int
+        Epochs scored (the first ones), for all runs or per case (``"base"`` included).
+
+    Returns
+    -------
+    dict of str to dict
+        Key name -> its JSON entry (:meth:`railradio.keynumbers.KeySpec.entry`: ``value``,
+        ``unit``, ``description``, source value and relation, ``mc_stderr``, optional ``lost_frac``).
+
+    Raises
+    ------
+    ValueError
+        When a run has fewer epochs than it is to be scored on.
+    """
     out: dict[str, Any] = {}
     runs = {"base": base} | dict(cases)
     for case, ds in runs.items():
@@ -399,7 +458,25 @@ def sensitivity_key_numbers(
 def toa_floor_m(sync_sigma_s: float = 0.0, q: float = 0.5) -> float:
     """``q``-quantile of |e| for e = u + c·δ: the integer-sample TOA error u ~ U(±c/(2F_s))
     plus a Gaussian clock offset δ ~ N(0, σ²) [m] — the floor of the seed's TOA estimator
-    when the RRH clocks are off by σ (exact: CDF by quadrature, quantile by root finding)."""
+    when the RRH clocks are off by σ (exact: CDF by quadrature, quantile by root finding).
+
+    Parameters
+    ----------
+    sync_sigma_s : float
+        Standard deviation σ of the RRH clock offsets, s (≥ 0).
+    q : float
+        Quantile, in (0, 1).
+
+    Returns
+    -------
+    float
+        The ``q``-quantile of |e|, m.
+
+    Raises
+    ------
+    ValueError
+        When ``sync_sigma_s`` < 0 (or is NaN).
+    """
     from scipy.integrate import quad
     from scipy.optimize import brentq
     from scipy.stats import norm
@@ -420,7 +497,19 @@ def toa_floor_m(sync_sigma_s: float = 0.0, q: float = 0.5) -> float:
 def sensitivity_floor_numbers(sync_sigma_s: dict[str, float]) -> dict[str, Any]:
     """Key numbers ``sens.nr.<case>.bound.toa_floor_m.median``: the median |TOA error| floor
     (:func:`toa_floor_m`) of each case with its RRH clock spread σ [s], beside the cases'
-    ``meas.toa_err_m.median_abs``."""
+    ``meas.toa_err_m.median_abs``.
+
+    Parameters
+    ----------
+    sync_sigma_s : dict of str to float
+        Case name -> RRH clock spread σ, s (:func:`railradio.nr.cases.sync_sigma_s`).
+
+    Returns
+    -------
+    dict of str to dict
+        Key name -> its JSON entry (:meth:`railradio.keynumbers.KeySpec.entry`: ``value``,
+        ``unit``, ``description``, source value and relation, ``mc_stderr``, optional ``lost_frac``).
+    """
     out: dict[str, Any] = {}
     for case, sigma in sync_sigma_s.items():
         name = f"sens.nr.{case}.bound.toa_floor_m.median"

@@ -57,6 +57,17 @@ class ShadowingMap:
 
     The field of RRH k spans [x_k - range, x_k + range] and is drawn from its own generator
     (seed, realization, k), so it is the same in every shard of the track.
+
+    Parameters
+    ----------
+    seed : int
+        The config seed.
+    key : tuple of int
+        Spawn key of the shadowing (the realization's key + ``KEY_SHADOWING``).
+    dep : Deployment
+        RRH positions (``x_m``, m).
+    radio : RadioParams
+        Uses ``range_m`` (m), ``shadow_sigma_db`` (dB) and ``shadow_corr_m`` (decorrelation distance, m).
     """
 
     def __init__(self, seed: int, key: tuple[int, ...], dep: Deployment, radio: RadioParams):
@@ -125,7 +136,33 @@ def link_budget(
     shadowing: bool = True,
 ) -> LinkBudget:
     """Large-scale parameters and the synthesis inputs of every RRH within ``radio.range_m``
-    of the train's reference point ``x_m``."""
+    of the train's reference point ``x_m``.
+
+    Parameters
+    ----------
+    x_m : float
+        Train reference position along the track, m.
+    speed_m_s : float
+        Train speed, m/s (sets the Doppler).
+    dep : Deployment
+        The RRH deployment.
+    radio : RadioParams
+        Link parameters (powers dBm, noise figure dB, carrier Hz, ``range_m`` m, shadowing).
+    rrh_array : RrhArray
+        The RRHs' antenna array and SS beams.
+    train : TrainArray
+        The train's antenna array and panels.
+    shadow : ShadowingMap
+        The realization's shadowing fields.
+    shadowing : bool
+        Apply the shadowing (False: 0 dB).
+
+    Returns
+    -------
+    LinkBudget
+        The RRHs in range (``rrh``), their received powers ``rx_power_dbm`` [dBm] and geometry,
+        and the synthesis inputs ``links`` (:class:`railradio.nr.synthesis.Links`).
+    """
     d2d_all = np.hypot(dep.x_m - x_m, dep.offset_m)
     rrh = np.flatnonzero(d2d_all <= radio.range_m)
     paths = _Paths(dep, radio, rrh_array, shadow, shadowing, rrh)

@@ -33,7 +33,23 @@ ACCURACY_CAP_M = 10_000.0
 
 
 def rrh_spacing_m(ds: xr.Dataset) -> float:
-    """The RRH spacing [m] of the deployment that made a track dataset (its provenance)."""
+    """The RRH spacing [m] of the deployment that made a track dataset (its provenance).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A track or IMM dataset whose ``config_json`` attribute holds ``sim.deployment.spacing_m``.
+
+    Returns
+    -------
+    float
+        The RRH spacing, m.
+
+    Raises
+    ------
+    ValueError
+        When the attribute is missing or does not name the spacing.
+    """
     try:
         return float(json.loads(ds.attrs["config_json"])["sim"]["deployment"]["spacing_m"])
     except (KeyError, TypeError, ValueError) as exc:

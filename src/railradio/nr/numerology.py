@@ -35,8 +35,13 @@ class Numerology:
 
     Parameters
     ----------
-    decimation
+    decimation : int
         D: the rate is F_s/D, the FFT size N_FFT/D (1, 2, 4 or 8).
+
+    Raises
+    ------
+    ValueError
+        When ``decimation`` is not 1, 2, 4 or 8.
     """
 
     decimation: int = 1

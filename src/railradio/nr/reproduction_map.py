@@ -92,7 +92,18 @@ VARIANTS = ("aod", "toa", "aod_toa")
 
 def receivers(nr: dict) -> dict[str, bool]:
     """The map's receivers -> whether their trackers are gated: the source's (``seed``,
-    no gate, as the source) and ours (every ``receiver_variants`` entry, gated)."""
+    no gate, as the source) and ours (every ``receiver_variants`` entry, gated).
+
+    Parameters
+    ----------
+    nr : dict
+        The ``nr`` section of the workflow config.
+
+    Returns
+    -------
+    dict of str to bool
+        Receiver name -> gated (``seed`` first, then the variants in config order).
+    """
     return {"seed": False} | {name: True for name in nr.get("receiver_variants", {})}
 
 
@@ -100,7 +111,25 @@ def cells(nr: dict, nr_schema: dict) -> dict[str, dict[str, Any]]:
     """Every map cell as a whole nr config (validated): ``mt<M>_<data>`` for each M_T of
     ``map.rrh_elements`` and data assumption of ``map.data``, then ``tpl_<t>_sel_<s>`` for
     the source receiver's template × selection on the default bursts (the main run's M_T
-    and the first data assumption), except the main config's own pair (the default cell)."""
+    and the first data assumption), except the main config's own pair (the default cell).
+
+    Parameters
+    ----------
+    nr : dict
+        The ``nr`` section of the workflow config (with its ``map`` section).
+    nr_schema : dict
+        The JSON schema of the ``nr`` section.
+
+    Returns
+    -------
+    dict of str to dict
+        Cell name -> its whole, validated nr config (without ``sensitivity`` and ``map``).
+
+    Raises
+    ------
+    railradio.config.ConfigError
+        From :func:`railradio.config.validate_config` for a cell that breaks the schema.
+    """
     mp = nr["map"]
     base = {k: copy.deepcopy(v) for k, v in nr.items() if k not in ("sensitivity", "map")}
     out = {}
@@ -122,14 +151,39 @@ def default_cell(nr: dict) -> str:
 
 def cell_receivers(name: str, nr: dict) -> list[str]:
     """Receivers reported in a cell: a template/selection cell changes the source's
-    receiver only (ours equals the default cell's)."""
+    receiver only (ours equals the default cell's).
+
+    Parameters
+    ----------
+    name : str
+        The cell name (``mt<M>_<data>`` or ``tpl_<t>_sel_<s>``).
+    nr : dict
+        The ``nr`` section of the workflow config.
+
+    Returns
+    -------
+    list of str
+        The receiver names.
+    """
     rx = list(receivers(nr))
     return ["seed"] if name.startswith("tpl_") else rx
 
 
 def burst_config(cfg: dict) -> dict:
     """What a cell's bursts and estimates depend on: its simulation sections without the
-    cell selection (applied by the tracker, on the same estimates)."""
+    cell selection (applied by the tracker, on the same estimates).
+
+    Parameters
+    ----------
+    cfg : dict
+        A cell's (or the main) nr config.
+
+    Returns
+    -------
+    dict
+        A deep copy of :func:`railradio.nr.workflow.sim_config` of ``cfg`` without the
+        receivers' ``selection``.
+    """
     out = copy.deepcopy(sim_config(cfg))
     out["receiver"].pop("selection", None)
     for v in out.get("receiver_variants", {}).values():
@@ -155,7 +209,26 @@ def calibration_owner(name: str, all_cells: dict[str, dict]) -> str:
 def shard_paths(cell: str, real: str, all_cells: dict[str, dict], main_cfg: dict, n_main_epochs: int) -> list[str]:
     """Estimate shards a cell reads for its segment (``real="r0"``) or calibration
     (``"cal"``): the main run's r0 shards covering the segment when its bursts are the main
-    run's, else those of the first cell with the same bursts."""
+    run's, else those of the first cell with the same bursts.
+
+    Parameters
+    ----------
+    cell : str
+        The cell name.
+    real : str
+        ``"r0"`` (the segment) or ``"cal"`` (the map's calibration run).
+    all_cells : dict of str to dict
+        Cell name -> nr config (:func:`cells`), config order.
+    main_cfg : dict
+        The main ``nr`` config (uses ``n_shards`` and ``map.segment``, ``map.n_shards``).
+    n_main_epochs : int
+        Evaluation epochs of the main run.
+
+    Returns
+    -------
+    list of str
+        Paths of the estimate shards (netCDF), shard order.
+    """
     from railradio.nr.simulate import shard_epochs
 
     if real == "cal":
@@ -174,7 +247,19 @@ def shard_paths(cell: str, real: str, all_cells: dict[str, dict], main_cfg: dict
 
 def calibration_section(nr: dict) -> dict:
     """The map's calibration run as an nr ``calibration`` section (for
-    :func:`railradio.nr.simulate.calibration_trajectory`)."""
+    :func:`railradio.nr.simulate.calibration_trajectory`).
+
+    Parameters
+    ----------
+    nr : dict
+        The ``nr`` section of the workflow config (with its ``map`` section).
+
+    Returns
+    -------
+    dict
+        ``{"epochs": int, "trajectory": {"v0_m_s": start speed [m/s], "phases": [[duration s,
+        acceleration m/s²], ...]}}``.
+    """
     c = nr["map"]["calibration"]
     return {"epochs": c["epochs"], "trajectory": {"v0_m_s": c["v0_m_s"], "phases": c["phases"]}}
 
@@ -272,7 +357,43 @@ def cell_key_numbers(
 ) -> dict[str, Any]:
     """Key numbers ``nr.map.<cell>.<rx>.*`` of one receiver in one cell: each metric with
     ``.lo``/``.hi`` (the bootstrap interval at ``confidence``) and each claim's status
-    ``claim.<name>`` (1 holds, 0 not resolved, -1 fails)."""
+    ``claim.<name>`` (1 holds, 0 not resolved, -1 fails).
+
+    Parameters
+    ----------
+    cell : str
+        The cell name.
+    rx : str
+        The receiver name.
+    aod_err_rad : numpy.ndarray
+        [n, 3] AOD errors of the selected RRHs over the segment's scored epochs, rad (NaN: none).
+    range_err_m : numpy.ndarray
+        [n, 3] TOA range errors of the selected RRHs, m (NaN: none).
+    pos_err_m : dict of str to numpy.ndarray
+        Tracker variant (``aod``, ``toa``, ``aod_toa``) -> [n] 2-D EKF position errors, m.
+    spacing_m : float
+        RRH spacing, m (an epoch is lost beyond half of it).
+    rng : numpy.random.Generator
+        Generator of the bootstrap resamples.
+    block : int
+        Bootstrap block length, epochs (in ``1..n``).
+    n_boot : int
+        Bootstrap resamples (≥ 1).
+    confidence : float
+        Confidence of the bootstrap interval, in (0, 1).
+    where : str
+        Text appended to each key's description.
+
+    Returns
+    -------
+    dict of str to dict
+        Key name -> its JSON entry (:meth:`railradio.keynumbers.KeySpec.entry`).
+
+    Raises
+    ------
+    ValueError
+        When ``block`` is outside ``1..n`` or ``n_boot`` < 1 (:func:`block_indices`).
+    """
     point = {k: float(v[0]) for k, v in cell_metrics(aod_err_rad, range_err_m, pos_err_m, spacing_m).items()}
     idx = block_indices(rng, aod_err_rad.shape[0], block, n_boot)
     boot = cell_metrics(aod_err_rad, range_err_m, pos_err_m, spacing_m, idx)
@@ -327,7 +448,30 @@ def diagnostic_key_numbers(
 ) -> dict[str, Any]:
     """What the AOD claim depends on, per cell and receiver: the median |AOD error| of the
     selected RRHs within / beyond :data:`ENDFIRE_DEG` of the track direction, their share
-    within it, and the median number of SS blocks detected per selected RRH."""
+    within it, and the median number of SS blocks detected per selected RRH.
+
+    Parameters
+    ----------
+    cell : str
+        The cell name.
+    rx : str
+        The receiver name.
+    aod_err_rad : numpy.ndarray
+        AOD errors of the selected RRHs, rad (NaN: none).
+    aod_true_rad : numpy.ndarray
+        Their true AODs (same shape), rad.
+    n_detected : numpy.ndarray
+        SS blocks detected per selected RRH.
+    where : str
+        Text appended to each key's description.
+
+    Returns
+    -------
+    dict of str to dict
+        Key name -> its JSON entry (:meth:`railradio.keynumbers.KeySpec.entry`).
+        ``nr.map.<cell>.<rx>.diag.*``: ``aod_err_deg.median_endfire`` and
+        ``aod_err_deg.median_broadside`` [deg], ``frac_endfire`` (1), ``n_detected.median``.
+    """
     deg = np.degrees(np.asarray(aod_true_rad, float)) % 180.0
     off = np.minimum(deg, 180.0 - deg)
     e = np.abs(np.degrees(aod_err_rad))
@@ -361,7 +505,22 @@ def diagnostic_key_numbers(
 
 def summary_key_numbers(numbers: dict[str, Any], cell_names: list[str], nr: dict) -> dict[str, Any]:
     """Per receiver and claim, in how many cells it holds / fails / is not resolved
-    (``nr.map.<rx>.<claim>.n_holds`` …) and the number of cells."""
+    (``nr.map.<rx>.<claim>.n_holds`` …) and the number of cells.
+
+    Parameters
+    ----------
+    numbers : dict
+        The cells' key numbers (:func:`cell_key_numbers`), with each claim's status.
+    cell_names : list of str
+        The map cells.
+    nr : dict
+        The ``nr`` section of the workflow config.
+
+    Returns
+    -------
+    dict of str to dict
+        Key name -> its JSON entry (:meth:`railradio.keynumbers.KeySpec.entry`).
+    """
     out: dict[str, Any] = {}
     for rx in receivers(nr):
         names = [c for c in cell_names if rx in cell_receivers(c, nr)]

@@ -23,7 +23,25 @@ def _check(factor: int) -> None:
 def project(z: NDArray, factor: int) -> NDArray[np.complex64]:
     """Keep the |f| < F/(2·factor) bins of ``z``'s spectrum and return every ``factor``-th
     sample of the filtered signal (F/factor samples per second; sample m is input sample
-    factor·m). The length of ``z`` must be a multiple of ``factor``."""
+    factor·m). The length of ``z`` must be a multiple of ``factor``.
+
+    Parameters
+    ----------
+    z : numpy.ndarray
+        Complex samples at a rate F (one burst, treated as circular).
+    factor : int
+        Decimation D (integer ≥ 1).
+
+    Returns
+    -------
+    numpy.ndarray of complex64
+        ``len(z) // factor`` samples at F/factor.
+
+    Raises
+    ------
+    ValueError
+        When ``factor`` is not an integer ≥ 1 or ``len(z)`` is not a multiple of it.
+    """
     _check(factor)
     n = z.size
     if n % factor:
@@ -38,7 +56,25 @@ def project(z: NDArray, factor: int) -> NDArray[np.complex64]:
 
 def upsample(z: NDArray, factor: int) -> NDArray[np.complex64]:
     """Band-limited interpolation by ``factor`` (zero spectrum outside the input's band):
-    ``project(upsample(z, D), D) == z``."""
+    ``project(upsample(z, D), D) == z``.
+
+    Parameters
+    ----------
+    z : numpy.ndarray
+        Complex samples at a rate F (one burst, treated as circular).
+    factor : int
+        Interpolation factor D (integer ≥ 1).
+
+    Returns
+    -------
+    numpy.ndarray of complex64
+        ``len(z) * factor`` samples at F·factor.
+
+    Raises
+    ------
+    ValueError
+        When ``factor`` is not an integer ≥ 1.
+    """
     _check(factor)
     if factor == 1:
         return np.asarray(z, dtype=np.complex64)

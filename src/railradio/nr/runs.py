@@ -33,7 +33,19 @@ GATES = (False, True)  # each tracker runs without and with the χ² innovation 
 
 def read_shards(paths: Sequence[str]) -> xr.Dataset:
     """One realization's estimate shards joined along ``epoch``: the per-epoch variables are
-    concatenated; the others (the train's geometry) are the same in every shard."""
+    concatenated; the others (the train's geometry) are the same in every shard.
+
+    Parameters
+    ----------
+    paths : sequence of str
+        Paths of the shards' netCDF files, in epoch order.
+
+    Returns
+    -------
+    xarray.Dataset
+        The realization's :func:`railradio.nr.simulate.simulate_epochs` dataset over all the
+        shards' epochs.
+    """
     return xr.concat(
         [read_dataset(p) for p in paths], dim="epoch", data_vars="minimal", coords="minimal", compat="override"
     )
@@ -42,7 +54,28 @@ def read_shards(paths: Sequence[str]) -> xr.Dataset:
 def case_estimates(ds: xr.Dataset, n_epochs: int, seed: int, rid: int, sync: dict[str, Any]) -> xr.Dataset:
     """A sensitivity case's estimates: the first ``n_epochs`` epochs of realization ID ``rid``
     (0: r0, 1000: the calibration run), with the clock errors of the case's ``nr.sync`` added
-    to the measured TOAs (keyed by that realization)."""
+    to the measured TOAs (keyed by that realization).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        The realization's estimates (:func:`read_shards`).
+    n_epochs : int
+        Epochs the case keeps (the first ones).
+    seed : int
+        The config seed.
+    rid : int
+        Realization ID of ``ds`` (0: r0, 1000: the calibration run).
+    sync : dict
+        The case's ``nr.sync`` section: ``rrh_sigma_s`` (spread of the RRH clock offsets, s)
+        and ``train_bias_s`` (the train clock's bias, s).
+
+    Returns
+    -------
+    xarray.Dataset
+        ``ds`` cut to ``n_epochs`` epochs with the clock errors added to ``toa_hat`` [s]
+        (:func:`railradio.nr.clocks.apply_clock_errors`).
+    """
     return apply_clock_errors(
         ds.isel(epoch=slice(0, int(n_epochs))),
         int(seed),
@@ -54,7 +87,20 @@ def case_estimates(ds: xr.Dataset, n_epochs: int, seed: int, rid: int, sync: dic
 
 def point_model(ds: xr.Dataset, tracker: dict[str, Any]) -> xr.Dataset:
     """The estimates as the tracker models them: without the panels' lever arm when
-    ``tracker['lever_arm']`` is false (the point model)."""
+    ``tracker['lever_arm']`` is false (the point model).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        Estimates (:func:`read_shards`).
+    tracker : dict
+        The ``nr.tracker`` config section (uses ``lever_arm``, bool).
+
+    Returns
+    -------
+    xarray.Dataset
+        ``ds`` itself, or ``ds`` without ``train_panel_x`` (the panels' along-track positions, m).
+    """
     return ds if tracker["lever_arm"] else ds.drop_vars("train_panel_x", errors="ignore")
 
 
@@ -67,7 +113,38 @@ def calibrate_receivers(
     ds: xr.Dataset, scn: Scenario, tracker: dict[str, Any], selection: dict[str, str], variants: Sequence[str], log
 ) -> dict[str, dict]:
     """Noise levels and q of every receiver's trackers (each variant, gate off and on), each
-    calibrated as it will run, with its q search: ``{tracker_name: record}``."""
+    calibrated as it will run, with its q search: ``{tracker_name: record}``.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        The calibration run's estimates (all receivers, :func:`read_shards`).
+    scn : Scenario
+        The scenario the estimates were simulated with (deployment, ``trajectory.dt_s``).
+    tracker : dict
+        The ``nr.tracker`` config section (``q_grid`` [m² s⁻⁵], ``gate_prob`` (1),
+        ``w_distance_edges_m`` [m], ``lever_arm``).
+    selection : dict of str to str
+        Receiver name -> strength measure choosing its measured RRHs
+        (:func:`railradio.nr.workflow.receiver_selection`).
+    variants : sequence of str
+        Tracker variants to calibrate (keys of :data:`railradio.nr.measurement.VARIANTS`:
+        ``aod``, ``toa``, ``aod_toa``).
+    log : logging.Logger
+        Receives one line per tracker.
+
+    Returns
+    -------
+    dict of str to dict
+        :func:`tracker_name` -> calibration record: ``q`` [m² s⁻⁵], ``sigma_aod_rad`` [rad],
+        ``sigma_toa_s`` [s], optional distance bins (:meth:`TrackerConfig.record`), and
+        ``q_search`` (the q values tried and their costs).
+
+    Raises
+    ------
+    ValueError
+        From :func:`railradio.nr.calibration.calibrate` (empty ``q_grid``, bad calibrated values).
+    """
     dep = scn.deployment
     out = {}
     for rx in ds["receiver"].values:
@@ -105,7 +182,39 @@ def track_receivers(
     log,
 ) -> xr.Dataset:
     """Every receiver's trackers on one realization, scored: 2-D EKF and snapshot position
-    errors, NIS and position NEES per dimension, the measured RRHs' AOD and range errors."""
+    errors, NIS and position NEES per dimension, the measured RRHs' AOD and range errors.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        One realization's estimates (all receivers).
+    scn : Scenario
+        The scenario (deployment, ``trajectory.dt_s``).
+    cal : dict of str to dict
+        Calibration records by :func:`tracker_name` (:func:`calibrate_receivers`).
+    tracker : dict
+        The ``nr.tracker`` config section (uses ``gate_prob``).
+    selection : dict of str to str
+        Receiver name -> strength measure of its measured RRHs.
+    variants : sequence of str
+        Tracker variants to run (``aod``, ``toa``, ``aod_toa``).
+    log : logging.Logger
+        Receives each tracker's mean error.
+
+    Returns
+    -------
+    xarray.Dataset
+        ``pos_err`` [m] (2-D EKF position error), ``nis`` and ``nees`` [1] (per dimension), dims
+        (``receiver``, ``variant``, ``gate``, ``epoch``); ``snap_err`` [m] (snapshot LS error),
+        dims (``receiver``, ``variant``, ``epoch``); ``aod_err`` [rad] and ``range_err`` [m] of the
+        measured RRHs, dims (``receiver``, ``epoch``, ``slot``); ``t`` [s], ``x_true`` [m],
+        ``a_true`` [m/s²], ``sir_best`` [dB] per ``epoch``.
+
+    Raises
+    ------
+    KeyError
+        When ``cal`` lacks a receiver/variant/gate combination.
+    """
     dep = scn.deployment
     receivers = [str(r) for r in ds["receiver"].values]
     variants = [str(v) for v in variants]
@@ -201,6 +310,38 @@ def track_imm(
     Returns the scores (2-D and along-track errors, position NEES, IMM mode probabilities,
     re-acquisitions, the acceleration changes) and the calibration record the trackers used.
     Raises ``ValueError`` when ``imm_params['receiver']`` was not simulated.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        One realization's estimates (all receivers).
+    scn : Scenario
+        The scenario (deployment, trajectory).
+    cal : dict of str to dict
+        Calibration records by :func:`tracker_name`; uses ``<receiver>/aod_toa/gate``.
+    imm_params : dict
+        The ``nr.imm`` config section: ``receiver``, ``q_quiet`` (m² s⁻⁵; ``None``: the
+        calibrated q), ``delta_a_m_s2`` (the acceleration jump the manoeuvre mode covers, m/s²),
+        ``sojourn_s`` (mean sojourn per mode, s).
+    tracker : dict
+        The ``nr.tracker`` config section (uses ``gate_prob``).
+    selection : dict of str to str
+        Receiver name -> strength measure of its measured RRHs.
+    log : logging.Logger
+        Receives the settings used.
+
+    Returns
+    -------
+    tuple of (xarray.Dataset, dict)
+        The scores (``pos_err`` and ``along_err`` [m], ``pos_nees`` [1] per (``filter``,
+        ``epoch``), filters ``ekf``, ``imm``, ``rts``; ``mode_prob`` [1] per (``mode``, ``epoch``);
+        ``q``, ``sojourn_s``, ``n_reacquired``, ``t`` [s], ``x_true`` [m], ``a_true`` [m/s²],
+        ``change_epoch`` and ``delta_a`` [m/s²] per ``change``) and the calibration record used.
+
+    Raises
+    ------
+    ValueError
+        When ``imm_params['receiver']`` is not among the simulated receivers.
     """
     dep, traj = scn.deployment, scn.trajectory
     rx = imm_params["receiver"]

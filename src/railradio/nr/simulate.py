@@ -38,7 +38,37 @@ KEY_SHADOWING, KEY_POOL, KEY_EPOCH = 1, 2, 3
 
 @dataclass(frozen=True)
 class Scenario:
-    """Everything that defines one realization of the nr study (SI units)."""
+    """Everything that defines one realization of the nr study (SI units).
+
+    Attributes
+    ----------
+    trajectory : Trajectory
+        The train's motion (epochs ``dt_s`` apart).
+    deployment : Deployment
+        RRH positions along the track and their cell IDs.
+    radio : RadioParams
+        Link-budget parameters (powers dBm, noise figure dB, carrier Hz, ...).
+    rrh_array, train_array : RrhArray, TrainArray
+        The RRH and train antenna arrays.
+    receiver : ReceiverConfig
+        The "seed" receiver (front-end decimation, SS-block pattern, TOA settings).
+    tdl : str
+        3GPP TDL profile name (e.g. ``"TDL-D"``).
+    delay_spread_s : float
+        RMS delay spread of the TDL profile, s.
+    detector : str
+        Detector of the seed receiver.
+    pfa : float
+        False-alarm probability per block of the detectors (1).
+    cell_search : CellSearchConfig
+        The receiver's cell search.
+    n_sinusoids : int
+        Sinusoids per tap of the sum-of-sinusoids fading.
+    pool_size : int
+        QPSK data symbols drawn once per realization for the data resource elements.
+    shadowing : bool
+        Whether the shadowing map is applied.
+    """
 
     trajectory: Trajectory
     deployment: Deployment = field(default_factory=Deployment)
@@ -100,7 +130,22 @@ class Burst:
 
 
 class Synthesis:
-    """Truth -> received burst, epoch by epoch; every draw keyed by (realization, epoch)."""
+    """Truth -> received burst, epoch by epoch; every draw keyed by (realization, epoch).
+
+    Parameters
+    ----------
+    scn : Scenario
+        The scenario.
+    seed : int
+        The config seed.
+    key : tuple of int
+        The realization's spawn key (:func:`railradio.rng.spawn_key`).
+
+    Raises
+    ------
+    ValueError
+        When ``scn.synthesis_decimation`` does not divide the front end's decimation.
+    """
 
     def __init__(self, scn: Scenario, seed: int, key: tuple[int, ...]):
         self.scn, self.seed, self.key = scn, seed, key
@@ -126,7 +171,21 @@ class Synthesis:
 
     def advance(self, epoch: int):
         """The truth of ``epoch`` and the network's serving cell there (no waveform):
-        ``(x, v, a, link budget, serving RRH)``."""
+        ``(x, v, a, link budget, serving RRH)``.
+
+        Parameters
+        ----------
+        epoch : int
+            Epoch index (t = epoch · ``trajectory.dt_s``). A jump from the last epoch resets the
+            network's serving-cell state.
+
+        Returns
+        -------
+        tuple
+            ``(x_m, v_m_s, a_m_s2, link budget, serving RRH)``: position along the track in m, speed
+            in m/s, acceleration in m/s², the :class:`railradio.nr.link.LinkBudget`, and the serving
+            RRH index (int).
+        """
         scn = self.scn
         if self.next_epoch is not None and epoch != self.next_epoch:
             self.network.reset()
@@ -273,14 +332,15 @@ def simulate_epochs(
 
     Parameters
     ----------
-    scn
+    scn : Scenario
         The scenario.
-    epochs
-        Epoch indices (t = epoch · dt).
-    seed, key
+    epochs : array_like of int
+        Epoch indices (t = epoch · dt, dt = ``scn.trajectory.dt_s`` in s); strictly increasing.
+    seed, key : int, tuple of int
         Config seed and the realization's spawn key.
-    keep_corr_epochs
-        Epochs whose per-block correlation functions are kept (for inspection).
+    keep_corr_epochs : tuple of int
+        Epochs whose per-block correlation functions are kept (for inspection; only the
+        first of them is stored, as ``corr_sample``).
 
     Returns
     -------
@@ -288,7 +348,16 @@ def simulate_epochs(
         Dimensions ``epoch`` × ``cand`` (the receiver's neighbour list, its anchor cell
         first): truth (position, speed, acceleration; per candidate 3-D distance, AOD,
         delay, received power) and estimates (candidate list, SS-RSRP, detections, AOD,
-        TOA, combined peak).
+        TOA, combined peak), the latter per ``receiver``: e.g. ``toa_hat`` [s] and ``aod_hat``
+        [rad] with dims (``receiver``, ``epoch``, ``cand``); ``toa_true`` [s], ``aod_true`` [rad],
+        ``ss_rsrp`` and ``rx_power`` per (``epoch``, ``cand``); ``x_true`` [m], ``v_true`` [m/s],
+        ``a_true`` [m/s²], ``t`` [s], ``sir_best`` [dB] per ``epoch``.
+
+    Raises
+    ------
+    ValueError
+        When ``epochs`` is not strictly increasing, or (from :class:`Synthesis` /
+        :class:`Estimator`) when a decimation setting does not divide the front end's.
     """
     epochs = np.asarray(epochs, dtype=np.int64)
     if np.any(np.diff(epochs) <= 0):
@@ -515,7 +584,20 @@ def _estimate_vars(rec: _EpochRecord) -> dict:
 
 
 def scenario_from_config(c: dict) -> Scenario:
-    """Build the :class:`Scenario` from the ``nr`` section of the workflow config."""
+    """Build the :class:`Scenario` from the ``nr`` section of the workflow config.
+
+    Parameters
+    ----------
+    c : dict
+        The ``nr`` section of the config (or a case's merged config): sections ``trajectory``,
+        ``deployment``, ``radio``, ``antenna``, ``channel``, ``receiver``, ``traffic`` and the
+        optional ``cell_search`` and ``receiver_variants``, in the config's SI units.
+
+    Returns
+    -------
+    Scenario
+        The scenario; ``receiver.search_range_m`` becomes the lag window ceil(range / c · F_s).
+    """
     from railradio.nr.antenna import RrhArray, TrainArray
 
     rx = c["receiver"]
@@ -579,7 +661,19 @@ def scenario_from_config(c: dict) -> Scenario:
 
 def calibration_trajectory(c: dict) -> Trajectory:
     """The calibration run's own trajectory (``calibration.trajectory`` of the ``nr``
-    config), sampled at the evaluation's ``trajectory.dt_s``."""
+    config), sampled at the evaluation's ``trajectory.dt_s``.
+
+    Parameters
+    ----------
+    c : dict
+        The ``nr`` section of the config: ``calibration.trajectory.phases``
+        ([[duration s, acceleration m/s²], ...]), optional ``v0_m_s`` (m/s) and ``trajectory.dt_s`` (s).
+
+    Returns
+    -------
+    Trajectory
+        The calibration trajectory.
+    """
     tr = c["calibration"]["trajectory"]
     return _trajectory(tr["phases"], c["trajectory"]["dt_s"], tr.get("v0_m_s", 0.0))
 
@@ -591,7 +685,27 @@ def _trajectory(phases, dt_s, v0_m_s: float = 0.0) -> Trajectory:
 
 
 def shard_epochs(n_epochs: int, n_shards: int, shard: int) -> np.ndarray:
-    """Epoch indices of one shard: contiguous, near-equal blocks."""
+    """Epoch indices of one shard: contiguous, near-equal blocks.
+
+    Parameters
+    ----------
+    n_epochs : int
+        Epochs of the whole run.
+    n_shards : int
+        Number of shards.
+    shard : int
+        Shard index, in ``0..n_shards - 1``.
+
+    Returns
+    -------
+    numpy.ndarray
+        The shard's epoch indices (int, increasing).
+
+    Raises
+    ------
+    ValueError
+        When ``shard`` is outside ``0..n_shards - 1``.
+    """
     if not 0 <= shard < n_shards:
         raise ValueError(f"shard must be in 0..{n_shards - 1}, got {shard!r}")
     edges = np.linspace(0, n_epochs, n_shards + 1).round().astype(int)

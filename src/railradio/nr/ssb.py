@@ -45,7 +45,20 @@ RANGES = _ranges()
 
 def qpsk_pool(rng: np.random.Generator, n_pool: int) -> NDArray[np.complex64]:
     """``n_pool`` random unit-power QPSK vectors over all N_FFT bins, FFT-bin order,
-    zero outside the 600 active subcarriers: shape [n_pool, N_FFT]."""
+    zero outside the 600 active subcarriers: shape [n_pool, N_FFT].
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Generator of the bits.
+    n_pool : int
+        Number of vectors.
+
+    Returns
+    -------
+    numpy.ndarray of complex64
+        [n_pool, N_FFT] symbols of unit power on the active subcarriers, 0 elsewhere.
+    """
     bits = rng.integers(0, 2, size=(n_pool, N_FFT, 2))
     sym = ((1 - 2 * bits[..., 0]) + 1j * (1 - 2 * bits[..., 1])) / np.sqrt(2)
     k = np.fft.fftfreq(N_FFT, 1.0 / N_FFT)
@@ -118,7 +131,32 @@ def reference_waveform(
     and SSS in its symbol 2 (with their CPs), every other subcarrier and symbol empty;
     time samples from the CP start of symbol 0 to the end of symbol 2, unit EPRE.
     ``template="sss"`` [ours] keeps only the SSS (unique per cell: the PSS repeats every
-    third RRH, whose stronger PSS otherwise leaks into a weaker cell's correlation)."""
+    third RRH, whose stronger PSS otherwise leaks into a weaker cell's correlation).
+
+    Parameters
+    ----------
+    num : Numerology
+        The sample rate F_s/D of the waveform.
+    n_id1 : int
+        Cell-ID group N_ID^(1) (0..335); with ``n_id2`` it selects the SSS.
+    n_id2 : int
+        N_ID^(2) (0..2): selects the PSS.
+    first_symbol : int
+        OFDM symbol index of the block's first symbol (sets the CP lengths,
+        :meth:`Numerology.cp_length`).
+    template : str
+        ``"pss_sss"`` or ``"sss"``.
+
+    Returns
+    -------
+    numpy.ndarray of complex64
+        The reference's time samples at F_s/D (three symbols with their CPs).
+
+    Raises
+    ------
+    ValueError
+        When ``template`` is neither ``"pss_sss"`` nor ``"sss"``.
+    """
     if template not in ("pss_sss", "sss"):
         raise ValueError(f"template must be 'pss_sss' or 'sss', got {template!r}")
     n = num.n_fft

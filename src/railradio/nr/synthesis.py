@@ -103,6 +103,30 @@ class Synthesizer:
 
     The random beams and loads are drawn for every RRH whatever the policy, so changing the
     policy or the serving cell changes no other draw.
+
+    Parameters
+    ----------
+    cfg : ReceiverConfig
+        The receiver configuration; its decimation D sets the synthesis rate F_s/D.
+    profile : TdlProfile
+        TDL power-delay profile (delays s, powers).
+    pool : numpy.ndarray of complex64
+        [n_pool, N_FFT] QPSK data symbols (:func:`railradio.nr.ssb.qpsk_pool`).
+    n_sinusoids : int
+        Sinusoids per tap of the sum-of-sinusoids fading.
+    full_channel_range_m : float
+        RRHs farther than this (2-D), m, are synthesized as one non-fading tap (inf: none).
+    data_beam : str
+        ``"serving"``, ``"train"``, ``"random"`` or ``"none"``.
+    load : float
+        Share of slots in which a non-serving RRH sends data, in [0, 1].
+    exact_spill : bool
+        Delayed taps spill into the next symbol as in the exact reference (False: wrapped).
+
+    Raises
+    ------
+    ValueError
+        When ``data_beam`` is unknown or ``load`` is outside [0, 1].
     """
 
     def __init__(
@@ -309,6 +333,33 @@ class Synthesizer:
 
         Returns ``(z, s_min)``: samples from the CP start of symbol ``s_min`` (negative:
         before the burst's first subframe).
+
+        Parameters
+        ----------
+        links : Links
+            The RRHs in range at the epoch.
+        rng : numpy.random.Generator
+            The epoch's generator (fading, beams, loads, noise).
+        t0_s : float
+            Time of the burst start, s.
+        noise : bool
+            Add the receiver's AWGN.
+        d2d_m : numpy.ndarray or None
+            [links] 2-D train–RRH distances, m (compared with ``full_channel_range_m``; None: all
+            full channel).
+        draws : list of dict or None
+            The links' random draws (:meth:`draws`); None: drawn here from ``rng``.
+        serving : numpy.ndarray of bool or None
+            See above.
+        motion : railradio.nr.motion.BurstMotion or None
+            See above.
+
+        Returns
+        -------
+        z : numpy.ndarray of complex64
+            The burst's samples at F_s/D (amplitude √W).
+        s_min : int
+            Symbol index of its first sample.
         """
         num = self.cfg.num
         n = num.n_fft

@@ -41,6 +41,33 @@ class TrackerConfig:
     ``distance_edges_m`` (increasing 2-D train–RRH distances [m]) the standard deviations of
     a measurement are those of its distance bin, ``sigma_aod_bins_rad`` and
     ``sigma_toa_bins_s`` (one more entry than edges), at the predicted distance.
+
+    Attributes
+    ----------
+    variant : str
+        ``aod``, ``toa`` or ``aod_toa``.
+    q : float
+        White-jerk intensity, m² s⁻⁵ (> 0).
+    sigma_aod_rad : float
+        AOD noise standard deviation, rad (> 0).
+    sigma_toa_s : float
+        TOA noise standard deviation, s (> 0).
+    gate : bool
+        Whether the χ² innovation gate is applied.
+    gate_prob : float
+        Probability of the χ² gate (1).
+    distance_edges_m : tuple of float
+        Positive, increasing 2-D distance bin edges, m (empty: no bins).
+    sigma_aod_bins_rad, sigma_toa_bins_s : tuple of float
+        Per-bin σ, rad and s: ``len(distance_edges_m) + 1`` positive values each.
+    start_speed_sigma_m_s : float
+        σ of the initial speed, m/s (> 0).
+
+    Raises
+    ------
+    ValueError
+        When ``variant`` is unknown, a σ, q or ``start_speed_sigma_m_s`` is not > 0, the edges
+        are not positive and increasing, or a bin tuple has the wrong length or a value ≤ 0.
     """
 
     variant: str = "aod_toa"
@@ -72,7 +99,14 @@ class TrackerConfig:
                     raise ValueError(f"{name} must hold {nb} positive values (one per distance bin), got {v!r}")
 
     def record(self) -> dict:
-        """The calibrated quantities as stored in ``calibration.json``."""
+        """The calibrated quantities as stored in ``calibration.json``.
+
+        Returns
+        -------
+        dict
+            ``q`` [m² s⁻⁵], ``sigma_aod_rad`` [rad], ``sigma_toa_s`` [s], and with distance bins
+            ``distance_edges_m`` [m], ``sigma_aod_bins_rad`` [rad], ``sigma_toa_bins_s`` [s] (lists).
+        """
         out = {"q": self.q, "sigma_aod_rad": self.sigma_aod_rad, "sigma_toa_s": self.sigma_toa_s}
         if self.distance_edges_m:
             out |= {
@@ -84,7 +118,25 @@ class TrackerConfig:
 
     @classmethod
     def from_record(cls, rec: dict, **kw) -> TrackerConfig:
-        """Inverse of :meth:`record` (``kw``: variant, gate, gate_prob)."""
+        """Inverse of :meth:`record` (``kw``: variant, gate, gate_prob).
+
+        Parameters
+        ----------
+        rec : dict
+            A record of :meth:`record` (extra keys are ignored).
+        **kw
+            Further :class:`TrackerConfig` fields (``variant``, ``gate``, ``gate_prob``).
+
+        Returns
+        -------
+        TrackerConfig
+            The tracker configuration.
+
+        Raises
+        ------
+        ValueError
+            As :class:`TrackerConfig`, for invalid values.
+        """
         bins = {k: tuple(rec[k]) for k in ("distance_edges_m", "sigma_aod_bins_rad", "sigma_toa_bins_s") if k in rec}
         return cls(q=rec["q"], sigma_aod_rad=rec["sigma_aod_rad"], sigma_toa_s=rec["sigma_toa_s"], **bins, **kw)
 
@@ -440,6 +492,41 @@ def track(
     rest: the seed's trajectory starts from standstill) and P0 (its covariance; speed and
     acceleration standard deviations 1 m/s and 1 m/s² [ours]). Also returns (``snapshot``) the snapshot
     LS fix of every epoch (no tracking) as a baseline.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        One receiver's estimates (a :func:`railradio.nr.simulate.simulate_epochs` dataset
+        selected at one ``receiver``): ``aod_hat`` [rad], ``toa_hat`` [s], their truths
+        ``aod_true``, ``toa_true``, and the strength variables, dims (``epoch``, ``cand``).
+        Also ``rrh`` (candidate RRH indices) and, for the panels' lever arm, ``train_panel_x`` [m].
+    rrh_x : numpy.ndarray
+        Along-track positions of the RRHs, m (``Deployment.x_m``).
+    rrh_y : float
+        Lateral offset of the RRHs from the track, m (``Deployment.offset_m``).
+    dh_m : float
+        RRH height above the train antenna, m (``h_bs_m - h_ut_m``).
+    dt_s : float
+        Epoch interval, s.
+    cfg : TrackerConfig
+        The tracker settings (variant, q, W, gate).
+    strength : str
+        Variable ranking the candidates (the receiver's selection): ``"peak"`` (combined
+        correlation peak), ``"ss_rsrp"`` or ``"best_score"``.
+    n_use : int
+        Strongest measured candidates used per epoch.
+    snapshot : bool
+        Also compute the per-epoch snapshot LS fix.
+    lever_arm : bool
+        Model the head/tail panels' along-track lever arm (False: the seed's point model).
+
+    Returns
+    -------
+    dict
+        ``state`` [epoch, 6] (x, y [m], v_x, v_y [m/s], a_x, a_y [m/s²]; NaN before ``k0``),
+        ``cov`` [epoch, 6, 6] (its covariance, SI units squared), ``nis`` [epoch] (1), ``n_used``
+        [epoch] (RRHs used per update), ``snapshot`` [epoch, 2] (x, y [m]; NaN without
+        ``snapshot``), ``k0`` (int, first tracked epoch), ``reacquired`` [epoch] (bool).
     """
     setup = track_setup(ds, rrh_x, rrh_y, dh_m, cfg, strength, n_use, lever_arm)
     k0, n = setup.k0, setup.n_epochs
@@ -463,7 +550,22 @@ def track(
 def nees_position(state: NDArray, cov: NDArray, x_true: NDArray) -> NDArray[np.float64]:
     """Normalized estimation error squared of the 2-D position, eᵀ P_pos⁻¹ e per epoch
     (e = estimate − truth, the train at y = 0); χ²₂-distributed for a consistent filter
-    (mean 2). NaN before the track starts. Scoring only: it uses the truth."""
+    (mean 2). NaN before the track starts. Scoring only: it uses the truth.
+
+    Parameters
+    ----------
+    state : numpy.ndarray
+        [epoch, 6] tracker states (x, y first, m).
+    cov : numpy.ndarray
+        [epoch, 6, 6] their covariances (position block in m²).
+    x_true : numpy.ndarray
+        [epoch] true along-track positions, m.
+
+    Returns
+    -------
+    numpy.ndarray
+        [epoch] position NEES (1); NaN where undefined.
+    """
     e = np.stack([state[:, 0] - np.asarray(x_true, float), state[:, 1]], axis=1)
     p = cov[:, :2, :2]
     det = p[:, 0, 0] * p[:, 1, 1] - p[:, 0, 1] * p[:, 1, 0]

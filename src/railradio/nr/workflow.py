@@ -8,12 +8,35 @@ SIM_KEYS = ("trajectory", "deployment", "radio", "antenna", "channel", "receiver
 
 
 def sim_config(c: dict) -> dict:
-    """The simulation-defining sections of an ``nr`` config (a rule's params)."""
+    """The simulation-defining sections of an ``nr`` config (a rule's params).
+
+    Parameters
+    ----------
+    c : dict
+        The ``nr`` section of the workflow config (or a sensitivity case's merged config).
+
+    Returns
+    -------
+    dict
+        The sections of ``c`` named in :data:`SIM_KEYS` that are present (same objects, not copies).
+    """
     return {k: c[k] for k in SIM_KEYS if k in c}
 
 
 def receiver_selection(c: dict) -> dict[str, str]:
-    """Receiver name -> the strength measure choosing its 3 measured RRHs."""
+    """Receiver name -> the strength measure choosing its 3 measured RRHs.
+
+    Parameters
+    ----------
+    c : dict
+        The ``nr`` section of the workflow config (or a sensitivity case's merged config).
+
+    Returns
+    -------
+    dict of str to str
+        ``"seed"`` -> ``c["receiver"]["selection"]``, then each ``receiver_variants`` name -> its
+        ``selection`` (config order).
+    """
     return {"seed": c["receiver"]["selection"]} | {
         name: v["selection"] for name, v in c.get("receiver_variants", {}).items()
     }

@@ -3,13 +3,9 @@
 The measurement table ``measured.tsv`` (beside this file) holds, per rule, the largest
 wall time and peak resident memory of its jobs in the last paper-scale run:
 
-* rules with a ``benchmark:`` directive: Snakemake's benchmark files
-  ``results/benchmarks/**/*.tsv`` (columns ``s`` and ``max_rss``), each attributed to its
-  rule by the rule's benchmark pattern and wildcard constraints;
-* the other rules (figures, merges, key numbers, paper): a one-off re-run of those rules on
-  the paper-scale intermediates (``--forcerun <rules>``, -j1) with ``rss_hook/`` on
-  PYTHONPATH and ``SCALE_MEMLOG=memlog.jsonl``, which records each job script's wall time
-  and peak RSS (``getrusage``, an upper bound) as JSON lines (``--extra``).
+Snakemake's benchmark files ``results/benchmarks/**/*.tsv`` (columns ``s`` and ``max_rss``):
+every rule that runs a job has a ``benchmark:`` directive, and each file is attributed to its
+rule by the rule's benchmark pattern and wildcard constraints.
 
 A rule not yet measured may carry a hand-written row with source ``estimate`` (a like
 rule's values) until its first paper-scale run.
@@ -25,7 +21,7 @@ retried once (``retries: 1``) with twice the limit.
 
 Usage (from the repository root)::
 
-    python workflow/profiles/slurm/derive_resources.py measure --extra memlog.jsonl
+    python workflow/profiles/slurm/derive_resources.py measure
     python workflow/profiles/slurm/derive_resources.py print     # the set-resources block
 
 ``tests/test_scale.py`` checks that the profile's set-resources equal ``derive()`` of the
@@ -37,7 +33,6 @@ from __future__ import annotations
 import argparse
 import ast
 import csv
-import json
 import math
 import re
 import sys
@@ -83,8 +78,8 @@ def _benchmark_regex(body: str) -> re.Pattern | None:
     return re.compile(pattern + re.escape(m.group(1)[pos:]) + "$")
 
 
-def measure(root: Path = ROOT, extra: Path | None = None) -> list[dict]:
-    """The measurement table from the benchmark files (and the extra JSON-lines records)."""
+def measure(root: Path = ROOT) -> list[dict]:
+    """The measurement table from the benchmark files."""
     regexes = {r: rx for r, body in rules_in_workflow(root).items() if (rx := _benchmark_regex(body))}
     per_rule: dict[str, list[tuple[float, float]]] = {}
     source: dict[str, str] = {}
@@ -96,14 +91,6 @@ def measure(root: Path = ROOT, extra: Path | None = None) -> list[dict]:
         for row in csv.DictReader(tsv.open(), delimiter="\t"):
             per_rule.setdefault(owners[0], []).append((float(row["s"]), float(row["max_rss"])))
             source[owners[0]] = "benchmark"
-    if extra is not None:
-        for line in extra.read_text().splitlines():
-            rec = json.loads(line)
-            if rec["rule"] in source and source[rec["rule"]] == "benchmark":
-                continue
-            rss = max(rec["maxrss_mb"], rec.get("child_maxrss_mb", 0.0))
-            per_rule.setdefault(rec["rule"], []).append((rec["wall_s"], rss))
-            source[rec["rule"]] = "rerun"
     return [
         {
             "rule": r,
@@ -158,14 +145,13 @@ def set_resources_yaml(res: dict[str, dict[str, int]]) -> str:
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("command", choices=("measure", "print"))
-    ap.add_argument("--extra", type=Path, help="JSON-lines records of the rules without benchmark files")
     a = ap.parse_args(argv)
     if a.command == "measure":
         # rows measured now replace the table's; rules not measured now keep their row
         # (a rule added by hand before its first measurement: source 'estimate'); rules
         # gone from the workflow are dropped
         rows = {r["rule"]: r for r in (read_table() if TABLE.exists() else [])}
-        rows.update({r["rule"]: r for r in measure(ROOT, a.extra)})
+        rows.update({r["rule"]: r for r in measure(ROOT)})
         live = rules_in_workflow(ROOT)
         write_table([rows[r] for r in sorted(rows) if r in live])
     print(set_resources_yaml(derive(read_table())))
