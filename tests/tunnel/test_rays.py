@@ -8,7 +8,7 @@ import pytest
 from railradio.constants import SPEED_OF_LIGHT_M_S
 from railradio.tunnel.channel import beat_length_m, coherent_gain_by_order, moving_mean, offset_grid_m, tabulate
 from railradio.tunnel.geometry import Cable, Tunnel
-from railradio.tunnel.keys import ENGINE_TOL_COHERENT_DB, ENGINE_TOL_MEAN_DB
+from railradio.tunnel.key_specs import ENGINE_TOL_COHERENT_DB, ENGINE_TOL_MEAN_DB
 from railradio.tunnel.lifting import image_coherent_gain, lift, reflection_product, trace
 from railradio.tunnel.materials import CONCRETE_900MHZ
 from railradio.tunnel.rays import image_families, sbr_families
