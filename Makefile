@@ -9,7 +9,7 @@ RUFF_PATHS := src workflow tests benchmarks
 export HDF5_USE_FILE_LOCKING := FALSE
 export MPLBACKEND := Agg
 
-.PHONY: all figures numbers paper test test-fast bench reproduce report lint expected publish fidelity dag gallery clean
+.PHONY: all figures numbers paper test test-fast bench reproduce report lint expected publish fidelity records dag gallery clean
 
 all: figures numbers
 
@@ -65,9 +65,14 @@ expected: $(STAMP)  ## regenerate tests/expected/key_numbers_ci.json (CI scale, 
 publish: numbers  ## copy the paper-scale key numbers to paper/numbers.json (commit it)
 	cp results/key_numbers.json paper/numbers.json
 
+records: $(STAMP)  ## the nr reproduction map and sensitivity cases at paper scale -> paper/{map,cases}_numbers.json (commit them)
+	$(SNAKE) records -j$(JOBS)
+	$(BIN)/python -m railradio.nr.records publish map results/nr/map/key_numbers.json
+	$(BIN)/python -m railradio.nr.records publish cases results/nr/cases/key_numbers.json
+
 fidelity: $(STAMP)  ## the nr shortcuts measured at paper scale (outside all) -> paper/fidelity_numbers.json (commit it)
 	$(SNAKE) fidelity -j$(JOBS)
-	$(BIN)/python -m railradio.nr.fidelity_record publish results/nr/fidelity/key_numbers.json paper/
+	$(BIN)/python -m railradio.nr.records publish fidelity results/nr/fidelity/key_numbers.json
 	cp results/nr/fidelity/nr_fidelity.png docs/gallery/
 
 GALLERY := fusion_rmse_vs_distance nr_position_error_cdf nr_sensitivity tunnel_position_error_cdf \

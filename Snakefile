@@ -60,6 +60,15 @@ rule fidelity:
         "results/nr/fidelity/key_numbers.json",
 
 
+# the nr targets published as records (make records; railradio.nr.records)
+rule records:
+    input:
+        "results/nr/map/key_numbers.json",
+        "results/nr/cases/key_numbers.json",
+        STUDY_FIGURES["nr_map"],
+        STUDY_FIGURES.get("nr_sensitivity", []),
+
+
 rule nr_imm_all:
     input:
         STUDY_FIGURES["nr_imm"],

@@ -77,6 +77,32 @@ def test_paper_scale_dag_resolves(tmp_path):
     counts = job_counts(run.stdout + run.stderr)
     # 10 distances + 12 TDOA errors + 10 AOA errors + the reference point
     assert counts["fusion_point"] == 33 and counts["fusion_figure"] == 3
+    # the figures of the published nr records: `all` runs their targets
+    assert counts["nr_map_cell"] == 19 and counts["nr_map_key_numbers"] == 1 and counts["nr_case_key_numbers"] == 1
+
+
+def test_reproduction_reads_the_nr_records_only_while_they_are_current(tmp_path):
+    """`numbers` at paper scale (what `make reproduce` runs) merges the published map and
+    cases records instead of running them; a changed config of one makes its record stale
+    and brings back its jobs only."""
+
+    def numbers_jobs() -> dict[str, int]:
+        run = smk(wd, "numbers", "-n", ci=False, timeout=COMMAND_TIMEOUT_S)
+        return job_counts(run.stdout + run.stderr)
+
+    wd = _copy_workflow(tmp_path)
+    counts = numbers_jobs()
+    assert counts["nr_shard"] == 12 and counts["nr_imm"] == 3
+    assert not [r for r in counts if r.startswith(("nr_map_", "nr_case_"))], counts
+    cfg = wd / "config/config.yaml"
+    text = cfg.read_text(encoding="utf-8")
+    cfg.write_text(text.replace("n_boot: 1000", "n_boot: 999"), encoding="utf-8")
+    counts = numbers_jobs()
+    assert counts["nr_map_key_numbers"] == 1 and counts["nr_map_cell"] == 19
+    assert not [r for r in counts if r.startswith("nr_case_")], counts
+    cfg.write_text(text.replace("epochs: 2500 ", "epochs: 2400 "), encoding="utf-8")
+    counts = numbers_jobs()
+    assert counts["nr_case_key_numbers"] == 1 and not [r for r in counts if r.startswith("nr_map_")], counts
 
 
 def test_slurm_profile_dry_run_resolves(tmp_path):

@@ -3,11 +3,13 @@
 # one shortcut replaced by the exact computation, and against the exact computation. Outside
 # `all` (the exact reference costs ~14 s an epoch): target `fidelity`; `make fidelity`
 # publishes its key numbers to paper/fidelity_numbers.json, which the key-number merge reads.
+from railradio.nr import records as nr_records
+
 NR_FID = NR["fidelity"]
 NR_FID_REAL = f"r{NR_FID['realization']}"
 # the published paper-scale numbers (make fidelity) join every run's key numbers
-if Path(workflow.basedir, "paper/fidelity_numbers.json").exists():
-    KEY_NUMBER_FRAGMENTS.append("paper/fidelity_numbers.json")
+if Path(workflow.basedir, nr_records.FIDELITY.numbers_file).exists():
+    KEY_NUMBER_FRAGMENTS.append(nr_records.FIDELITY.numbers_file)
 
 
 rule nr_fidelity_shard:

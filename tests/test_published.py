@@ -1,0 +1,66 @@
+"""Published records (railradio.published): CI reads them instead of re-running their
+targets, so a stale record must fail here, and the merge must read only a current one."""
+
+import json
+from pathlib import Path
+
+import pytest
+import yaml
+
+from railradio.config import load_schema, validate_config
+from railradio.nr.records import RECORDS
+from railradio.published import Record
+
+from .conftest import ROOT
+
+
+def _config() -> dict:
+    config = yaml.safe_load((ROOT / "config/config.yaml").read_text(encoding="utf-8"))
+    return validate_config(config, load_schema(ROOT / "workflow/schemas/config.schema.yaml"))
+
+
+@pytest.mark.parametrize("name", sorted(RECORDS))
+def test_published_records_are_from_this_code_and_config(name):
+    """paper/<name>_numbers.json comes from `make <name>`: its provenance must name the code
+    and config that are here, or its numbers are stale (re-run `make fidelity` / `make records`)."""
+    assert RECORDS[name].stale(ROOT, _config()) == [], f"paper/{name}_numbers.json is stale: re-run `make {name}`"
+
+
+def test_a_record_goes_stale_with_its_code_its_rule_file_or_its_config(tmp_path):
+    root = tmp_path
+    (root / "paper").mkdir()
+    (root / "workflow/scripts").mkdir(parents=True)
+    (root / "workflow/rules").mkdir(parents=True)
+    script, rules = root / "workflow/scripts/t.py", root / "workflow/rules/t.smk"
+    script.write_text("import json\n", encoding="utf-8")
+    rules.write_text("rule t:\n    output: 'x'\n", encoding="utf-8")
+    rec = Record("t", ("workflow/scripts/t.py",), lambda c: {"a": c["a"]}, rule_files=("workflow/rules/t.smk",))
+    assert rec.stale(root, {"a": 1}) == ["not published"]
+    numbers = tmp_path / "k.json"
+    numbers.write_text(json.dumps({"t.x": {"value": 1.0}}), encoding="utf-8")
+    rec.publish(numbers, root, {"a": (1, 2)})
+    assert json.loads((root / rec.numbers_file).read_text()) == {"t.x": {"value": 1.0}}
+    assert rec.stale(root, {"a": [1, 2]}) == []  # as JSON reads it back
+    assert rec.stale(root, {"a": [1, 3]}) == ["config"]
+    script.write_text("import json  # edited\n", encoding="utf-8")
+    assert rec.stale(root, {"a": [1, 2]}) == ["code"]
+    script.write_text("import json\n", encoding="utf-8")
+    rules.write_text("rule t:\n    output: 'y'\n", encoding="utf-8")
+    assert rec.stale(root, {"a": [1, 3]}) == ["code", "config"]
+
+
+@pytest.mark.parametrize(("name", "prefix"), [("map", "nr.map."), ("cases", "sens.nr.")])
+def test_nr_records_hold_their_targets_keys_and_nothing_else(name, prefix):
+    """A record replaces its target's fragment: the same keys as that fragment at CI scale
+    (all under one prefix), and the published paper numbers carry them unchanged."""
+    published = json.loads((ROOT / RECORDS[name].numbers_file).read_text(encoding="utf-8"))
+    ci = json.loads((ROOT / "tests/expected/key_numbers_ci.json").read_text(encoding="utf-8"))
+    assert set(published) == {k for k in ci if k.startswith(prefix)}
+    paper = json.loads((ROOT / "paper/numbers.json").read_text(encoding="utf-8"))
+    assert {k: paper[k] for k in published} == published
+
+
+def test_records_name_existing_files():
+    for rec in RECORDS.values():
+        for f in (*rec.scripts, *rec.rule_files):
+            assert Path(ROOT / f).is_file(), f
