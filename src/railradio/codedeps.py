@@ -36,7 +36,22 @@ DATA_DIR = SRC_ROOT / "data"
 
 
 def module_path(name: str, root: Path = SRC_ROOT) -> Path | None:
-    """The file of ``railradio`` module ``name`` (a package: its ``__init__.py``), or None."""
+    """The file of ``railradio`` module ``name`` (a package: its ``__init__.py``), or None.
+
+    Parameters
+    ----------
+    name : str
+        Dotted module name, e.g. ``"railradio.fusion.arc"``.
+    root : pathlib.Path, default SRC_ROOT
+        The ``railradio`` package directory to resolve modules and package data against.
+
+    Returns
+    -------
+    pathlib.Path or None
+        ``<root>/<sub>/__init__.py`` for a package or ``<root>/<sub>.py`` for a module; None
+        if ``name`` is not under ``railradio`` or names no file (e.g. a function imported
+        with ``from railradio.x import y``).
+    """
     parts = name.split(".")
     if parts[0] != PACKAGE:
         return None
@@ -124,6 +139,27 @@ def script_closure(script: str | Path, root: Path = SRC_ROOT) -> dict[str, Path]
     Names: ``railradio.x.y`` for library modules, ``data/<file>`` for package data,
     ``local/<dir>/<file>.py`` for helper scripts (the script itself excluded: Snakemake
     tracks it). ``root``: the ``railradio`` package directory to resolve against.
+
+    Parameters
+    ----------
+    script : str or pathlib.Path
+        Path of the workflow script (e.g. ``workflow/scripts/fusion/point.py``); the other
+        directories beside its directory are the other script directories.
+    root : pathlib.Path, default SRC_ROOT
+        The ``railradio`` package directory to resolve modules and package data against.
+
+    Returns
+    -------
+    dict of str to pathlib.Path
+        Stable name -> path of every file reached, sorted by name.
+
+    Raises
+    ------
+    ValueError
+        If ``script`` is not a file, a reached file uses a relative import, or a helper
+        module is found in more than one other script directory.
+    SyntaxError
+        If a reached file is not valid Python.
     """
     script = Path(script).resolve()
     if not script.is_file():
@@ -163,7 +199,27 @@ def script_closure(script: str | Path, root: Path = SRC_ROOT) -> dict[str, Path]
 
 def third_party(script: str | Path, root: Path = SRC_ROOT) -> dict[str, str]:
     """Installed distributions (name -> version) of the third-party packages that the
-    script and the files of its closure import (``numpy``, ``scipy``, ``numba``, …)."""
+    script and the files of its closure import (``numpy``, ``scipy``, ``numba``, …).
+
+    Parameters
+    ----------
+    script : str or pathlib.Path
+        Path of the workflow script (e.g. ``workflow/scripts/fusion/point.py``); the other
+        directories beside its directory are the other script directories.
+    root : pathlib.Path, default SRC_ROOT
+        The ``railradio`` package directory to resolve modules and package data against.
+
+    Returns
+    -------
+    dict of str to str
+        Distribution name -> installed version, sorted by name; standard-library modules
+        have no distribution and do not appear.
+
+    Raises
+    ------
+    ValueError
+        As :func:`script_closure`.
+    """
     files = [Path(script).resolve(), *(p for n, p in script_closure(script, root).items() if not n.startswith("data/"))]
     tops = {n.split(".")[0] for f in files for n in _facts(f)[0]} - {PACKAGE}
     dists = _distributions()
@@ -185,7 +241,28 @@ def _distributions() -> dict[str, tuple[tuple[str, str], ...]]:
 def script_code_hash(script: str | Path, root: Path = SRC_ROOT) -> str:
     """SHA-256 (16 hex digits) over the script's own bytes (Snakemake notices a changed
     script by its time stamp only), the names and bytes of :func:`script_closure`, and the
-    versions of the third-party distributions they import (:func:`third_party`)."""
+    versions of the third-party distributions they import (:func:`third_party`).
+
+    Parameters
+    ----------
+    script : str or pathlib.Path
+        Path of the workflow script (e.g. ``workflow/scripts/fusion/point.py``); the other
+        directories beside its directory are the other script directories.
+    root : pathlib.Path, default SRC_ROOT
+        The ``railradio`` package directory to resolve modules and package data against.
+
+    Returns
+    -------
+    str
+        The first 16 hexadecimal digits of the SHA-256 digest.
+
+    Raises
+    ------
+    OSError
+        If ``script`` cannot be read (e.g. FileNotFoundError).
+    ValueError
+        As :func:`script_closure`.
+    """
     h = hashlib.sha256()
     h.update(Path(script).read_bytes())
     for name, path in script_closure(script, root).items():

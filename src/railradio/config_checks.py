@@ -69,7 +69,20 @@ def _fusion(cfg: Mapping[str, Any]) -> Iterator[Problem]:
 
 
 def main_epochs(nr: Mapping[str, Any]) -> int | None:
-    """Epochs of an nr run: the trajectory's, cut at ``max_epochs`` (None if it is invalid)."""
+    """Epochs of an nr run: the trajectory's, cut at ``max_epochs`` (None if it is invalid).
+
+    Parameters
+    ----------
+    nr : mapping
+        The ``nr`` section of the config (schema-valid, defaults filled).
+
+    Returns
+    -------
+    int or None
+        Number of epochs of the run: the trajectory's, at most ``max_epochs`` when that is
+        set; None if :func:`railradio.nr.simulate.scenario_from_config` rejects the section
+        (ValueError or KeyError).
+    """
     from railradio.nr.simulate import scenario_from_config
 
     try:
@@ -80,7 +93,27 @@ def main_epochs(nr: Mapping[str, Any]) -> int | None:
 
 
 def nr_problems(nr: Mapping[str, Any], root: str = "nr", main: bool = True) -> Iterator[Problem]:
-    """The rules of one nr config (the main run's, ``main=True``, or a merged case's)."""
+    """The rules of one nr config (the main run's, ``main=True``, or a merged case's).
+
+    Parameters
+    ----------
+    nr : mapping
+        An nr config, schema-valid: the ``nr`` section, or a sensitivity case or map cell
+        merged into it.
+    root : str, default "nr"
+        Dotted key under which the problems are reported (e.g.
+        ``"nr.sensitivity.cases.<case>"``).
+    main : bool, default True
+        True for the main run: also check the rules only it has to meet (``n_shards`` and
+        ``fidelity`` against the run's epochs and realizations).
+
+    Yields
+    ------
+    tuple of (str, object, str)
+        A :data:`Problem` per broken rule: the dotted key, its value (``"…"`` when the values
+        are inconsistent as a whole) and what the rule allows.  If the study's scenario
+        cannot be built from ``nr``, that is the only problem, under ``root``.
+    """
     from railradio.nr.simulate import calibration_trajectory, scenario_from_config
 
     try:
@@ -375,7 +408,21 @@ def _tunnel(cfg: Mapping[str, Any]) -> Iterator[Problem]:
 
 
 def problems(cfg: Mapping[str, Any], schema: Mapping[str, Any]) -> list[Problem]:
-    """Every cross-key rule ``cfg`` (schema-valid, defaults filled) breaks."""
+    """Every cross-key rule ``cfg`` (schema-valid, defaults filled) breaks.
+
+    Parameters
+    ----------
+    cfg : mapping
+        The whole workflow config, schema-valid with the defaults filled.
+    schema : mapping
+        The JSON schema of the whole config (``workflow/schemas/config.schema.yaml``).
+
+    Returns
+    -------
+    list of tuple of (str, object, str)
+        One :data:`Problem` per broken rule (dotted key, its value or ``"…"``, what the rule
+        allows), by study: fusion, nr, handover, chain, tunnel; empty if none is broken.
+    """
     out: list[Problem] = []
     out += _fusion(cfg)
     out += _nr(cfg, schema)
@@ -386,7 +433,21 @@ def problems(cfg: Mapping[str, Any], schema: Mapping[str, Any]) -> list[Problem]
 
 
 def check_config(cfg: Mapping[str, Any], schema: Mapping[str, Any]) -> None:
-    """Raise :class:`ConfigError` naming each key whose value breaks a rule between keys."""
+    """Raise :class:`ConfigError` naming each key whose value breaks a rule between keys.
+
+    Parameters
+    ----------
+    cfg : mapping
+        The whole workflow config, schema-valid with the defaults filled.
+    schema : mapping
+        The JSON schema of the whole config (``workflow/schemas/config.schema.yaml``).
+
+    Raises
+    ------
+    railradio.config.ConfigError
+        If any rule of :func:`problems` is broken; the message lists every broken rule with
+        its key, value and what is allowed.
+    """
     found = problems(cfg, schema)
     if found:
         lines = [

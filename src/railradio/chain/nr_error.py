@@ -78,6 +78,29 @@ def hold_and_drift(err_m: np.ndarray, period_s: float, drift_m_s: float) -> tupl
     """Fill NaN epochs: last fix held plus drift·age (sign +1); (filled error, age [s]).
 
     The series must start with a fix (leading NaNs are cut by :func:`series_from_runs`).
+
+    Parameters
+    ----------
+    err_m : numpy.ndarray of float
+        [E] along-track error of one contiguous segment, one value per tracker epoch [m];
+        NaN where the tracker has no output, the first value finite.
+    period_s : float
+        Tracker epoch period [s].
+    drift_m_s : float
+        Dead-reckoning drift rate during outages [m/s].
+
+    Returns
+    -------
+    err_m : numpy.ndarray of float
+        [E] the error with each NaN epoch replaced by the last fix plus ``drift_m_s`` times
+        its age [m]; the fixes unchanged.
+    age_s : numpy.ndarray of float
+        [E] time since the last fix [s], 0 at an epoch with a fix.
+
+    Raises
+    ------
+    ValueError
+        If ``err_m`` is empty or its first value is not finite.
     """
     e = np.asarray(err_m, dtype=float)
     if e.size == 0 or not np.isfinite(e[0]):
@@ -217,7 +240,24 @@ def bootstrap(
 
 
 def error_stats(err_m: np.ndarray) -> dict[str, float]:
-    """mean (signed), std, RMS and 95th percentile of |e| [m] of an error sample."""
+    """mean (signed), std, RMS and 95th percentile of |e| [m] of an error sample.
+
+    Parameters
+    ----------
+    err_m : array_like of float
+        Along-track position errors e [m], any shape; non-finite values are ignored.
+
+    Returns
+    -------
+    dict of str to float
+        ``mean`` (signed), ``std`` (population, ddof 0), ``rms`` and ``p95`` (95th
+        percentile of |e|) [m] of the finite values.
+
+    Raises
+    ------
+    ValueError
+        If ``err_m`` holds no finite value.
+    """
     e = np.asarray(err_m, dtype=float).ravel()
     e = e[np.isfinite(e)]
     if e.size == 0:
@@ -231,7 +271,24 @@ def error_stats(err_m: np.ndarray) -> dict[str, float]:
 
 
 def speed_mask(ds: xr.Dataset, speed_kmh: float, halfwidth_kmh: float) -> np.ndarray:
-    """bool [epoch]: true speed within ``halfwidth_kmh`` of ``speed_kmh``."""
+    """bool [epoch]: true speed within ``halfwidth_kmh`` of ``speed_kmh``.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        An nr dataset (IMM or track file) with ``t`` [s] and the true along-track position
+        ``x_true`` [m] over epoch.
+    speed_kmh : float
+        Centre of the speed window, the handover speed [km/h].
+    halfwidth_kmh : float
+        Half width of the speed window [km/h].
+
+    Returns
+    -------
+    numpy.ndarray of bool
+        Shape [epoch]: True where the true speed (the gradient of ``x_true`` over ``t``)
+        differs from ``speed_kmh`` by at most ``halfwidth_kmh``.
+    """
     t = ds["t"].values
     return np.abs(np.gradient(ds["x_true"].values, t) / KMH - speed_kmh) <= halfwidth_kmh
 

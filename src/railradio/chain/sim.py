@@ -57,7 +57,32 @@ def gm_label(sigma_m: float) -> str:
 
 
 def gm_error_m(white: np.ndarray, sigma_m: float, corr_s: float, period_s: float) -> np.ndarray:
-    """Untruncated first-order Gauss–Markov error [m] from standard normals [..., K]."""
+    """Untruncated first-order Gauss–Markov error [m] from standard normals [..., K].
+
+    Parameters
+    ----------
+    white : numpy.ndarray of float
+        Standard normal draws [1], shape [..., K]; the process runs along the last axis
+        (e.g. a block's ``gnss_white``, [B runs, K handover samples]).
+    sigma_m : float
+        Stationary standard deviation σ of the error [m], finite, >= 0.
+    corr_s : float
+        Correlation time of the process [s], > 0 (unused when ``sigma_m`` is 0).
+    period_s : float
+        Time between successive samples along the last axis [s], > 0.
+
+    Returns
+    -------
+    numpy.ndarray of float
+        Along-track position error [m], the shape of ``white``: a stationary AR(1) process
+        with coefficient exp(-period_s/corr_s) and standard deviation σ (zeros for σ = 0).
+
+    Raises
+    ------
+    ValueError
+        If ``sigma_m`` is negative or not finite, or (with ``sigma_m`` > 0) ``corr_s`` <= 0
+        or ``period_s`` = 0 (an AR(1) coefficient of 1).
+    """
     if not sigma_m >= 0 or not math.isfinite(sigma_m):
         raise ValueError(f"sigma_m must be a finite number >= 0, got {sigma_m!r}")
     if sigma_m == 0.0:
@@ -66,7 +91,30 @@ def gm_error_m(white: np.ndarray, sigma_m: float, corr_s: float, period_s: float
 
 
 def nr_rng(seed: int, speed_kmh: float, filt: str, block: int) -> np.random.Generator:
-    """Generator of the nr bootstrap of one block (its own stream beside the handover's)."""
+    """Generator of the nr bootstrap of one block (its own stream beside the handover's).
+
+    Parameters
+    ----------
+    seed : int
+        The config's master seed, >= 0.
+    speed_kmh : float
+        Train speed of the chain [km/h]; keyed as a float.
+    filt : str
+        nr tracker (filter) name, e.g. ``"ekf"``.
+    block : int
+        Block index, >= 0.
+
+    Returns
+    -------
+    numpy.random.Generator
+        The generator of ``(seed, spawn_key("handover", stable_id("chain"),
+        stable_id(float(speed_kmh)), stable_id(filt), block))``.
+
+    Raises
+    ------
+    ValueError
+        If ``seed`` or ``block`` is not a non-negative integer.
+    """
     return make_rng(
         seed, spawn_key("handover", stable_id("chain"), stable_id(float(speed_kmh)), stable_id(filt), int(block))
     )

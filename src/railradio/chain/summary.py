@@ -98,6 +98,30 @@ def crossover(sigmas_m, p_policy, p_ref: float) -> tuple[float, str]:
     Returns (σ*, status): ``found`` (σ* finite), ``above`` (p_policy > p_ref at every σ of
     the grid: the crossover lies beyond the largest σ, σ* = NaN) or ``never`` (p_policy ≤
     p_ref already at the smallest σ, σ* = NaN).
+
+    Parameters
+    ----------
+    sigmas_m : array_like of float
+        Gauss–Markov σ grid [m], 1-D, strictly ascending, at least 2 values.
+    p_policy : array_like of float
+        The policy's rate at each σ (its success rate or a 95 % bound of it) [1], finite,
+        the shape of ``sigmas_m``.
+    p_ref : float
+        The reference rate (A3's success rate or a 95 % bound of it) [1], finite.
+
+    Returns
+    -------
+    sigma_star_m : float
+        The crossover σ* [m], interpolated linearly between the last σ above ``p_ref`` and
+        the first at or below it; NaN unless ``status`` is ``found``.
+    status : str
+        ``"found"``, ``"above"`` or ``"never"`` (see above).
+
+    Raises
+    ------
+    ValueError
+        If ``sigmas_m`` and ``p_policy`` are not 1-D of equal length >= 2, ``sigmas_m`` is not
+        strictly ascending, or ``p_policy`` or ``p_ref`` is not finite.
     """
     s = np.asarray(sigmas_m, dtype=float)
     p = np.asarray(p_policy, dtype=float)

@@ -126,12 +126,37 @@ class ArcGeometry:
         return self.cell.train_interval_m
 
     def sagitta_m(self, s_m: ArrayLike) -> NDArray[np.float64]:
-        """Offset of the arc from its tangent line y = 0 at arc length s, (1 - cos κs)/κ [m]."""
+        """Offset of the arc from its tangent line y = 0 at arc length s, (1 - cos κs)/κ [m].
+
+        Parameters
+        ----------
+        s_m : array_like of float
+            Arc length(s) s of the train along the track [m], any shape.
+
+        Returns
+        -------
+        numpy.ndarray of float
+            The sagitta (1 - cos κs)/κ [m], >= 0, the shape of ``s_m``; 0 on the straight
+            track.
+        """
         return self.track_xy_m(s_m)[1]
 
     def track_xy_m(self, s_m: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Track point p(s) = (sin κs/κ, (1 - cos κs)/κ) [m], written with sinc so that
-        κ = 0 is the straight track exactly."""
+        κ = 0 is the straight track exactly.
+
+        Parameters
+        ----------
+        s_m : array_like of float
+            Arc length(s) s of the train along the track [m], any shape.
+
+        Returns
+        -------
+        x : numpy.ndarray of float
+            x coordinate sin κs / κ of the track point [m], the shape of ``s_m``.
+        y : numpy.ndarray of float
+            y coordinate (1 - cos κs) / κ of the track point [m], the shape of ``s_m``.
+        """
         s = np.asarray(s_m, dtype=float)
         k = self.curvature_per_m
         x = s * np.sinc(k * s / np.pi)
@@ -139,7 +164,21 @@ class ArcGeometry:
         return x, y
 
     def tangent(self, s_m: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """Unit tangent t(s) = (cos κs, sin κs)."""
+        """Unit tangent t(s) = (cos κs, sin κs).
+
+        Parameters
+        ----------
+        s_m : array_like of float
+            Arc length(s) s of the train along the track [m], any shape.
+
+        Returns
+        -------
+        tx : numpy.ndarray of float
+            x component cos κs of the unit tangent in the direction of increasing s [1], the
+            shape of ``s_m``.
+        ty : numpy.ndarray of float
+            y component sin κs of the unit tangent [1], the shape of ``s_m``.
+        """
         a = self.curvature_per_m * np.asarray(s_m, dtype=float)
         return np.cos(a), np.sin(a)
 
@@ -155,7 +194,20 @@ class ArcGeometry:
 
     # --- measurement model ------------------------------------------------------------
     def ranges_m(self, s_m: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """Distances r1, r2 [m] from the train at arc length s to BS1 and BS2."""
+        """Distances r1, r2 [m] from the train at arc length s to BS1 and BS2.
+
+        Parameters
+        ----------
+        s_m : array_like of float
+            Arc length(s) s of the train along the track [m], any shape.
+
+        Returns
+        -------
+        r1 : numpy.ndarray of float
+            Distance from the track point p(s) to BS1 [m], the shape of ``s_m``.
+        r2 : numpy.ndarray of float
+            Distance from the track point p(s) to BS2 [m], the shape of ``s_m``.
+        """
         px, py = self.track_xy_m(s_m)
         (x1, y1), (x2, y2) = self.bs_xy_m
         return np.hypot(px - x1, py - y1), np.hypot(px - x2, py - y2)
@@ -177,7 +229,19 @@ class ArcGeometry:
         return r2 - r1
 
     def range_difference_slope(self, s_m: ArrayLike) -> NDArray[np.float64]:
-        """dΔ/ds = t·(p - b2)/r2 - t·(p - b1)/r1 [m/m]."""
+        """dΔ/ds = t·(p - b2)/r2 - t·(p - b1)/r1 [m/m].
+
+        Parameters
+        ----------
+        s_m : array_like of float
+            Arc length(s) s of the train along the track [m], any shape.
+
+        Returns
+        -------
+        numpy.ndarray of float
+            Derivative of the range difference r2 - r1 with respect to the arc length [m/m],
+            the shape of ``s_m``.
+        """
         px, py = self.track_xy_m(s_m)
         tx, ty = self.tangent(s_m)
         (x1, y1), (x2, y2) = self.bs_xy_m
@@ -185,13 +249,37 @@ class ArcGeometry:
         return (tx * (px - x2) + ty * (py - y2)) / r2 - (tx * (px - x1) + ty * (py - y1)) / r1
 
     def aoa_rad(self, s_m: ArrayLike) -> NDArray[np.float64]:
-        """Bearing of the train from BS1, atan2(p_y - b1_y, p_x - b1_x) [rad]."""
+        """Bearing of the train from BS1, atan2(p_y - b1_y, p_x - b1_x) [rad].
+
+        Parameters
+        ----------
+        s_m : array_like of float
+            Arc length(s) s of the train along the track [m], any shape.
+
+        Returns
+        -------
+        numpy.ndarray of float
+            Bearing θ of the track point p(s) seen from BS1, counted from the +x direction
+            [rad], in (-π, π], the shape of ``s_m``.
+        """
         px, py = self.track_xy_m(s_m)
         (x1, y1), _ = self.bs_xy_m
         return np.arctan2(py - y1, px - x1)
 
     def aoa_slope(self, s_m: ArrayLike) -> NDArray[np.float64]:
-        """dθ/ds = ((p - b1) × t) / r1² [rad/m] (d/r1² on the straight track)."""
+        """dθ/ds = ((p - b1) × t) / r1² [rad/m] (d/r1² on the straight track).
+
+        Parameters
+        ----------
+        s_m : array_like of float
+            Arc length(s) s of the train along the track [m], any shape.
+
+        Returns
+        -------
+        numpy.ndarray of float
+            Derivative of the bearing at BS1 with respect to the arc length [rad/m], the shape
+            of ``s_m``.
+        """
         px, py = self.track_xy_m(s_m)
         tx, ty = self.tangent(s_m)
         (x1, y1), _ = self.bs_xy_m
@@ -218,7 +306,29 @@ class ArcGeometry:
 def fisher_information_arc(
     s_m: ArrayLike, sigma_delta_m: float, sigma_theta_rad: float, geom: ArcGeometry
 ) -> NDArray[np.float64]:
-    """Fisher information J(s) about the along-track coordinate s [1/m²] (module docstring)."""
+    """Fisher information J(s) about the along-track coordinate s [1/m²] (module docstring).
+
+    Parameters
+    ----------
+    s_m : array_like of float
+        Arc length(s) s of the train along the track [m], any shape.
+    sigma_delta_m : float
+        Standard deviation σ_Δ of the range-difference error, c·σ_TDOA [m], finite, > 0.
+    sigma_theta_rad : float
+        Standard deviation σ_θ of the AOA error at BS1 [rad], finite, > 0.
+    geom : ArcGeometry
+        The layout on the arc.
+
+    Returns
+    -------
+    numpy.ndarray of float
+        J(s) = (dΔ/ds)² / σ_Δ² + (dθ/ds)² / σ_θ² [1/m²], the shape of ``s_m``.
+
+    Raises
+    ------
+    ValueError
+        If ``sigma_delta_m`` or ``sigma_theta_rad`` is not a finite number > 0.
+    """
     if not (sigma_delta_m > 0 and math.isfinite(sigma_delta_m)):
         raise ValueError(f"sigma_delta_m must be a finite number > 0, got {sigma_delta_m!r}")
     if not (sigma_theta_rad > 0 and math.isfinite(sigma_theta_rad)):
@@ -307,6 +417,21 @@ def aoa_on_arc(theta_rad: ArrayLike, geom: ArcGeometry) -> NDArray[np.float64]:
     root t = -c / (b + sqrt(b² - c)), written in κ so that it stays exact for large R;
     then s = atan2(κ q_x, 1 - κ q_y) / κ.  On the straight track this is
     :func:`railradio.fusion.aoa_on_track` (the source's eq. 7).
+
+    Parameters
+    ----------
+    theta_rad : array_like of float
+        Measured bearing θ of the train from BS1, counted from the +x direction (as
+        :meth:`ArcGeometry.aoa_rad`) [rad], any shape.
+    geom : ArcGeometry
+        The layout on the arc.
+
+    Returns
+    -------
+    numpy.ndarray of float
+        Arc length s of the intersection [m], the shape of ``theta_rad``; in (-πR, πR] on a
+        curved track.  On the straight track -d / tan θ, non-finite for a bearing parallel
+        to the track.
     """
     theta = np.asarray(theta_rad, dtype=float)
     if geom.is_straight:
@@ -321,12 +446,44 @@ def aoa_on_arc(theta_rad: ArrayLike, geom: ArcGeometry) -> NDArray[np.float64]:
 
 
 def tdoa_variance_arc(s_m: ArrayLike, sigma_delta_m: float, geom: ArcGeometry) -> NDArray[np.float64]:
-    """First-order variance of the TDOA arc position at s [m²]: σ_Δ² / (dΔ/ds)²."""
+    """First-order variance of the TDOA arc position at s [m²]: σ_Δ² / (dΔ/ds)².
+
+    Parameters
+    ----------
+    s_m : array_like of float
+        Arc length(s) at which the variance is evaluated (the TDOA estimate when a receiver
+        propagates it) [m], any shape.
+    sigma_delta_m : float
+        Standard deviation σ_Δ of the range-difference error, c·σ_TDOA [m].
+    geom : ArcGeometry
+        The layout on the arc.
+
+    Returns
+    -------
+    numpy.ndarray of float
+        Variance σ_Δ² / (dΔ/ds)² of the TDOA arc position [m²], the shape of ``s_m``.
+    """
     return sigma_delta_m**2 / geom.range_difference_slope(s_m) ** 2
 
 
 def aoa_variance_arc(s_m: ArrayLike, sigma_theta_rad: float, geom: ArcGeometry) -> NDArray[np.float64]:
-    """First-order variance of the AOA arc position at s [m²]: σ_θ² / (dθ/ds)²."""
+    """First-order variance of the AOA arc position at s [m²]: σ_θ² / (dθ/ds)².
+
+    Parameters
+    ----------
+    s_m : array_like of float
+        Arc length(s) at which the variance is evaluated (the AOA estimate when a receiver
+        propagates it) [m], any shape.
+    sigma_theta_rad : float
+        Standard deviation σ_θ of the AOA error at BS1 [rad].
+    geom : ArcGeometry
+        The layout on the arc.
+
+    Returns
+    -------
+    numpy.ndarray of float
+        Variance σ_θ² / (dθ/ds)² of the AOA arc position [m²], the shape of ``s_m``.
+    """
     return sigma_theta_rad**2 / geom.aoa_slope(s_m) ** 2
 
 
@@ -349,6 +506,29 @@ def tdoa_on_line(
     the cell (x > x_m, the larger root) is taken — the smaller for y2 < d, mirrored.  No
     valid root (Δ beyond the extremum) is a trial without solution: ∓inf, to be clipped to
     the segment as in the source.
+
+    Parameters
+    ----------
+    delta_m : array_like of float
+        Measured range difference Δ = r2 - r1 [m], any shape.
+    d_m : float
+        Distance of BS1 from the line: BS1 stands at (0, d) [m], finite, > 0.
+    bs2_xy_m : tuple of float
+        Coordinates (x2, y2) of BS2 [m], finite, x2 > 0 (e.g. :attr:`ArcGeometry.bs_xy_m`).
+
+    Returns
+    -------
+    x_m : numpy.ndarray of float
+        Position x on the line y = 0 [m], the shape of ``delta_m``; where there is no valid
+        root, -inf for Δ > 0 and +inf otherwise.
+    no_solution : numpy.ndarray of bool
+        Boolean mask of the trials without a valid root (only possible for |Δ| >= x2), the
+        shape of ``delta_m``.
+
+    Raises
+    ------
+    ValueError
+        If ``d_m`` is not a finite number > 0, or ``bs2_xy_m`` is not finite with x2 > 0.
     """
     x2, y2 = (float(v) for v in bs2_xy_m)
     if not (d_m > 0 and math.isfinite(d_m)):
@@ -374,7 +554,23 @@ def tdoa_on_line(
 
 
 def line_range_difference_slope(x_m: ArrayLike, d_m: float, bs2_xy_m: tuple[float, float]) -> NDArray[np.float64]:
-    """d(r2 - r1)/dx on the line y = 0 with BS1 at (0, d), BS2 at (x2, y2) [m/m]."""
+    """d(r2 - r1)/dx on the line y = 0 with BS1 at (0, d), BS2 at (x2, y2) [m/m].
+
+    Parameters
+    ----------
+    x_m : array_like of float
+        Position(s) x on the line y = 0 [m], any shape.
+    d_m : float
+        Distance of BS1 from the line: BS1 stands at (0, d) [m].
+    bs2_xy_m : tuple of float
+        Coordinates (x2, y2) of BS2 [m].
+
+    Returns
+    -------
+    numpy.ndarray of float
+        (x - x2)/r2 - x/r1, the derivative of the range difference along the line [m/m],
+        the shape of ``x_m``.
+    """
     x = np.asarray(x_m, dtype=float)
     x2, y2 = bs2_xy_m
     return (x - x2) / np.hypot(x - x2, y2) - x / np.hypot(x, d_m)

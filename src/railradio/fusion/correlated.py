@@ -50,7 +50,29 @@ def _check_rho(rho: float) -> float:
 def common_reference_rho(sigma_ref_s: float, sigma_other_s: float) -> tuple[float, float]:
     """(ρ, σ_TDOA [s]) of two TDOAs that share a reference BS with TOA error σ_ref while the
     other two BSs have independent TOA errors σ_other: ρ = σ_ref²/(σ_ref² + σ_other²),
-    σ_TDOA = sqrt(σ_ref² + σ_other²)."""
+    σ_TDOA = sqrt(σ_ref² + σ_other²).
+
+    Parameters
+    ----------
+    sigma_ref_s : float
+        Standard deviation σ_ref of the time-of-arrival error at the shared reference BS [s],
+        finite, >= 0.
+    sigma_other_s : float
+        Standard deviation σ_other of the time-of-arrival error at each of the two other BSs
+        [s], finite, >= 0.
+
+    Returns
+    -------
+    rho : float
+        Correlation coefficient ρ of the two TDOA errors [1], in [0, 1].
+    sigma_tdoa_s : float
+        Standard deviation σ_TDOA of each of the two TDOAs [s].
+
+    Raises
+    ------
+    ValueError
+        If ``sigma_ref_s`` or ``sigma_other_s`` is not a finite number >= 0, or both are 0.
+    """
     for name, v in (("sigma_ref_s", sigma_ref_s), ("sigma_other_s", sigma_other_s)):
         if not (v >= 0 and math.isfinite(v)):
             raise ValueError(f"{name} must be a finite number >= 0 [s], got {v!r}")
@@ -63,7 +85,30 @@ def common_reference_rho(sigma_ref_s: float, sigma_other_s: float) -> tuple[floa
 def correlated_pair(z_a: ArrayLike, z_b: ArrayLike, rho: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Two unit-variance normals with correlation ρ from two independent ones (Cholesky):
     (z_a, ρ z_a + sqrt(1 - ρ²) z_b).  The first is z_a itself, so a sweep over ρ keeps the
-    first TDOA's errors (common random numbers)."""
+    first TDOA's errors (common random numbers).
+
+    Parameters
+    ----------
+    z_a : array_like of float
+        Standard normal draws [1], any shape.
+    z_b : array_like of float
+        Standard normal draws independent of ``z_a`` [1], broadcastable with ``z_a``.
+    rho : float
+        The wanted correlation coefficient ρ [1], in (-1, 1).
+
+    Returns
+    -------
+    n_a : numpy.ndarray of float
+        ``z_a`` itself (as float) [1], the shape of ``z_a``.
+    n_b : numpy.ndarray of float
+        ρ z_a + sqrt(1 - ρ²) z_b [1], the broadcast shape of ``z_a`` and ``z_b``: standard
+        normal, with correlation ρ to ``n_a``.
+
+    Raises
+    ------
+    ValueError
+        If ``rho`` is not in (-1, 1).
+    """
     rho = _check_rho(rho)
     z_a = np.asarray(z_a, dtype=float)
     return z_a, rho * z_a + math.sqrt(1.0 - rho * rho) * np.asarray(z_b, dtype=float)
@@ -71,17 +116,59 @@ def correlated_pair(z_a: ArrayLike, z_b: ArrayLike, rho: float) -> tuple[NDArray
 
 # --- the third BS: BS0 at (-D, d), the mirror image of BS2 -----------------------------
 def range_difference0_m(x_m: ArrayLike, geom: CellGeometry) -> NDArray[np.float64]:
-    """r0 - r1 [m] with BS0 at (-D, d): (r2 - r1)(-x)."""
+    """r0 - r1 [m] with BS0 at (-D, d): (r2 - r1)(-x).
+
+    Parameters
+    ----------
+    x_m : array_like of float
+        Train position(s) (x, 0) along the track [m], any shape.
+    geom : CellGeometry
+        The cell geometry of BS1 and BS2 (BS0 is BS2 mirrored about x = 0).
+
+    Returns
+    -------
+    numpy.ndarray of float
+        Range difference r0 - r1 between BS0 and the serving BS1 [m], the shape of ``x_m``.
+    """
     return geom.range_difference_m(-np.asarray(x_m, dtype=float))
 
 
 def range_difference0_slope(x_m: ArrayLike, geom: CellGeometry) -> NDArray[np.float64]:
-    """g0(x) = d(r0 - r1)/dx = -g(-x) [m/m], positive on the train's interval."""
+    """g0(x) = d(r0 - r1)/dx = -g(-x) [m/m], positive on the train's interval.
+
+    Parameters
+    ----------
+    x_m : array_like of float
+        Train position(s) (x, 0) along the track [m], any shape.
+    geom : CellGeometry
+        The cell geometry of BS1 and BS2 (BS0 is BS2 mirrored about x = 0).
+
+    Returns
+    -------
+    numpy.ndarray of float
+        The slope g0(x) of the range difference r0 - r1 [m/m], the shape of ``x_m``.
+    """
     return -geom.range_difference_slope(-np.asarray(x_m, dtype=float))
 
 
 def tdoa0_on_track(delta0_m: ArrayLike, geom: CellGeometry) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
-    """Position on the track from Δ0 = r0 - r1: the source's closed form, mirrored."""
+    """Position on the track from Δ0 = r0 - r1: the source's closed form, mirrored.
+
+    Parameters
+    ----------
+    delta0_m : array_like of float
+        Measured range difference Δ0 = r0 - r1 between BS0 and BS1 [m], any shape.
+    geom : CellGeometry
+        The cell geometry of BS1 and BS2 (BS0 is BS2 mirrored about x = 0).
+
+    Returns
+    -------
+    x_m : numpy.ndarray of float
+        Position on the track [m], the shape of ``delta0_m``; ±inf where there is no
+        solution (|Δ0| >= D), to be clipped by :func:`railradio.fusion.clip_to_segment`.
+    no_solution : numpy.ndarray of bool
+        Boolean mask of |Δ0| >= D, the shape of ``delta0_m``.
+    """
     x, no_solution = tdoa_on_track(delta0_m, geom)
     return -x, no_solution
 
@@ -103,6 +190,37 @@ def fuse_two_tdoa_aoa(
     eq. 9–10 with one more term).  ``sd_t0 = inf`` with ρ = 0 drops the second TDOA: the
     source's two-estimate fusion exactly.  (With ρ ≠ 0 an infinitely noisy second TDOA
     still reveals part of the first one's error, and its limit weight is 1/((1-ρ²)v2).)
+
+    All array arguments must broadcast together.
+
+    Parameters
+    ----------
+    x_t2 : array_like of float
+        Position from the TDOA Δ2 = r2 - r1 (:func:`railradio.fusion.tdoa_on_track`) [m].
+    sd_t2 : array_like of float
+        Signed standard deviation σ_Δ/g2 of ``x_t2`` [m], nonzero.
+    x_t0 : array_like of float
+        Position from the TDOA Δ0 = r0 - r1 (:func:`tdoa0_on_track`) [m]; ignored where
+        ``sd_t0`` is infinite.
+    sd_t0 : array_like of float
+        Signed standard deviation σ_Δ/g0 of ``x_t0`` [m], nonzero; inf drops the second TDOA.
+    x_a : array_like of float
+        Position from the AOA (:func:`railradio.fusion.aoa_on_track`) [m].
+    var_a : array_like of float
+        Variance of ``x_a`` [m²], > 0.
+    rho : float
+        Correlation coefficient ρ of the two TDOA errors [1], in (-1, 1).
+
+    Returns
+    -------
+    numpy.ndarray of float
+        The fused position [m], the broadcast shape of the array arguments.
+
+    Raises
+    ------
+    ValueError
+        If ``rho`` is not in (-1, 1), a value of ``sd_t2`` or ``sd_t0`` is zero or NaN, or a
+        value of ``var_a`` is not > 0.
     """
     rho = _check_rho(rho)
     sd_t2, sd_t0 = np.asarray(sd_t2, dtype=float), np.asarray(sd_t0, dtype=float)
@@ -126,7 +244,32 @@ def fuse_two_tdoa_aoa(
 def fisher_information_correlated(
     x_m: ArrayLike, sigma_delta_m: float, sigma_theta_rad: float, rho: float, geom: CellGeometry
 ) -> NDArray[np.float64]:
-    """J(x) [1/m²] of (Δ2, Δ0, θ) with TDOA correlation ρ (module docstring)."""
+    """J(x) [1/m²] of (Δ2, Δ0, θ) with TDOA correlation ρ (module docstring).
+
+    Parameters
+    ----------
+    x_m : array_like of float
+        Train position(s) x on the track [m], any shape.
+    sigma_delta_m : float
+        Standard deviation σ_Δ of each range-difference error, c·σ_TDOA [m], finite, > 0.
+    sigma_theta_rad : float
+        Standard deviation σ_θ of the AOA error at BS1 [rad], finite, > 0.
+    rho : float
+        Correlation coefficient ρ of the two TDOA errors [1], in (-1, 1).
+    geom : CellGeometry
+        The cell geometry of BS1 and BS2 (BS0 is BS2 mirrored about x = 0).
+
+    Returns
+    -------
+    numpy.ndarray of float
+        Fisher information J(x) about the track position [1/m²], the shape of ``x_m``.
+
+    Raises
+    ------
+    ValueError
+        If ``rho`` is not in (-1, 1), or ``sigma_delta_m`` or ``sigma_theta_rad`` is not a
+        finite number > 0.
+    """
     rho = _check_rho(rho)
     if not (sigma_delta_m > 0 and math.isfinite(sigma_delta_m)):
         raise ValueError(f"sigma_delta_m must be a finite number > 0, got {sigma_delta_m!r}")

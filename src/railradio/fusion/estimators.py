@@ -91,6 +91,20 @@ def aoa_on_track(theta_rad: ArrayLike, geom: CellGeometry) -> NDArray[np.float64
 
     y - d = tan(θ)·(x - 0) at y = 0 gives x = -d / tan θ [m].  θ = 0 or π (a bearing
     parallel to the track) gives ±inf, to be clipped by :func:`clip_to_segment`.
+
+    Parameters
+    ----------
+    theta_rad : array_like of float
+        Measured bearing θ of the train from BS1, counted from the +x direction of the track
+        (as :meth:`CellGeometry.aoa_rad`) [rad], any shape.
+    geom : CellGeometry
+        The cell geometry (d [m]).
+
+    Returns
+    -------
+    numpy.ndarray of float
+        Position x = -d / tan θ on the track [m], the shape of ``theta_rad``; non-finite for
+        a bearing parallel to the track.
     """
     theta = np.asarray(theta_rad, dtype=float)
     with np.errstate(divide="ignore"):
@@ -102,6 +116,20 @@ def clip_to_segment(x_m: ArrayLike, geom: CellGeometry) -> tuple[NDArray[np.floa
 
     The train is known to be in the serving cell, so an estimate outside its segment
     (or a TDOA without solution, ±inf) is projected onto the segment's nearer end.
+
+    Parameters
+    ----------
+    x_m : array_like of float
+        Position estimates on the track [m], any shape; ±inf allowed.
+    geom : CellGeometry
+        The cell geometry; its segment is [-sqrt(R² - d²), sqrt(R² - d²)] [m].
+
+    Returns
+    -------
+    x_m : numpy.ndarray of float
+        The positions clipped to the segment [m], the shape of ``x_m``.
+    clipped : numpy.ndarray of bool
+        Boolean mask of the positions that lay outside the segment, the shape of ``x_m``.
     """
     lo, hi = geom.segment_m
     x = np.asarray(x_m, dtype=float)
@@ -110,13 +138,45 @@ def clip_to_segment(x_m: ArrayLike, geom: CellGeometry) -> tuple[NDArray[np.floa
 
 
 def tdoa_variance_propagated(x_m: ArrayLike, sigma_delta_m: float, geom: CellGeometry) -> NDArray[np.float64]:
-    """First-order variance of the TDOA position at x [m²]: σ_Δ² / g(x)²."""
+    """First-order variance of the TDOA position at x [m²]: σ_Δ² / g(x)².
+
+    Parameters
+    ----------
+    x_m : array_like of float
+        Position(s) on the track at which the variance is evaluated (the true position, or
+        the TDOA estimate when a receiver propagates it) [m], any shape.
+    sigma_delta_m : float
+        Standard deviation σ_Δ of the range-difference error, c·σ_TDOA [m].
+    geom : CellGeometry
+        The cell geometry.
+
+    Returns
+    -------
+    numpy.ndarray of float
+        Variance σ_Δ² / g(x)² of the TDOA position [m²], the shape of ``x_m``.
+    """
     g = geom.range_difference_slope(x_m)
     return sigma_delta_m**2 / g**2
 
 
 def aoa_variance_propagated(x_m: ArrayLike, sigma_theta_rad: float, geom: CellGeometry) -> NDArray[np.float64]:
-    """First-order variance of the AOA position at x [m²]: σ_θ² · r1⁴ / d²."""
+    """First-order variance of the AOA position at x [m²]: σ_θ² · r1⁴ / d².
+
+    Parameters
+    ----------
+    x_m : array_like of float
+        Position(s) on the track at which the variance is evaluated (the true position, or
+        the AOA estimate when a receiver propagates it) [m], any shape.
+    sigma_theta_rad : float
+        Standard deviation σ_θ of the AOA error at BS1 [rad].
+    geom : CellGeometry
+        The cell geometry.
+
+    Returns
+    -------
+    numpy.ndarray of float
+        Variance σ_θ² · r1⁴ / d² of the AOA position [m²], the shape of ``x_m``.
+    """
     return sigma_theta_rad**2 / geom.aoa_slope(x_m) ** 2
 
 
@@ -124,6 +184,27 @@ def fuse(x_a: ArrayLike, var_a: ArrayLike, x_b: ArrayLike, var_b: ArrayLike) -> 
     """Inverse-variance weighted mean of two estimates (seed eq. 9–10).
 
     x_F = (x_a/σ_a² + x_b/σ_b²) / (1/σ_a² + 1/σ_b²).  Variances must be > 0.
+
+    Parameters
+    ----------
+    x_a : array_like of float
+        First position estimate(s), e.g. the TDOA position [m].
+    var_a : array_like of float
+        Variance σ_a² of ``x_a`` [m²], > 0, broadcastable with ``x_a``.
+    x_b : array_like of float
+        Second position estimate(s), e.g. the AOA position [m].
+    var_b : array_like of float
+        Variance σ_b² of ``x_b`` [m²], > 0, broadcastable with ``x_b``.
+
+    Returns
+    -------
+    numpy.ndarray of float
+        The fused position x_F [m], the broadcast shape of the four inputs.
+
+    Raises
+    ------
+    ValueError
+        If a value of ``var_a`` or ``var_b`` is not > 0 (NaN included).
     """
     var_a = np.asarray(var_a, dtype=float)
     var_b = np.asarray(var_b, dtype=float)

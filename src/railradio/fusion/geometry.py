@@ -68,7 +68,20 @@ class CellGeometry:
         return (0.0, self.half_segment_m)
 
     def ranges_m(self, x_m: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """Distances r1, r2 [m] from a train at (x, 0) to BS1 and BS2 (seed eq. 3)."""
+        """Distances r1, r2 [m] from a train at (x, 0) to BS1 and BS2 (seed eq. 3).
+
+        Parameters
+        ----------
+        x_m : array_like of float
+            Train position(s) (x, 0) along the track [m], any shape.
+
+        Returns
+        -------
+        r1 : numpy.ndarray of float
+            Distance from the train to BS1 at (0, d) [m], the shape of ``x_m``.
+        r2 : numpy.ndarray of float
+            Distance from the train to BS2 at (D, d) [m], the shape of ``x_m``.
+        """
         x = np.asarray(x_m, dtype=float)
         return np.hypot(x, self.d_m), np.hypot(self.baseline_m - x, self.d_m)
 
@@ -89,17 +102,53 @@ class CellGeometry:
         return r2 - r1
 
     def range_difference_slope(self, x_m: ArrayLike) -> NDArray[np.float64]:
-        """g(x) = d(r2 - r1)/dx [m/m], negative everywhere on the track."""
+        """g(x) = d(r2 - r1)/dx [m/m], negative everywhere on the track.
+
+        Parameters
+        ----------
+        x_m : array_like of float
+            Train position(s) (x, 0) along the track [m], any shape.
+
+        Returns
+        -------
+        numpy.ndarray of float
+            The slope g(x) = -(D - x)/r2 - x/r1 of the range difference [m/m], the shape of
+            ``x_m``.
+        """
         x = np.asarray(x_m, dtype=float)
         r1, r2 = self.ranges_m(x)
         return -(self.baseline_m - x) / r2 - x / r1
 
     def aoa_rad(self, x_m: ArrayLike) -> NDArray[np.float64]:
-        """Angle of arrival at BS1 of the train's signal, atan2(0 - d, x - 0) [rad]."""
+        """Angle of arrival at BS1 of the train's signal, atan2(0 - d, x - 0) [rad].
+
+        Parameters
+        ----------
+        x_m : array_like of float
+            Train position(s) (x, 0) along the track [m], any shape.
+
+        Returns
+        -------
+        numpy.ndarray of float
+            Bearing θ of the train seen from BS1, counted from the +x direction of the track
+            [rad], the shape of ``x_m``; in (-π, 0), since the track lies below BS1.
+        """
         x = np.asarray(x_m, dtype=float)
         return np.arctan2(-self.d_m, x)
 
     def aoa_slope(self, x_m: ArrayLike) -> NDArray[np.float64]:
-        """dθ/dx = d / r1² [rad/m]."""
+        """dθ/dx = d / r1² [rad/m].
+
+        Parameters
+        ----------
+        x_m : array_like of float
+            Train position(s) (x, 0) along the track [m], any shape.
+
+        Returns
+        -------
+        numpy.ndarray of float
+            Rate of change of the bearing at BS1 with the train position, d / r1² [rad/m],
+            positive, the shape of ``x_m``.
+        """
         r1, _ = self.ranges_m(x_m)
         return self.d_m / r1**2

@@ -194,7 +194,28 @@ def point_params(point: dict) -> PointParams:
 
 
 def train_positions(params: PointParams, rng: np.random.Generator) -> np.ndarray:
-    """Train positions on [0, sqrt(R² - d²)] [m], shape [n_positions]."""
+    """Train positions on [0, sqrt(R² - d²)] [m], shape [n_positions].
+
+    Parameters
+    ----------
+    params : PointParams
+        The sweep point: ``n_positions``, ``position_sampling`` and the geometry (``d_m``,
+        ``cell_radius_factor``).
+    rng : numpy.random.Generator
+        Generator of the positions; drawn from only with ``position_sampling="random"``.
+
+    Returns
+    -------
+    numpy.ndarray of float
+        Train positions along the track [m], shape [n_positions], ascending: the midpoints of
+        n_positions equal cells of the interval (``"grid"``) or sorted uniform draws on it
+        (``"random"``).
+
+    Raises
+    ------
+    ValueError
+        If ``params.d_m`` or ``params.cell_radius_factor`` is out of range (:class:`CellGeometry`).
+    """
     lo, hi = params.geometry.train_interval_m
     n = params.n_positions
     if params.position_sampling == "grid":
@@ -249,7 +270,32 @@ def _chunk_stats(
 def trial_normals(seed: int, key: tuple[int, ...], positions: range, n_rows: int, n_trials: int) -> np.ndarray:
     """Standard normals of the trials at ``positions``: [n_rows, len(positions), n_trials];
     position j draws its rows in order from its own generator ``key + (1, j)``, so a
-    position's draws do not depend on the chunk it falls in."""
+    position's draws do not depend on the chunk it falls in.
+
+    Parameters
+    ----------
+    seed : int
+        The config's master seed, >= 0.
+    key : tuple of int
+        The point's spawn key; position j draws from ``key + (1, j)``.
+    positions : range
+        Indices j of the positions of the chunk.
+    n_rows : int
+        Rows of normals per position, one per noise source (2 in the main study: range
+        difference and angle).
+    n_trials : int
+        Trials per position T.
+
+    Returns
+    -------
+    numpy.ndarray of float
+        Standard normal draws [1], shape [n_rows, len(positions), n_trials].
+
+    Raises
+    ------
+    ValueError
+        If ``seed`` is not a non-negative integer (:func:`railradio.rng.make_rng`).
+    """
     z = np.empty((n_rows, len(positions), n_trials))
     for row, j in enumerate(positions):
         rng = make_rng(seed, key + (1, j))
@@ -273,6 +319,39 @@ def run_positions(
     ``chunk_stats(x_true, z)`` maps a chunk's true positions [P] and normals [n_rows, P, T]
     to per-position statistics (last axis P).  Returns the true positions [n_positions] and
     the statistics concatenated over the chunks along their last axis.
+
+    Parameters
+    ----------
+    params : PointParams
+        The sweep point (``n_positions``, ``n_trials``, ``position_sampling``, geometry).
+    seed : int
+        The config's master seed, >= 0.
+    key : tuple of int
+        The point's spawn key; positions use ``key + (0,)``, the trials of position j
+        ``key + (1, j)``.
+    n_rows : int
+        Rows of standard normals per position, one per noise source (2 in the main study:
+        range difference and angle).
+    chunk_stats : callable
+        ``chunk_stats(x_true, z) -> dict of str to numpy.ndarray``: from the chunk's true
+        positions [m], shape [P], and standard normals z, shape [n_rows, P, n_trials], the
+        per-position statistics, each with last axis P.
+    chunk_positions : int, default 50
+        Positions processed at once (memory/speed only; results do not depend on it), >= 1.
+
+    Returns
+    -------
+    x_true : numpy.ndarray of float
+        True train positions along the track [m], shape [n_positions].
+    stats : dict of str to numpy.ndarray
+        The statistics of ``chunk_stats``, concatenated over the chunks along their last
+        axis (length n_positions).
+
+    Raises
+    ------
+    ValueError
+        If ``chunk_positions`` < 1, ``seed`` is not a non-negative integer, or the geometry
+        of ``params`` is out of range (:class:`CellGeometry`).
     """
     if chunk_positions < 1:
         raise ValueError(f"chunk_positions must be >= 1, got {chunk_positions!r}")
@@ -388,7 +467,23 @@ def _point_dataset(params: PointParams, x_true: np.ndarray, cat: dict[str, np.nd
 
 def summarize(ds: xr.Dataset) -> dict[str, float]:
     """RMSE per estimator over trials and positions, its Monte Carlo standard error, the
-    aggregated CRLB and clip fractions, from a :func:`simulate_point` dataset."""
+    aggregated CRLB and clip fractions, from a :func:`simulate_point` dataset.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A dataset of :func:`simulate_point`.
+
+    Returns
+    -------
+    dict of str to float
+        For each estimator e of ``ds`` (:data:`ESTIMATORS`): ``rmse_<e>_m`` [m], the RMSE
+        over trials and positions (seed eq. 11), and ``rmse_<e>_se_m`` [m], its Monte Carlo
+        standard error (from that of the mean squared error, to first order; 0 where the
+        RMSE is 0); ``crlb_m`` [m], the square root of the mean over positions of
+        ``crlb_var``; ``frac_tdoa_no_solution``, ``frac_tdoa_clipped``, ``frac_aoa_clipped``
+        [1], the shares of all trials.
+    """
     n_pos = ds.sizes["position"]
     n_trials = int(ds["n_trials"])
     out: dict[str, float] = {}

@@ -433,7 +433,25 @@ def _sens_dataset(
 def summarize_sens(ds: xr.Dataset) -> dict[str, float]:
     """RMSE per estimator over trials and positions, its Monte Carlo standard error (as in
     :func:`railradio.fusion.summarize`), the RMS over positions of the per-position bias,
-    the aggregated CRLB sqrt(mean 1/J) and the shares of the counted trials."""
+    the aggregated CRLB sqrt(mean 1/J) and the shares of the counted trials.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A dataset of :func:`simulate_sens_point`.
+
+    Returns
+    -------
+    dict of str to float
+        For each estimator e of ``ds`` (``ESTIMATORS[kind]``): ``rmse_<e>_m`` [m], the
+        along-track RMSE over trials and positions, ``rmse_<e>_se_m`` [m], its Monte Carlo
+        standard error (0 where the RMSE is 0), and ``bias_rms_<e>_m`` [m], the RMS over
+        positions of the per-position mean error; ``crlb_m`` [m]; and for each trial count
+        ``n_<name>`` in ``ds``, ``frac_<name>`` [1], its share of all trials (curve:
+        ``frac_mismatch_tdoa_no_solution``, ``frac_mismatch_clipped``,
+        ``frac_arc_tdoa_no_solution``, ``frac_arc_clipped``; ρ: ``frac_tdoa_no_solution``,
+        ``frac_clipped``).
+    """
     n_pos = ds.sizes["position"]
     n_trials = int(ds["n_trials"])
     out: dict[str, float] = {}

@@ -31,7 +31,19 @@ _NAME_RE = re.compile(r"^[a-z0-9_.]+$")
 
 
 def radius_tag(radius_m: float) -> str:
-    """``r4000`` for R = 4000 m, ``rinf`` for the straight track."""
+    """``r4000`` for R = 4000 m, ``rinf`` for the straight track.
+
+    Parameters
+    ----------
+    radius_m : float
+        Track radius of curvature R [m]; ``math.inf`` for the straight track.
+
+    Returns
+    -------
+    str
+        ``"rinf"`` for an infinite radius, ``"r"`` followed by R as an integer when R is a
+        whole number of metres, else ``"r"`` followed by ``repr(R)`` (e.g. ``r4000.5``).
+    """
     if math.isinf(radius_m):
         return "rinf"
     if radius_m == int(radius_m):
@@ -40,7 +52,18 @@ def radius_tag(radius_m: float) -> str:
 
 
 def rho_tag(rho: float) -> str:
-    """``rho0.5`` for ρ = 0.5, ``rho0`` for ρ = 0."""
+    """``rho0.5`` for ρ = 0.5, ``rho0`` for ρ = 0.
+
+    Parameters
+    ----------
+    rho : float
+        Correlation coefficient ρ of the two TDOA errors [1].
+
+    Returns
+    -------
+    str
+        ``"rho"`` followed by ρ formatted with ``{:g}``.
+    """
     return f"rho{float(rho):g}"
 
 

@@ -32,7 +32,36 @@ PARTS = ("correction", "midpoint", "oracle", "measured")
 
 def correction_errors(ctx: BlockContext, m: int, alpha: float, method: str) -> dict[str, np.ndarray]:
     """Per run and node [B, N] [dB]: ``pred`` (ĉ_i), ``true`` (d_i) and the errors of
-    :data:`PARTS` (node 0, the head, has no predecessor: NaN)."""
+    :data:`PARTS` (node 0, the head, has no predecessor: NaN).
+
+    Parameters
+    ----------
+    ctx : BlockContext
+        The block's radio and position arrays (from
+        :func:`railradio.handover.model.build_context`).
+    m : int
+        Number of joint nodes m: a node's prediction uses its min(m, i) nearest predecessors.
+    alpha : float
+        Geometric weight parameter α [1], in (0, 1).
+    method : str
+        WSLR reading, ``regression`` or ``mean``.
+
+    Returns
+    -------
+    dict of str to numpy.ndarray
+        Arrays [B, N] [dB], column 0 (the head) NaN: ``pred``, the deviation ĉ_i predicted by
+        WSLR from the predecessors' measured deviations; ``true``, the true deviation d_i at the
+        node's trigger; the errors ``correction`` (ĉ_i − d_i), ``midpoint`` (−d_i at the node's
+        trigger without the correction, when its estimate reaches Xm), ``oracle`` (WSLR of the
+        predecessors' true deviations minus d_i) and ``measured`` (the node's measured minus its
+        true deviation).
+
+    Raises
+    ------
+    ValueError
+        If ``m`` is not an integer ≥ 1, ``alpha`` is outside (0, 1), or ``method`` is neither
+        ``regression`` nor ``mean`` (checked when the train has more than one node).
+    """
     w = geometric_weights(m, alpha)
     band = head_band(ctx)
     nodes = joint_nodes(ctx, band, w[None, :], method)
@@ -69,7 +98,19 @@ def correction_errors(ctx: BlockContext, m: int, alpha: float, method: str) -> d
 
 
 def rms_per_node(err: np.ndarray) -> np.ndarray:
-    """Root-mean-square over runs of an error [B, N] per node [N] (NaN for the head)."""
+    """Root-mean-square over runs of an error [B, N] per node [N] (NaN for the head).
+
+    Parameters
+    ----------
+    err : numpy.ndarray
+        Errors [B, N] over runs and nodes (e.g. [dB]); non-finite entries are left out.
+
+    Returns
+    -------
+    numpy.ndarray
+        RMS over the finite runs of each node [N], in the unit of ``err``; NaN for a node
+        without a finite value (the head).
+    """
     e = np.asarray(err, dtype=float)
     ok = np.isfinite(e)
     n = ok.sum(axis=0)

@@ -34,7 +34,26 @@ METHODS = ("regression", "mean")
 
 
 def geometric_weight_table(m: int, alphas: np.ndarray) -> np.ndarray:
-    """[A, m] geometric weights α(1 − α)^(k−1), one row per α (normalized in the WSLR)."""
+    """[A, m] geometric weights α(1 − α)^(k−1), one row per α (normalized in the WSLR).
+
+    Parameters
+    ----------
+    m : int
+        Number of weights per row: the number of joint nodes m.
+    alphas : numpy.ndarray
+        Geometric weight parameters α [1], shape [A], each in (0, 1).
+
+    Returns
+    -------
+    numpy.ndarray
+        Weights [1], shape [A, m]: row a holds α_a(1 − α_a)^(k−1) for k = 1…m (k = 1 the
+        nearest predecessor), not normalized.
+
+    Raises
+    ------
+    ValueError
+        If an α is outside (0, 1).
+    """
     alphas = np.asarray(alphas, dtype=float)
     if np.any((alphas <= 0) | (alphas >= 1)):
         raise ValueError("alphas must be in (0, 1)")
@@ -42,7 +61,27 @@ def geometric_weight_table(m: int, alphas: np.ndarray) -> np.ndarray:
 
 
 def full_weight_table(m: int, step: float) -> np.ndarray:
-    """[A, m] every per-element weight vector with elements step, 2·step, … < 1."""
+    """[A, m] every per-element weight vector with elements step, 2·step, … < 1.
+
+    Parameters
+    ----------
+    m : int
+        Number of weights per vector: the number of joint nodes m.
+    step : float
+        Grid step of each element [1], in (0, 1).
+
+    Returns
+    -------
+    numpy.ndarray
+        Weights [1], shape [A, m] with A = (round(1/step) − 1)^m: every vector whose elements
+        each take the values j·step, j = 1 … round(1/step) − 1, in lexicographic order; not
+        normalized (the WSLR normalizes them).
+
+    Raises
+    ------
+    ValueError
+        If ``step`` is outside (0, 1).
+    """
     if not 0 < step < 1:
         raise ValueError(f"step must be in (0, 1), got {step!r}")
     vals = np.arange(1, int(round(1 / step))) * step
@@ -291,7 +330,27 @@ def best_weights(ds: xr.Dataset, method: str) -> tuple[int, float]:
 
 def one_se_settings(ds: xr.Dataset, method: str) -> list[tuple[int, float | None]]:
     """The distinct (m, α) within one standard error of the minimum for a WSLR method; for
-    m = 1 the weights do not depend on α, so it is one setting (α None)."""
+    m = 1 the weights do not depend on α, so it is one setting (α None).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A cost dataset of :func:`cost_grid` (variable ``within_1se`` over ``wslr``, ``m`` and
+        ``alpha``).
+    method : str
+        WSLR reading, ``regression`` or ``mean`` (usually ``scn.joint.wslr``).
+
+    Returns
+    -------
+    list of tuple of (int, float or None)
+        The settings (m, α) with J ≤ J_min + SE(J_min), α [1], in the order of the ``m`` and
+        ``alpha`` coordinates; m = 1 appears once, as ``(1, None)``, if any of its α is within.
+
+    Raises
+    ------
+    KeyError
+        If ``method`` is not on the dataset's ``wslr`` coordinate.
+    """
     w = ds["within_1se"].sel(wslr=method)
     out: list[tuple[int, float | None]] = []
     for m in ds["m"].values:

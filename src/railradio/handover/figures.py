@@ -21,7 +21,20 @@ SEED_BEST_M = 3
 
 
 def plot_cost_vs_m(cost: xr.Dataset, pdf_path, png_path=None) -> None:
-    """Minimum cost over α per m for both WSLR readings (seed Fig. 4)."""
+    """Minimum cost over α per m for both WSLR readings (seed Fig. 4).
+
+    Parameters
+    ----------
+    cost : xarray.Dataset
+        A cost dataset of :func:`railradio.handover.cost.cost_grid`: ``cost`` J and its standard
+        error ``cost_se`` [1] over (``wslr``, ``m``, ``alpha``), the scalars ``speed_kmh``
+        [km/h] and ``n_runs``; when present, ``cost_min_full_grid`` [1] (m), ``within_1se`` and
+        the attribute ``config_wslr``.
+    pdf_path : str or os.PathLike
+        Path of the PDF to write.
+    png_path : str or os.PathLike or None, optional
+        Path of the PNG to write (default: ``pdf_path`` with the suffix ``.png``).
+    """
     fig, ax = plotting.figure()
     m = cost["m"].values
     for meth, marker in zip(cost["wslr"].values, ("o", "s"), strict=False):
@@ -83,7 +96,19 @@ def _rate_plot(ax, summary, name, transform=None, log=False):
 
 
 def plot_pingpong_vs_speed(summary: xr.Dataset, pdf_path, png_path=None) -> None:
-    """Ping-pong rate against speed (seed Fig. 5); ▽ = upper 95 % bound where none was seen."""
+    """Ping-pong rate against speed (seed Fig. 5); ▽ = upper 95 % bound where none was seen.
+
+    Parameters
+    ----------
+    summary : xarray.Dataset
+        Rates and means per policy and speed (:func:`railradio.handover.summary.metrics_dataset`
+        over (``policy``, ``speed_kmh``), speeds in km/h): the ping-pong rate ``pingpong``
+        [1] and its 95 % interval ``pingpong_lo``, ``pingpong_hi`` [1].
+    pdf_path : str or os.PathLike
+        Path of the PDF to write.
+    png_path : str or os.PathLike or None, optional
+        Path of the PNG to write (default: ``pdf_path`` with the suffix ``.png``).
+    """
     fig, ax = plotting.figure()
     _rate_plot(ax, summary, "pingpong", log=True)
     plotting.log_axis(ax, "y")
@@ -94,7 +119,19 @@ def plot_pingpong_vs_speed(summary: xr.Dataset, pdf_path, png_path=None) -> None
 
 
 def plot_interruption_vs_speed(summary: xr.Dataset, pdf_path, png_path=None) -> None:
-    """Interruption rate 1 − success against speed with the 99.5 % success line (seed Fig. 8)."""
+    """Interruption rate 1 − success against speed with the 99.5 % success line (seed Fig. 8).
+
+    Parameters
+    ----------
+    summary : xarray.Dataset
+        Rates and means per policy and speed (:func:`railradio.handover.summary.metrics_dataset`
+        over (``policy``, ``speed_kmh``), speeds in km/h): the success rate ``success`` [1]
+        and its 95 % interval ``success_lo``, ``success_hi`` [1], drawn as 1 − success.
+    pdf_path : str or os.PathLike
+        Path of the PDF to write.
+    png_path : str or os.PathLike or None, optional
+        Path of the PNG to write (default: ``pdf_path`` with the suffix ``.png``).
+    """
     fig, ax = plotting.figure()
     _rate_plot(ax, summary, "success", transform=lambda p: 1.0 - p, log=True)
     ax.axhline(1 - SUCCESS_REQUIREMENT, **plotting.BOUND_STYLE, label="requirement: success ≥ 99.5 %")
@@ -131,7 +168,20 @@ def _mean_plot(summary, name, ylabel, pdf_path, png_path, hline=None, hlabel=Non
 def plot_delay_vs_speed(summary: xr.Dataset, pdf_path, png_path=None) -> None:
     """Mean handover delay against speed with the 45 ms requirement (seed Fig. 7): command to
     completion over all handovers (successful only, the seed's reading, dotted) and trigger to
-    completion."""
+    completion.
+
+    Parameters
+    ----------
+    summary : xarray.Dataset
+        Rates and means per policy and speed (:func:`railradio.handover.summary.metrics_dataset`
+        over (``policy``, ``speed_kmh``), speeds in km/h): the mean delays ``delay_all_ms``,
+        ``delay_trigger_ms`` and, when present, ``delay_ms`` [ms], each with its standard error
+        ``_se`` [ms] (error bars ±2 standard errors).
+    pdf_path : str or os.PathLike
+        Path of the PDF to write.
+    png_path : str or os.PathLike or None, optional
+        Path of the PNG to write (default: ``pdf_path`` with the suffix ``.png``).
+    """
     fig, axes = plotting.figure(ncols=2, figsize=(9.0, 3.4))
     v = summary["speed_kmh"].values
     panels = (
@@ -167,12 +217,36 @@ def plot_delay_vs_speed(summary: xr.Dataset, pdf_path, png_path=None) -> None:
 
 
 def plot_rsrp_gap_vs_speed(summary: xr.Dataset, pdf_path, png_path=None) -> None:
-    """Mean |RSRP-GAP| at completion against speed (seed Fig. 6)."""
+    """Mean |RSRP-GAP| at completion against speed (seed Fig. 6).
+
+    Parameters
+    ----------
+    summary : xarray.Dataset
+        Rates and means per policy and speed (:func:`railradio.handover.summary.metrics_dataset`
+        over (``policy``, ``speed_kmh``), speeds in km/h): the mean absolute gap
+        ``rsrp_gap_db`` [dB] and its standard error ``rsrp_gap_db_se`` [dB].
+    pdf_path : str or os.PathLike
+        Path of the PDF to write.
+    png_path : str or os.PathLike or None, optional
+        Path of the PNG to write (default: ``pdf_path`` with the suffix ``.png``).
+    """
     _mean_plot(summary, "rsrp_gap_db", "mean |RSRP-GAP| at completion [dB]", pdf_path, png_path)
 
 
 def plot_sensitivity(sens: xr.Dataset, pdf_path, png_path=None) -> None:
-    """Interruption and ping-pong rate of every sensitivity variant (95 % intervals)."""
+    """Interruption and ping-pong rate of every sensitivity variant (95 % intervals).
+
+    Parameters
+    ----------
+    sens : xarray.Dataset
+        Rates per policy and sensitivity ``variant``: ``success`` and ``pingpong`` [1] with their
+        95 % intervals ``_lo``, ``_hi`` [1], ``affected`` (``variant``, ``policy``; only a
+        policy the variant can change is drawn) and the scalar ``speed_kmh`` [km/h].
+    pdf_path : str or os.PathLike
+        Path of the PDF to write.
+    png_path : str or os.PathLike or None, optional
+        Path of the PNG to write (default: ``pdf_path`` with the suffix ``.png``).
+    """
     variants = [str(v) for v in sens["variant"].values]
     fig, axes = plotting.figure(ncols=2, figsize=(9.0, 0.28 * len(variants) + 1.6), sharey=True)
     y = np.arange(len(variants))

@@ -204,7 +204,21 @@ def _pick(summary: xr.Dataset, policy: str, name: str, speed: float):
 def pingpong_strictly_lowest(summary: xr.Dataset) -> np.ndarray:
     """bool per speed: the joint ping-pong rate is strictly below A3's and distance's — its
     upper 95% bound below both lower 95% bounds (docs/model/handover.md §7, 'proposed < A3, distance'; a
-    policy with zero ping-pong ties with joint's zero and does not count)."""
+    policy with zero ping-pong ties with joint's zero and does not count).
+
+    Parameters
+    ----------
+    summary : xarray.Dataset
+        Rates and means per policy and speed (:func:`railradio.handover.summary.metrics_dataset`
+        over (``policy``, ``speed_kmh``)) for the policies ``joint``, ``a3`` and ``distance``,
+        with the bounds ``pingpong_lo`` and ``pingpong_hi`` [1] of the 95 % interval.
+
+    Returns
+    -------
+    numpy.ndarray
+        bool, one per speed in the order of ``speed_kmh``: True where joint's upper bound is
+        below both other policies' lower bounds.
+    """
     hi = summary["pingpong_hi"].sel(policy=list(POLICIES)).values
     lo = summary["pingpong_lo"].sel(policy=list(POLICIES)).values
     return hi[0] < lo[1:].min(axis=0)
@@ -218,7 +232,28 @@ def _sig_digits(v: float) -> int:
 
 def sens_values(sens: xr.Dataset) -> dict[str, Any]:
     """handover.sens.<variant>.value: the numeric value a variant sets (for the paper's table;
-    exact, from the config via the sensitivity dataset)."""
+    exact, from the config via the sensitivity dataset).
+
+    Parameters
+    ----------
+    sens : xarray.Dataset
+        Rates and means per policy and sensitivity ``variant``, with ``switch`` (the config key
+        ``section.key`` a variant changes) and ``value`` (the value it sets, as text) per
+        variant.
+
+    Returns
+    -------
+    dict of str to dict
+        Key name -> JSON entry (:meth:`railradio.keynumbers.KeySpec.entry`, mc_stderr 0) for
+        every variant but ``reference`` whose value reads as a number; unit from the key's
+        suffix (``_db`` dB, ``_s`` s, ``_m`` m, else 1), significant digits as the config writes
+        the value.
+
+    Raises
+    ------
+    ValueError
+        If a value reads as a number that is not finite.
+    """
     out = {}
     for var in sens["variant"].values:
         if var == "reference":
@@ -238,7 +273,22 @@ def sens_values(sens: xr.Dataset) -> dict[str, Any]:
 
 
 def sens_specs(sens: xr.Dataset) -> dict[str, KeySpec]:
-    """Specs of the sensitivity keys handover.sens.<variant>.<policy>.<metric>."""
+    """Specs of the sensitivity keys handover.sens.<variant>.<policy>.<metric>.
+
+    Parameters
+    ----------
+    sens : xarray.Dataset
+        Rates and means per policy and sensitivity ``variant``, with ``switch`` and ``value``
+        per variant, ``affected`` over (``variant``, ``policy``) (the variant can change the
+        policy) and the scalar ``speed_kmh`` [km/h].
+
+    Returns
+    -------
+    dict of str to KeySpec
+        Key name -> spec, for every variant (``reference`` included), every policy it affects
+        and the metrics ``success``, ``pingpong`` [1], ``delay_ms`` and ``delay_all_ms`` [ms]
+        (no ``pingpong`` for ``joint``: zero by construction).
+    """
     out = {}
     for var in sens["variant"].values:
         sw = str(sens["switch"].sel(variant=var).values)

@@ -79,32 +79,123 @@ class _Run:
 
     # --- geometry and radio -----------------------------------------------------------
     def x_true(self, i: int, k: int) -> float:
+        """True position of node ``i`` at sample ``k``: the head's v·k·T_m minus i node spacings.
+
+        Parameters
+        ----------
+        i, k : int
+            Node index (0 = head) and sample index (time k·T_m).
+
+        Returns
+        -------
+        float
+            True along-track position [m] (serving RRH at 0, target at L_BS).
+        """
         return self.v * (k * self.tm) - i * self.scn.train.node_spacing_m
 
     def x_hat(self, i: int, k: int) -> float:
+        """Estimated position x̂ of node ``i`` at sample ``k``: true position plus GNSS/INS error.
+
+        Parameters
+        ----------
+        i, k : int
+            Node index (0 = head) and sample index (time k·T_m).
+
+        Returns
+        -------
+        float
+            Estimated along-track position [m] (the error is common to all nodes).
+        """
         return self.v * (k * self.tm) + self.err[k] - i * self.scn.train.node_spacing_m
 
     def field(self, j: int, x: float) -> float:
+        """Shadowing ζ of link ``j`` at ``x``: the value at the nearest grid point (clipped).
+
+        Parameters
+        ----------
+        j : int
+            Link, 0 = serving, 1 = target.
+        x : float
+            Along-track position [m].
+
+        Returns
+        -------
+        float
+            ζ [dB], positive = extra loss.
+        """
         n = round((x - self.g_x0) / self.g_dx)
         return self.zeta[j][min(max(n, 0), self.g_n - 1)]
 
     def mean_rsrp(self, j: int, x: float) -> float:
+        """Mean received power P_tx − L(d) of link ``j`` at ``x``, shadowing excluded.
+
+        Parameters
+        ----------
+        j : int
+            Link, 0 = serving, 1 = target.
+        x : float
+            Along-track position [m].
+
+        Returns
+        -------
+        float
+            Power [dBm]; d is the distance from x to the link's RRH, h off the track.
+        """
         rd = self.scn.radio
         xj = 0.0 if j == 0 else rd.spacing_m
         d = math.hypot(x - xj, rd.offset_m)
         return rd.tx_power_dbm - (self.l0 + 10 * rd.pathloss_exponent * math.log10(d / rd.ref_distance_m))
 
     def true_rsrp(self, j: int, x: float) -> float:
+        """Local-mean received power of link ``j`` at ``x``: the mean power minus the shadowing ζ.
+
+        Parameters
+        ----------
+        j : int
+            Link, 0 = serving, 1 = target.
+        x : float
+            True along-track position [m].
+
+        Returns
+        -------
+        float
+            Power [dBm], no measurement noise.
+        """
         return self.mean_rsrp(j, x) - self.field(j, x)
 
     def sinr(self, wanted: int, x: float) -> float:
+        """SINR of link ``wanted`` at ``x`` (true local means; the other link, times η, and noise interfere).
+
+        Parameters
+        ----------
+        wanted : int
+            Link whose SINR is computed, 0 = serving, 1 = target.
+        x : float
+            True along-track position [m].
+
+        Returns
+        -------
+        float
+            SINR [dB].
+        """
         rd = self.scn.radio
         other = 1 - wanted
         i_mw = rd.load_factor * 10 ** (self.true_rsrp(other, x) / 10) + self.noise_mw
         return self.true_rsrp(wanted, x) - 10 * math.log10(i_mw)
 
     def serving_ok(self, hb: float) -> bool:
-        """Serving link not failed at a command at hb (instant rule, or RLF after T310)."""
+        """Serving link not failed at a command at hb (instant rule, or RLF after T310).
+
+        Parameters
+        ----------
+        hb : float
+            True position of the node at the command H_b [m].
+
+        Returns
+        -------
+        bool
+            True if the serving link holds by ``execution.failure_rule``.
+        """
         ex, rd = self.scn.execution, self.scn.radio
         if ex.failure_rule == "instant":
             return self.sinr(0, hb) >= rd.q_out_db
@@ -144,7 +235,18 @@ class _Run:
     def target_ok(self, hb: float) -> bool:
         """Access to the target succeeds for an execution commanded at hb: rlm, the mean
         target SINR at the execution's indications (the last at He) >= Q_out; the other
-        rules, the target SINR at He >= Q_in."""
+        rules, the target SINR at He >= Q_in.
+
+        Parameters
+        ----------
+        hb : float
+            True position of the node at the command H_b [m]; H_e = H_b + v·T0.
+
+        Returns
+        -------
+        bool
+            True if access to the target succeeds.
+        """
         ex, rd = self.scn.execution, self.scn.radio
         if ex.failure_rule != "rlm":
             return self.sinr(1, hb + self.v * ex.t0_s) >= rd.q_in_db
@@ -154,7 +256,23 @@ class _Run:
 
     def execute(self, hb: float, retry_ok) -> tuple[int, bool, float, float]:
         """(attempts, success, completion position, time of completion after the first
-        command — a failure's detection plus re-establishment) from a first command at hb."""
+        command — a failure's detection plus re-establishment) from a first command at hb.
+
+        Parameters
+        ----------
+        hb : float
+            True position of the node at its first command H_b [m].
+        retry_ok : callable
+            ``retry_ok(a, s_ok, hb_next)`` -> bool, asked while a < ``max_attempts``: whether the
+            failed attempt a (from 1; ``s_ok``: its serving link held) is retried at ``hb_next`` [m].
+
+        Returns
+        -------
+        tuple of (int, bool, float, float)
+            Attempts made; success; completion position H_e of the last attempt [m]; time [s]
+            from the first command to completion, a·T0 + (a − 1)·TZ, or for a failure to its
+            detection (negative: radio-link failure before the command) plus re-establishment.
+        """
         ex = self.scn.execution
         hb0 = hb
         a = 1
@@ -229,6 +347,22 @@ def _a3(run: _Run) -> list[dict]:
             k_trig = max(k_cmd - (n_ttt - 1), 0)
 
         def returns(i, k0, t_done, f=f):
+            """Ping-pong: the reverse A3 condition held for the TTT within the window after completion.
+
+            Parameters
+            ----------
+            i, k0 : int
+                Node index (unused: ``f`` is bound per node) and first sample after completion.
+            t_done : float
+                Completion time [s] from t = 0 (the head at the serving RRH).
+            f : list of list of float
+                The node's L3-filtered RSRP [dBm], indexed [link][k] (0 = serving, 1 = target).
+
+            Returns
+            -------
+            bool
+                True if the node is commanded back to the previous cell within ``pingpong_window_s``.
+            """
             count = 0
             for k in range(k0, run.k_n):
                 if k * run.tm - t_done > ex.pingpong_window_s:
@@ -283,6 +417,18 @@ def _joint(run: _Run) -> list[dict]:
     src = run.filt if jt.measurements == "l3" else run.meas
 
     def gap(i, k):
+        """Measured gap serving − target of node ``i`` at sample ``k`` (``joint.measurements``).
+
+        Parameters
+        ----------
+        i, k : int
+            Node index (0 = head) and sample index.
+
+        Returns
+        -------
+        float
+            Gap [dB] of the L3-filtered (``l3``) or raw (``raw``) RSRP measurements.
+        """
         return src[i][0][k] - src[i][1][k]
 
     def reg(x):

@@ -24,7 +24,21 @@ AFFECTS = {
 
 
 def variant_id(switch: str, value: Any) -> str:
-    """File- and key-safe name of a variant, e.g. ``load_factor_0p3``, ``wslr_mean``."""
+    """File- and key-safe name of a variant, e.g. ``load_factor_0p3``, ``wslr_mean``.
+
+    Parameters
+    ----------
+    switch : str
+        The config key the variant changes, ``section.key``.
+    value : Any
+        The value the variant sets, in the key's own unit.
+
+    Returns
+    -------
+    str
+        ``<key>_<text>``: the key without its section, then ``str(value)`` with every ``.``
+        written ``p`` and every ``-`` written ``m``.
+    """
     short = switch.split(".")[-1]
     text = str(value).replace(".", "p").replace("-", "m")
     return f"{short}_{text}"

@@ -126,7 +126,32 @@ RECORDS = {r.name: r for r in (FIDELITY, MAP, CASES)}
 
 
 def main(argv: list[str] | None = None) -> int:
-    """``publish <record> <key_numbers.json>``: write the record for ``config/config.yaml``."""
+    """``publish <record> <key_numbers.json>``: write the record for ``config/config.yaml``.
+
+    Run from the repository root: the config and its schema are read from there and the
+    record is written to its ``paper/`` directory.
+
+    Parameters
+    ----------
+    argv : list of str or None, default None
+        The command-line arguments without the program name: ``publish``, a record name
+        (``fidelity``, ``map`` or ``cases``) and the path of the run's key-number JSON file;
+        None reads ``sys.argv[1:]``.
+
+    Returns
+    -------
+    int
+        Exit status: 0 once the record is written, 2 for wrong arguments (the module
+        docstring is printed to stderr as the usage).
+
+    Raises
+    ------
+    railradio.config.ConfigError
+        If ``config/config.yaml`` breaks the schema.
+    OSError
+        If the config, the schema or the key-number file cannot be read, or the record
+        cannot be written.
+    """
     import yaml
 
     from railradio.config import load_schema, validate_config

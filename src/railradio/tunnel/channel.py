@@ -501,7 +501,23 @@ def offset_index(table: xr.Dataset, dx_m: np.ndarray) -> tuple[np.ndarray, np.nd
 
 
 def window_slots(tunnel: Tunnel, x_rx_m: np.ndarray, half_width_m: float) -> tuple[np.ndarray, np.ndarray]:
-    """Indices of the slots within +-half_width of each receiver [rx, n] and a validity mask."""
+    """Indices of the slots within +-half_width of each receiver [rx, n] and a validity mask.
+
+    Parameters
+    ----------
+    tunnel : Tunnel
+        Slot positions and slot spacing.
+    x_rx_m : numpy.ndarray
+        Receiver positions along the tunnel [m], 1-D [rx].
+    half_width_m : float
+        Half-width of the window of slots around each receiver [m].
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``(idx, ok)``, each [rx, n] with n = 2 floor(half_width_m / slot spacing) + 2: slot indices (int64, clipped
+        to the tunnel's slots) and whether each is a slot of the tunnel within ``half_width_m`` of the receiver.
+    """
     xs = tunnel.slot_x_m
     s = tunnel.slot_spacing_m
     n = int(math.floor(half_width_m / s)) * 2 + 2

@@ -30,7 +30,32 @@ def far_decay(cfg: dict[str, Any]) -> xr.Dataset:
     of the two lowest modes) centred every quarter beat length over ``rays.far_decay_m``,
     and its least-squares slope, against the EH11 attenuation of the same square (Emslie,
     Lagace & Strong 1975).  The slope key takes the highest order; the order at which the
-    window means are within 0.1 dB of it tells whether it converged."""
+    window means are within 0.1 dB of it tells whether it converged.
+
+    Parameters
+    ----------
+    cfg : dict
+        The ``tunnel`` section of the configuration (``geometry``, ``cable``, ``wall``,
+        ``rays``; ``rays.max_order``, ``rays.far_decay_m``: the first and last window centre,
+        offsets from the slot [m]).
+
+    Returns
+    -------
+    xarray.Dataset
+        ``local_mean_db`` [order, centre_m] (one slot's coherent power, unit EIRP, truncated
+        at each reflection order and averaged over one beat length) [dB] and
+        ``slope_db_per_km`` [order] (its least-squares decay over the centres) [dB/km];
+        coordinates ``order`` (the highest reflection order summed) and ``centre_m`` (window
+        centre, offset from the slot) [m].  Attributes: ``beat_length_m`` [m],
+        ``eh11_db_per_km`` (EH11 attenuation of the square) [dB/km], ``converged_order``
+        (the first order whose window means are all within 0.1 dB of the highest order's)
+        and ``slope_db_per_km`` (the slope at the highest order) [dB/km].
+
+    Raises
+    ------
+    ValueError
+        When the configuration is invalid for the tunnel, cable or image method.
+    """
     r = cfg["rays"]
     tun = tunnel_from_config(cfg, "rect")
     lam = cable_from_config(cfg).wavelength_m
@@ -90,7 +115,29 @@ def far_decay_circle(cfg: dict[str, Any], sample_m: float = 1.0) -> dict[str, fl
     ``rays.far_decay_m`` at ``max_order`` (the reflection product interpolated in sin b as
     in the tables), against Marcatili & Schmeltzer's attenuation of
     EH11 and TE01 in a lossy circular guide of the tunnel's radius (TE01, the least
-    attenuated mode, bounds every mode's decay from below)."""
+    attenuated mode, bounds every mode's decay from below).
+
+    Parameters
+    ----------
+    cfg : dict
+        The ``tunnel`` section of the configuration (``geometry``, ``cable``, ``wall``,
+        ``rays``; ``rays.far_decay_m`` [m], ``rays.max_order``, ``rays.sbr_rays``,
+        ``rays.sbr_rx_radius_m`` [m], ``rays.sbr_polarization``).
+    sample_m : float
+        Spacing of the offset samples averaged in each window [m].
+
+    Returns
+    -------
+    dict
+        ``slope_db_per_km`` (least-squares decay of the window means) [dB/km],
+        ``eh11_db_per_km`` and ``te01_db_per_km`` (the modes' attenuation in the circular
+        guide of the tunnel's radius) [dB/km], ``n_families`` (SBR ray families) [1].
+
+    Raises
+    ------
+    ValueError
+        When the configuration is invalid for the tunnel, cable or SBR engine.
+    """
     r = cfg["rays"]
     tun = tunnel_from_config(cfg, "circle")
     lam = cable_from_config(cfg).wavelength_m
@@ -118,7 +165,36 @@ def cutoff_check(cfg: dict[str, Any], table: xr.Dataset, x_step_m: float = 2.0, 
     A table covering the whole tunnel leaves no slot beyond it (share 0, the doubled
     cut-off adds nothing); a shorter one is compared with the channel tabulated to 2c (at
     the table's order, on a ``step_m`` grid: the local mean and the power delay profile are
-    averages over 40 wavelengths, which a 0.2 m grid samples 66 times)."""
+    averages over 40 wavelengths, which a 0.2 m grid samples 66 times).
+
+    Parameters
+    ----------
+    cfg : dict
+        The ``tunnel`` section of the configuration (``geometry``, ``cable``, ``wall``,
+        ``rays``; ``rays.delay_bin_ns`` [ns], ``rays.n_delay_bins``,
+        ``rays.local_mean_wavelengths``, ``rays.cutoff_power_frac`` [1]).
+    table : xarray.Dataset
+        The image-method table (:func:`railradio.tunnel.study.make_table` ``'image'``) with
+        the attributes ``shape`` and ``reflection_order``; its extent c is its largest offset.
+    x_step_m : float
+        Spacing of the receiver positions along the tunnel [m].
+    step_m : float
+        Offset step of the channel tabulated to 2c [m]; it must divide the slot spacing.
+
+    Returns
+    -------
+    xarray.Dataset
+        Over ``x_m`` (receiver positions every ``x_step_m`` from the portal [m]):
+        ``power_beyond_cutoff_frac`` [1], ``delay_rms_cutoff_s``, ``delay_rms_doubled_s``,
+        ``delay_rms_halved_s`` (slots within c, 2c and c/2) [s].  Attributes ``cutoff_m``
+        (the table's extent c) [m] and ``cutoff_power_frac`` [1].
+
+    Raises
+    ------
+    ValueError
+        When the table is shorter than the tunnel and ``step_m`` does not divide the slot
+        spacing; when the configuration is invalid for the tunnel or cable.
+    """
     r = cfg["rays"]
     tun = tunnel_from_config(cfg, table.attrs["shape"])
     cab = cable_from_config(cfg)

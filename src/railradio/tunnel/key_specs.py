@@ -318,7 +318,22 @@ SPECS = _specs()
 
 
 def sens_spec(case: str, train: str) -> KeySpec:
-    """Key of one sensitivity case and train type (names follow the config's cases)."""
+    """Key of one sensitivity case and train type (names follow the config's cases).
+
+    Parameters
+    ----------
+    case : str
+        Sensitivity case label (:func:`railradio.tunnel.sensitivity.sensitivity_cases`, or
+        ``slot_side_wall``).
+    train : str
+        Train type (``metro``, ``hst``, ``freight``).
+
+    Returns
+    -------
+    KeySpec
+        The key ``tunnel.sens.<case>.<train>.err_m.p95`` [m]: the 95th percentile of the KF
+        train error, pooled over realizations.
+    """
     return KeySpec(
         f"tunnel.sens.{case}.{train}.err_m.p95",
         "m",

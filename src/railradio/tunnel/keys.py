@@ -13,14 +13,38 @@ from railradio.tunnel.key_specs import ENGINE_TOL_COHERENT_DB, ENGINE_TOL_MEAN_D
 def length_error_m(ds: xr.Dataset) -> np.ndarray:
     """|x̂_head - x̂_tail - L| per epoch [m] of a run's KF (realization 0): the train's
     along-track extent, all that remains of the seed's attitude θ = arctan(Δy/Δx)
-    (seed 3.3.2) when the slots are collinear and only along-track positions are solved."""
+    (seed 3.3.2) when the slots are collinear and only along-track positions are solved.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A run of :func:`railradio.tunnel.simulate.run_train`: ``kf_head``, ``kf_tail``
+        [time_s] [m] and the attribute ``length_m`` (train length L) [m].
+
+    Returns
+    -------
+    numpy.ndarray
+        Train length error [time_s] [m].
+    """
     return np.abs(ds["kf_head"].values - ds["kf_tail"].values - float(ds.attrs["length_m"]))
 
 
 def pooled_p95(rep: np.ndarray) -> tuple[float, float | None]:
     """95th percentile of errors [realization, epoch] pooled over realizations, and its Monte
     Carlo standard error: the std of the per-realization 95th percentiles / sqrt(R)
-    (None for one realization)."""
+    (None for one realization).
+
+    Parameters
+    ----------
+    rep : numpy.ndarray
+        Errors [realization, epoch] [m]; NaN is ignored.
+
+    Returns
+    -------
+    tuple
+        ``(value, stderr)``: the pooled 95th percentile [m] (float) and its Monte Carlo
+        standard error [m] (float, or None with one realization).
+    """
     rep = np.asarray(rep, dtype=float)
     value = float(np.nanpercentile(rep, 95))
     if rep.shape[0] < 2:
@@ -31,7 +55,22 @@ def pooled_p95(rep: np.ndarray) -> tuple[float, float | None]:
 
 def pooled_share(reps: list[np.ndarray], limit_m: float) -> tuple[float, float | None]:
     """Share of epochs with error < limit over all runs [realization, epoch] (same R each)
-    and its Monte Carlo standard error across realizations."""
+    and its Monte Carlo standard error across realizations.
+
+    Parameters
+    ----------
+    reps : list of numpy.ndarray
+        Errors of every run [realization, epoch] [m].
+    limit_m : float
+        Error limit [m].
+
+    Returns
+    -------
+    tuple
+        ``(value, stderr)``: the share of epochs with error < ``limit_m`` over all runs [1]
+        (float) and its Monte Carlo standard error [1] (float, or None with fewer than two
+        realizations or unequal numbers of realizations).
+    """
     value = float(np.mean(np.concatenate([r.ravel() for r in reps]) < limit_m))
     n_r = reps[0].shape[0]
     if n_r < 2 or any(r.shape[0] != n_r for r in reps):

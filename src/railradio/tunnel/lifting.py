@@ -50,6 +50,34 @@ def reflection_product(
     receiver's vertical polarization.  With ``return_history`` (vector only) also the
     field magnitude after each reflection [f, s, k] (it can never grow).  ``eps=None``:
     perfectly absorbing walls (G = 0 for every reflected ray).
+
+    Parameters
+    ----------
+    fam : Families
+        2-D ray families from the slot to the receiver (:mod:`railradio.tunnel.rays`).
+    sin_b : numpy.ndarray
+        Sines of the angle b between the 3-D ray and the tunnel axis, l / d [1]; in [0, 1];
+        [s] (the same for every family) or [f, s].
+    eps : complex or None
+        Relative permittivity of the wall [1] (real part > 1, imaginary part <= 0); None:
+        perfectly absorbing walls.
+    polarization : {'paraxial', 'vector'}
+        Polarization rule (module docstring).
+    return_history : bool
+        Also return the field magnitude after each reflection (``vector`` rule, or ``eps``
+        None: zeros).
+
+    Returns
+    -------
+    numpy.ndarray or tuple of numpy.ndarray
+        G [f, s] (complex) [1]; with ``return_history`` under the ``vector`` rule or with
+        ``eps`` None, ``(G, history)`` with ``history`` [f, s, k] [1].
+
+    Raises
+    ------
+    ValueError
+        When ``polarization`` is unknown; when ``eps`` is given and ``sin_b`` lies outside
+        [0, 1], is neither [s] nor [f, s], or ``eps`` is not a lossy permittivity as above.
     """
     if polarization not in POLARIZATIONS:
         raise ValueError(f"polarization must be one of {POLARIZATIONS}, got {polarization!r}")
@@ -204,6 +232,40 @@ def trace(
 
     ``image`` needs a rectangular tunnel; ``sbr`` takes either cross-section.  The
     polarization rule defaults to paraxial for the image method, vector for SBR.
+
+    Parameters
+    ----------
+    engine : {'image', 'sbr'}
+        Ray engine (:func:`~railradio.tunnel.rays.image_families`,
+        :func:`~railradio.tunnel.rays.sbr_families`).
+    tunnel : Tunnel
+        The tunnel; ``'rect'`` for the image method.
+    dx_m : array_like
+        Along-axis offsets x_rx - x_slot [m] (only |dx| matters), 1-D.
+    wavelength_m : float
+        Free-space wavelength [m].
+    eps : complex or None
+        Relative permittivity of the wall [1] (real part > 1, imaginary part <= 0); None:
+        perfectly absorbing walls.
+    order : int
+        Largest reflection order (image: |m| + |n|; SBR: reflections traced) [1].
+    polarization : {'paraxial', 'vector'} or None
+        Polarization rule; None: the engine's default.
+    n_rays : int
+        2-D rays launched by SBR; >= 16.
+    rx_radius_m : float
+        Radius of SBR's reception circle around the receiver [m].
+
+    Returns
+    -------
+    Rays
+        The rays of :func:`lift`: ``amplitude`` [ray, offset] [1], ``delay_s`` [ray, offset]
+        [s], ``n_reflections`` [ray].
+
+    Raises
+    ------
+    ValueError
+        When ``engine`` is unknown, or the engine or :func:`lift` rejects its arguments.
     """
     if engine == "image":
         fam = image_families(tunnel, order)
@@ -237,7 +299,19 @@ def _image_sum(ell, n_tm, c_tm, n_te, c_te, dx, k, eps, out):
 def image_power_form(fam: Families) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """An image family's reflections in the rectangle, counted by wall pair: (number of
     floor/ceiling reflections, their 2-D incidence cosine |u_y|, number of side-wall
-    reflections, |u_z|) per family (the 2-D direction only changes sign at a reflection)."""
+    reflections, |u_z|) per family (the 2-D direction only changes sign at a reflection).
+
+    Parameters
+    ----------
+    fam : Families
+        Image-method families (:func:`~railradio.tunnel.rays.image_families`).
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``(n_tm, c_tm, n_te, c_te)``, each [f]: floor/ceiling reflections (int64), their 2-D
+        incidence cosine |u_y| [1], side-wall reflections (int64), their cosine |u_z| [1].
+    """
     valid = np.arange(fam.normal.shape[1])[None, :] < fam.n_refl[:, None]
     on_floor = valid & (np.abs(fam.normal[..., 0]) >= np.abs(fam.normal[..., 1]))
     n_tm = on_floor.sum(axis=1).astype(np.int64)
@@ -257,7 +331,32 @@ def image_coherent_gain(fam: Families, dx_m, wavelength_m: float, eps: complex, 
     rectangle every reflection off the floor or ceiling (TM) has the incidence cosine
     sin b |u_y|, off a side wall (TE) sin b |u_z|, so the product is two powers.
     ``by_order``: the sum of each reflection order apart, [order 0..max, offset] (its
-    cumulative sum over orders is the gain truncated at each order)."""
+    cumulative sum over orders is the gain truncated at each order).
+
+    Parameters
+    ----------
+    fam : Families
+        Image-method families (:func:`~railradio.tunnel.rays.image_families`).
+    dx_m : array_like
+        Along-axis offsets x_rx - x_slot [m] (only |dx| matters; flattened).
+    wavelength_m : float
+        Free-space wavelength [m].
+    eps : complex
+        Relative permittivity of the wall [1] (real part > 1, imaginary part <= 0).
+    by_order : bool
+        Return each reflection order's sum apart.
+
+    Returns
+    -------
+    numpy.ndarray
+        Complex gain relative to unit EIRP [1]: [offset], or [order 0..max, offset] with
+        ``by_order``.
+
+    Raises
+    ------
+    ValueError
+        When ``fam`` does not come from the image method or ``eps`` is None.
+    """
     if fam.engine != "image":
         raise ValueError(f"fam must come from image_families, got engine {fam.engine!r}")
     if eps is None:

@@ -45,6 +45,24 @@ def fresnel_te(cos_i, eps: complex = CONCRETE_900MHZ) -> np.ndarray:
 
     Gamma_TE = (cos t - sqrt(eps - sin^2 t)) / (cos t + sqrt(eps - sin^2 t))
     (ITU-R P.2040-1 eq. 31a with mu = 1).
+
+    Parameters
+    ----------
+    cos_i : float or array_like
+        Cosine of the incidence angle from the wall normal [1]; in [0, 1].
+    eps : complex
+        Relative permittivity of the wall [1]; real part > 1, imaginary part <= 0
+        (exp(+j omega t)).
+
+    Returns
+    -------
+    numpy.ndarray
+        Complex reflection coefficient Gamma_TE [1], the shape of ``cos_i``.
+
+    Raises
+    ------
+    ValueError
+        When ``eps`` is not a lossy permittivity as above or ``cos_i`` lies outside [0, 1].
     """
     eps = _check_eps(eps)
     c = _check_cos(cos_i)
@@ -57,6 +75,24 @@ def fresnel_tm(cos_i, eps: complex = CONCRETE_900MHZ) -> np.ndarray:
 
     Gamma_TM = (eps cos t - sqrt(eps - sin^2 t)) / (eps cos t + sqrt(eps - sin^2 t))
     (ITU-R P.2040-1 eq. 31b with mu = 1, p vector = s x k on both sides).
+
+    Parameters
+    ----------
+    cos_i : float or array_like
+        Cosine of the incidence angle from the wall normal [1]; in [0, 1].
+    eps : complex
+        Relative permittivity of the wall [1]; real part > 1, imaginary part <= 0
+        (exp(+j omega t)).
+
+    Returns
+    -------
+    numpy.ndarray
+        Complex reflection coefficient Gamma_TM [1], the shape of ``cos_i``.
+
+    Raises
+    ------
+    ValueError
+        When ``eps`` is not a lossy permittivity as above or ``cos_i`` lies outside [0, 1].
     """
     eps = _check_eps(eps)
     c = _check_cos(cos_i)
@@ -65,7 +101,18 @@ def fresnel_tm(cos_i, eps: complex = CONCRETE_900MHZ) -> np.ndarray:
 
 
 def reflection_loss_db(gamma) -> np.ndarray:
-    """Reflection loss -20 log10 |Gamma| [dB]."""
+    """Reflection loss -20 log10 |Gamma| [dB].
+
+    Parameters
+    ----------
+    gamma : complex or array_like
+        Reflection coefficient Gamma [1].
+
+    Returns
+    -------
+    numpy.ndarray
+        Reflection loss [dB], the shape of ``gamma``.
+    """
     return -20.0 * np.log10(np.abs(gamma))
 
 
@@ -78,6 +125,27 @@ def eh11_attenuation_db_per_m(
         alpha = 4.343 lambda^2 Re[ 1 / (w^3 sqrt(eps - 1)) + eps / (h^3 sqrt(eps - 1)) ]
 
     (side walls TE, floor and ceiling TM for a vertical field).
+
+    Parameters
+    ----------
+    wavelength_m : float
+        Free-space wavelength lambda [m]; positive.
+    width_m : float
+        Width w of the tunnel, between the side walls [m]; positive.
+    height_m : float
+        Height h of the tunnel, floor to ceiling [m]; positive.
+    eps : complex
+        Relative permittivity of the walls [1] (imaginary part <= 0, exp(+j omega t)).
+
+    Returns
+    -------
+    float
+        Attenuation of the EH11 mode [dB/m].
+
+    Raises
+    ------
+    ValueError
+        When ``wavelength_m``, ``width_m`` or ``height_m`` is not positive.
     """
     if wavelength_m <= 0 or width_m <= 0 or height_m <= 0:
         raise ValueError("wavelength_m, width_m and height_m must be positive")
@@ -99,7 +167,29 @@ def circular_attenuation_db_per_m(
     """Attenuation of a mode of a hollow circular guide in a lossy dielectric (Marcatili &
     Schmeltzer 1964, eq. 35): alpha = (u_nm / 2 pi)^2 lambda^2 / a^3 Re(nu_n) [Np/m] with
     nu = 1/sqrt(eps - 1) (TE0m), eps/sqrt(eps - 1) (TM0m), (eps + 1)/(2 sqrt(eps - 1))
-    (hybrid EH_nm) [dB/m]."""
+    (hybrid EH_nm) [dB/m].
+
+    Parameters
+    ----------
+    wavelength_m : float
+        Free-space wavelength lambda [m]; positive.
+    radius_m : float
+        Radius a of the guide [m]; positive.
+    mode : {'EH11', 'TE01', 'TM01'}
+        The mode (:data:`CIRCULAR_MODES`).
+    eps : complex
+        Relative permittivity of the wall [1] (imaginary part <= 0, exp(+j omega t)).
+
+    Returns
+    -------
+    float
+        Attenuation of the mode [dB/m].
+
+    Raises
+    ------
+    ValueError
+        When ``wavelength_m`` or ``radius_m`` is not positive or ``mode`` is unknown.
+    """
     if wavelength_m <= 0 or radius_m <= 0:
         raise ValueError("wavelength_m and radius_m must be positive")
     if mode not in CIRCULAR_MODES:

@@ -77,7 +77,29 @@ def shadow_field(
     rng: np.random.Generator, n_slots: int, length_m: float, sigma_db: float, corr_m: float, step_m: float = 1.0
 ) -> np.ndarray:
     """Per-slot shadowing along the tunnel [slot, x on a ``step_m`` grid] [dB], AR(1) with
-    correlation exp(-dx / corr_m) (Gudmundson)."""
+    correlation exp(-dx / corr_m) (Gudmundson).
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Source of the field's draws.
+    n_slots : int
+        Number of slots (rows), each with its own field.
+    length_m : float
+        Length of the tunnel covered by the grid, from x = 0 [m].
+    sigma_db : float
+        Standard deviation of the field [dB] (the field takes its unit:
+        :func:`delay_error_field` passes one in s).
+    corr_m : float
+        Correlation distance along the tunnel [m]; positive.
+    step_m : float
+        Grid step [m].
+
+    Returns
+    -------
+    numpy.ndarray
+        The stationary field [slot, ceil(length_m / step_m) + 1] at x = 0, step_m, ... [dB].
+    """
     n = int(math.ceil(length_m / step_m)) + 1
     rho = math.exp(-step_m / corr_m)
     w = rng.standard_normal((n_slots, n))
@@ -88,7 +110,26 @@ def shadow_field(
 def delay_error_field(
     rng: np.random.Generator, n_slots: int, length_m: float, mm: MeasurementModel
 ) -> np.ndarray | None:
-    """Per-slot delay error along the tunnel [slot, x on a 1 m grid] [s]; None if white."""
+    """Per-slot delay error along the tunnel [slot, x on a 1 m grid] [s]; None if white.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Source of the field's draws.
+    n_slots : int
+        Number of slots (rows).
+    length_m : float
+        Length of the tunnel covered by the grid, from x = 0 [m].
+    mm : MeasurementModel
+        ``delay_error`` (the time structure), ``delay_sigma_s`` [s], ``delay_corr_m`` [m].
+
+    Returns
+    -------
+    numpy.ndarray or None
+        [slot, ceil(length_m) + 1] [s]: ``ar1``, an AR(1) field of standard deviation
+        ``delay_sigma_s`` correlated over ``delay_corr_m``; ``slot_bias``, one Gaussian bias
+        per slot, constant along the tunnel; None for ``white``.
+    """
     if mm.delay_error == "white":
         return None
     if mm.delay_error == "ar1":

@@ -26,6 +26,18 @@ def monotone_gain_db(table: xr.Dataset) -> tuple[np.ndarray, np.ndarray]:
 
     The local-mean gain of one slot is not strictly monotone (a multiply reflected ray can
     lose less as it grows more grazing); the running minimum is the invertible envelope.
+
+    Parameters
+    ----------
+    table : xarray.Dataset
+        Tabulated channel (:func:`railradio.tunnel.channel.tabulate`): ``power_mean``
+        (local-mean power gain) [1] over ``offset_m`` [m].
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``(offsets, curve)``, each [offset]: the table's offsets [m] and the running minimum
+        of its local-mean gain [dB].
     """
     off = table["offset_m"].values
     g = 10.0 * np.log10(table["power_mean"].values)
@@ -33,7 +45,23 @@ def monotone_gain_db(table: xr.Dataset) -> tuple[np.ndarray, np.ndarray]:
 
 
 def gain_to_offset_m(gain_db, offsets_m: np.ndarray, curve_db: np.ndarray) -> np.ndarray:
-    """|dx| at which the monotone curve equals ``gain_db`` (clipped to the table) [m]."""
+    """|dx| at which the monotone curve equals ``gain_db`` (clipped to the table) [m].
+
+    Parameters
+    ----------
+    gain_db : float or array_like
+        Measured path gain of a slot: RSSI minus the cable power at the slot [dB].
+    offsets_m : numpy.ndarray
+        Increasing offsets of the curve [m], [offset].
+    curve_db : numpy.ndarray
+        Non-increasing gain at ``offsets_m`` (:func:`monotone_gain_db`) [dB], [offset].
+
+    Returns
+    -------
+    numpy.ndarray
+        Offset |dx| [m], the shape of ``gain_db`` (linear interpolation; gains beyond the
+        curve's ends give its first or last offset).
+    """
     rev_g, rev_o = curve_db[::-1], offsets_m[::-1]
     # np.interp needs increasing x: the reversed curve is non-decreasing; make it strict
     rev_g = rev_g + np.arange(rev_g.size) * 1e-12
@@ -46,6 +74,25 @@ def rssi_ls(x_slot_m: np.ndarray, range_m: np.ndarray, h_m: float) -> np.ndarray
     Rows i = 1..n-1 against the reference (column 0, the strongest slot):
     (x - x_i)^2 - (x - x_0)^2 = d_i^2 - d_0^2  ->  2 (x_0 - x_i) x = d_i^2 - d_0^2 - x_i^2 + x_0^2;
     h cancels.  ``x_slot_m``, ``range_m``: [epoch, n] with n >= 2.
+
+    Parameters
+    ----------
+    x_slot_m : numpy.ndarray
+        Slot positions along the track [m], [epoch, n]; column 0 the reference.
+    range_m : numpy.ndarray
+        Slot-receiver distances d_i (from RSSI ranging) [m], [epoch, n].
+    h_m : float
+        Cross distance h between slot line and receiver [m]; it cancels (not used).
+
+    Returns
+    -------
+    numpy.ndarray
+        Position x along the track [epoch] [m].
+
+    Raises
+    ------
+    ValueError
+        When ``x_slot_m`` and ``range_m`` differ in shape or are not [epoch, n >= 2].
     """
     xs = np.asarray(x_slot_m, dtype=float)
     d = np.asarray(range_m, dtype=float)
@@ -76,6 +123,34 @@ def tdoa_gauss_newton(
     Returns (x [epoch], variance [epoch] from (J^T C^-1 J)^-1).  The TDOA covariance is
     sigma^2 (I + 1 1^T) (every difference shares the reference's error); steps are
     clipped to ``max_step_m`` (far from the slots the equations flatten).
+
+    Parameters
+    ----------
+    x0_m : numpy.ndarray
+        Starting positions along the track (e.g. the RSSI fix) [m], [epoch].
+    x_slot_m : numpy.ndarray
+        Slot positions along the track [m], [epoch, n]; column 0 the reference.
+    range_diff_m : numpy.ndarray
+        Range differences c (tau_i - tau_0) [m], [epoch, n - 1].
+    h_m : float
+        Cross distance h between slot line and receiver [m].
+    sigma_m : float
+        Standard deviation of each slot's range c tau_i [m]; positive.
+    n_iter : int
+        Largest number of iterations (they stop when every step is below 1e-6 m).
+    max_step_m : float
+        Largest step of one iteration [m].
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``(x, var)``, each [epoch]: the position along the track [m] and its variance from
+        the geometry at the solution [m^2].
+
+    Raises
+    ------
+    ValueError
+        When ``sigma_m`` is not positive or ``range_diff_m`` is not [epoch, n - 1].
     """
     if sigma_m <= 0:
         raise ValueError("sigma_m must be positive")
@@ -109,6 +184,22 @@ def gdop_seed(x_m: np.ndarray, y_m: float, x_slot_m: np.ndarray, y_slot_m: float
 
     t_i is the azimuth from the position to slot i.  With all slots on one line below the
     receiver the matrix is near-singular whenever the slots lie on one side.
+
+    Parameters
+    ----------
+    x_m : numpy.ndarray
+        Receiver positions along the track [m], [epoch].
+    y_m : float
+        Receiver height above the floor [m].
+    x_slot_m : numpy.ndarray
+        Slot positions along the track [m], [epoch, n].
+    y_slot_m : float
+        Slot height above the floor [m].
+
+    Returns
+    -------
+    numpy.ndarray
+        GDOP [epoch] [1].
     """
     dx = np.asarray(x_slot_m, dtype=float) - np.asarray(x_m, dtype=float)[:, None]
     dy = y_slot_m - y_m
@@ -121,7 +212,22 @@ def gdop_seed(x_m: np.ndarray, y_m: float, x_slot_m: np.ndarray, y_slot_m: float
 
 
 def gdop_tdoa_along(x_m: np.ndarray, x_slot_m: np.ndarray, h_m: float) -> np.ndarray:
-    """Along-track standard deviation of the TDOA fix per unit range error c sigma_tau."""
+    """Along-track standard deviation of the TDOA fix per unit range error c sigma_tau.
+
+    Parameters
+    ----------
+    x_m : numpy.ndarray
+        Positions along the track [m], [epoch].
+    x_slot_m : numpy.ndarray
+        Slot positions along the track [m], [epoch, n]; column 0 the reference.
+    h_m : float
+        Cross distance h between slot line and receiver [m].
+
+    Returns
+    -------
+    numpy.ndarray
+        Dilution sigma_x / (c sigma_tau) [epoch] [1].
+    """
     x = np.asarray(x_m, dtype=float)
     xs = np.asarray(x_slot_m, dtype=float)
     n = xs.shape[1] - 1
@@ -132,11 +238,35 @@ def gdop_tdoa_along(x_m: np.ndarray, x_slot_m: np.ndarray, h_m: float) -> np.nda
 
 
 def cep(sigma_x: np.ndarray, sigma_y: np.ndarray) -> np.ndarray:
-    """Circular error probable CEP = 0.59 (sigma_x + sigma_y) [seed 4.3.2]."""
+    """Circular error probable CEP = 0.59 (sigma_x + sigma_y) [seed 4.3.2].
+
+    Parameters
+    ----------
+    sigma_x : float or array_like
+        Standard deviation of the position error along x [m].
+    sigma_y : float or array_like
+        Standard deviation of the position error along y [m].
+
+    Returns
+    -------
+    numpy.ndarray
+        CEP [m], the broadcast shape of ``sigma_x`` and ``sigma_y``.
+    """
     return 0.59 * (np.asarray(sigma_x) + np.asarray(sigma_y))
 
 
 def range_diff_from_delays(delay_s: np.ndarray) -> np.ndarray:
-    """c (tau_i - tau_0) for columns 1..n-1 against column 0 [m]."""
+    """c (tau_i - tau_0) for columns 1..n-1 against column 0 [m].
+
+    Parameters
+    ----------
+    delay_s : numpy.ndarray
+        Measured slot delays tau [s], [epoch, n]; column 0 the reference.
+
+    Returns
+    -------
+    numpy.ndarray
+        Range differences [m], [epoch, n - 1].
+    """
     d = np.asarray(delay_s, dtype=float)
     return SPEED_OF_LIGHT_M_S * (d[:, 1:] - d[:, :1])

@@ -68,6 +68,18 @@ class Families:
         return int(self.ell_m.size)
 
     def subset(self, mask: np.ndarray) -> Families:
+        """The families selected by ``mask``, with the same engine and a copy of ``stats``.
+
+        Parameters
+        ----------
+        mask : numpy.ndarray
+            Boolean mask over the families [f], or the indices of the families to keep.
+
+        Returns
+        -------
+        Families
+            The selected families, in the order ``mask`` gives them.
+        """
         m = np.asarray(mask)
         return Families(
             self.ell_m[m],

@@ -20,7 +20,18 @@ from railradio.tunnel.study import (
 
 
 def case_label(v: float) -> str:
-    """A sweep value as a case-name fragment: 3.5 -> "3p5", -1 -> "m1"."""
+    """A sweep value as a case-name fragment: 3.5 -> "3p5", -1 -> "m1".
+
+    Parameters
+    ----------
+    v : float
+        The swept value, in the unit of its ``sensitivity`` entry (e.g. dB, ns).
+
+    Returns
+    -------
+    str
+        ``v`` in ``%g`` format with '.' written 'p' and '-' written 'm'.
+    """
     return f"{v:g}".replace(".", "p").replace("-", "m")
 
 

@@ -41,7 +41,45 @@ def separable_measurements(
 ) -> dict[str, np.ndarray]:
     """Per-slot RSSI and delay of the ``n_slots`` strongest measured slots [epoch, n];
     the delay error is white from ``rng`` or read from ``delay_field`` (see
-    :func:`railradio.tunnel.measurement.delay_error_field`)."""
+    :func:`railradio.tunnel.measurement.delay_error_field`).
+
+    Parameters
+    ----------
+    table : xarray.Dataset
+        Tabulated slot-to-receiver channel (:func:`railradio.tunnel.channel.tabulate`):
+        ``taps`` (physical) or ``power_mean`` (seed) over ``offset_m`` [m].
+    tunnel : Tunnel
+        Slot positions and the cross distance h between slot line and receiver.
+    cable : Cable
+        Cable power at each slot.
+    x_rx_m : numpy.ndarray
+        Receiver positions along the tunnel [m], [epoch].
+    shadow : numpy.ndarray
+        Per-slot shadowing [slot, x on a 1 m grid] [dB]
+        (:func:`railradio.tunnel.measurement.shadow_field`).
+    rng : numpy.random.Generator
+        Source of the white delay error (not used with ``delay_field``).
+    mm : MeasurementModel
+        ``n_slots``, ``window_m`` [m] and ``delay_sigma_s`` [s].
+    propagation : {'physical', 'seed'}
+        'physical': a slot's gain is the power of its coherent tap sum; otherwise its
+        local-mean power.
+    delay_field : numpy.ndarray or None
+        Per-slot delay error [slot, x on a 1 m grid] [s]; None: white.
+
+    Returns
+    -------
+    dict
+        Arrays [epoch, n_slots], the strongest slot first: ``slot`` (index), ``slot_x_m``
+        [m], ``rssi_dbm`` [dBm], ``cable_power_dbm`` (cable power at the slot) [dBm],
+        ``delay_s`` (slot-receiver line-of-sight delay plus its error) [s].
+
+    Raises
+    ------
+    ValueError
+        When fewer than ``n_slots`` slots lie within ``window_m`` and the table's extent
+        of a receiver.
+    """
     xs, pc_dbm, _ = slot_powers(tunnel, cable)
     x = np.asarray(x_rx_m, dtype=float)
     sl, ok = window_slots(tunnel, x, mm.window_m)
@@ -67,7 +105,28 @@ def separable_measurements(
 
 
 def separable_fix(meas: dict, table: xr.Dataset, tunnel: Tunnel, mm: MeasurementModel):
-    """RSSI-LS fix, TDOA fix from it, its variance, both GDOPs [epoch]."""
+    """RSSI-LS fix, TDOA fix from it, its variance, both GDOPs [epoch].
+
+    Parameters
+    ----------
+    meas : dict
+        Measurements of :func:`separable_measurements`: ``slot_x_m`` [m], ``rssi_dbm`` and
+        ``cable_power_dbm`` [dBm], ``delay_s`` [s], each [epoch, n].
+    table : xarray.Dataset
+        The channel table inverted for RSSI ranging (:func:`~railradio.tunnel.positioning.monotone_gain_db`).
+    tunnel : Tunnel
+        Cross distance h, tunnel length, receiver and slot heights.
+    mm : MeasurementModel
+        ``delay_sigma_s`` [s] (the TDOA weights).
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``(x_rssi, x_tdoa, sigma_tdoa, gdop_seed, gdop_tdoa)``, each [epoch]: the RSSI-LS fix
+        clipped to the tunnel [m], the TDOA Gauss-Newton fix started from it [m], the TDOA
+        fix's standard deviation from its geometry (the square root of its variance) [m],
+        the seed's 2-D GDOP [1] and the along-track TDOA dilution [1].
+    """
     h = tunnel.cross_distance_m
     off, curve = monotone_gain_db(table)
     dx = gain_to_offset_m(meas["rssi_dbm"] - meas["cable_power_dbm"], off, curve)

@@ -220,7 +220,36 @@ def kf_realizations(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Head and tail errors of the head and tail receivers' KF [realization, epoch] [m] for
     the given Monte Carlo realizations of a separable receiver (each its own shadowing,
-    delay-error field and noise); the vectorized KF, equal to :func:`railradio.tunnel.tracking.kf_track`."""
+    delay-error field and noise); the vectorized KF, equal to :func:`railradio.tunnel.tracking.kf_track`.
+
+    Parameters
+    ----------
+    table : xarray.Dataset
+        Tabulated slot-to-receiver channel of the run's propagation.
+    tunnel : Tunnel
+        The tunnel of the table's cross-section.
+    cable : Cable
+        The leaky cable.
+    train : Train
+        The train type crossing the tunnel.
+    mm : MeasurementModel
+        The receivers' measurement model.
+    propagation : {'physical', 'seed'}
+        The table's propagation model (selects the random streams).
+    tracking : dict
+        The ``tracking`` section: ``rate_hz`` [Hz], ``accel_sigma_m_s2`` [m/s^2], ``max_speed_m_s`` [m/s].
+    seed : int
+        Root seed of the workflow.
+    r0 : float
+        Measurement variance per unit dilution squared (:func:`calibrate_separable`) [m^2].
+    realizations : iterable of int
+        Monte Carlo realizations (0: the fields and noise of :func:`run_train`'s evaluation run).
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``(err_head, err_tail)``, each [realization, epoch]: |KF - truth| of the head and tail receiver [m].
+    """
     t, x_head = epochs(tunnel, train, tracking["rate_hz"])
     k = train.n_receivers
     ends = (0, k - 1)

@@ -61,7 +61,20 @@ def channel_config(cfg: dict[str, Any], name: str, keys: list[str]) -> dict[str,
 
 
 def side_wall_config(cfg: dict[str, Any]) -> dict[str, Any]:
-    """The tunnel config with the slot line moved to the side wall (the sensitivity variant)."""
+    """The tunnel config with the slot line moved to the side wall (the sensitivity variant).
+
+    Parameters
+    ----------
+    cfg : dict
+        The ``tunnel`` section of the configuration; ``sensitivity.side_wall_slot_z_m`` holds
+        the transverse position of the slot line on the side wall [m].
+
+    Returns
+    -------
+    dict
+        A new config with ``geometry.slot_z_m`` replaced (``cfg`` is not modified; the other
+        sections are shared with it).
+    """
     z = cfg["sensitivity"]["side_wall_slot_z_m"]
     return cfg | {"geometry": cfg["geometry"] | {"slot_z_m": z}}
 
@@ -231,6 +244,31 @@ def train_from_config(cfg: dict[str, Any], name: str) -> Train:
 
 
 def families(cfg: dict[str, Any], shape: str, engine: str, order: int) -> Families:
+    """The 2-D ray families from the slot to the receiver in the tunnel of ``cfg`` by one engine.
+
+    Parameters
+    ----------
+    cfg : dict
+        The ``tunnel`` section of the configuration (``geometry``; for SBR ``rays.sbr_rays``
+        and ``rays.sbr_rx_radius_m`` [m]).
+    shape : {'circle', 'rect'}
+        Cross-section (:func:`tunnel_from_config`).
+    engine : {'image', 'sbr'}
+        'image': the image method (needs ``shape`` 'rect'); any other value: SBR.
+    order : int
+        Largest reflection order (image: |m| + |n|; SBR: reflections traced) [1].
+
+    Returns
+    -------
+    Families
+        The families (:func:`~railradio.tunnel.rays.image_families` or
+        :func:`~railradio.tunnel.rays.sbr_families`).
+
+    Raises
+    ------
+    ValueError
+        When the geometry is invalid or the engine rejects the shape, order or SBR settings.
+    """
     tun = tunnel_from_config(cfg, shape)
     if engine == "image":
         return image_families(tun, order)
@@ -239,14 +277,45 @@ def families(cfg: dict[str, Any], shape: str, engine: str, order: int) -> Famili
 
 
 def local_mean_window(cfg: dict[str, Any]) -> float:
-    """The local-mean window [m] of ``rays.local_mean_wavelengths`` wavelengths."""
+    """The local-mean window [m] of ``rays.local_mean_wavelengths`` wavelengths.
+
+    Parameters
+    ----------
+    cfg : dict
+        The ``tunnel`` section of the configuration; ``cable`` (its frequency gives the
+        wavelength) and ``rays.local_mean_wavelengths`` [1].
+
+    Returns
+    -------
+    float
+        Length of the local-mean window [m].
+
+    Raises
+    ------
+    ValueError
+        When the cable is invalid or ``rays.local_mean_wavelengths`` is not positive.
+    """
     return lee_window_m(cable_from_config(cfg).wavelength_m, cfg["rays"]["local_mean_wavelengths"])
 
 
 def table_extent_m(cfg: dict[str, Any], propagation: str = "physical") -> float:
     """The largest slot-receiver offset the table holds [m]: ``rays.max_offset_m``, or with
     it null the whole tunnel (every slot a receiver in the tunnel can see); the seed's model
-    ``seed_model.max_offset_m`` (its own attenuation leaves nothing beyond it)."""
+    ``seed_model.max_offset_m`` (its own attenuation leaves nothing beyond it).
+
+    Parameters
+    ----------
+    cfg : dict
+        The ``tunnel`` section of the configuration; ``geometry.length_m``,
+        ``rays.max_offset_m`` and ``seed_model.max_offset_m`` [m] (null: the tunnel length).
+    propagation : {'physical', 'seed'}
+        'seed': the seed model's table; any other value: the ray tables.
+
+    Returns
+    -------
+    float
+        The table's extent [m], at most the tunnel length.
+    """
     length = float(cfg["geometry"]["length_m"])
     m = cfg["seed_model"]["max_offset_m"] if propagation == "seed" else cfg["rays"]["max_offset_m"]
     return length if m is None else min(float(m), length)
@@ -258,7 +327,28 @@ def choose_order(cfg: dict[str, Any]) -> tuple[int, np.ndarray, np.ndarray]:
     orders N+1..``max_order`` carry a field at most ``convergence_field_db`` below the
     local mean at every offset from 0 to the table's extent (:func:`table_extent_m`) on a
     ``convergence_step_m`` grid.  Returns (order, the worst omitted field over offsets
-    [dB re local mean] per order, the offsets)."""
+    [dB re local mean] per order, the offsets).
+
+    Parameters
+    ----------
+    cfg : dict
+        The ``tunnel`` section of the configuration (``geometry``, ``cable``, ``wall``,
+        ``rays``; ``rays.max_order``, ``rays.convergence_field_db`` [dB],
+        ``rays.convergence_step_m`` [m], ``rays.local_mean_wavelengths``, ``rays.max_offset_m`` [m]).
+
+    Returns
+    -------
+    tuple
+        ``(order, worst_db, offsets)``: the chosen order (int); per truncation order, the
+        worst field of the orders it omits over the offsets, relative to the local mean
+        [order] [dB]; the offsets [offset] [m].
+
+    Raises
+    ------
+    ValueError
+        When no order below ``rays.max_order`` converges, or the configuration is invalid
+        for the tunnel or cable.
+    """
     r = cfg["rays"]
     tun = tunnel_from_config(cfg, "rect")
     lam = cable_from_config(cfg).wavelength_m

@@ -57,6 +57,40 @@ def kf_track(
     measurement (e.g. the first snapshot fix with its variance), which is therefore not used
     again (no double counting); otherwise the prior precedes the first epoch.
     Returns (x [T], v [T], var_x [T], nis [T]).
+
+    Parameters
+    ----------
+    z_m : numpy.ndarray
+        Snapshot fixes [m]: [T], [T, K] or [T, K, C] (see above); NaN: no measurement.
+    r_m2 : float or numpy.ndarray
+        Measurement variances [m^2]: scalar, [T] or [T, K]; positive.
+    dt_s : float
+        Time between epochs [s]; positive.
+    accel_sigma : float
+        Standard deviation of the white acceleration noise [m/s^2]; positive.
+    x0 : tuple of float
+        Initial state: position [m] and speed [m/s].
+    p0 : tuple of float
+        Initial variances of position [m^2] and speed [m^2/s^2].
+    offsets_m : numpy.ndarray or None
+        Distance of each measurement column behind the tracked position [m], [K]; None: zeros.
+    gate_sigma : float or None
+        Innovation gate in standard deviations [1]; None: no gate.
+    start_at_first : bool
+        (x0, p0) is the state at the first epoch (see above).
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``(x, v, var_x, nis)``, each [T]: filtered position [m], speed [m/s], position
+        variance [m^2], and the normalized innovation squared per measurement [1] (NaN at
+        epochs without an update of all K measurements).
+
+    Raises
+    ------
+    ValueError
+        When ``z_m`` is not 1-, 2- or 3-D, ``offsets_m`` has not K entries, ``r_m2`` has
+        another shape or is not positive, or ``dt_s`` or ``accel_sigma`` is not positive.
     """
     z = _as_candidates(z_m)
     n, k, _ = z.shape
@@ -121,7 +155,37 @@ def kf_track_batch(
     standard form (filterpy uses Joseph's, equal for the optimal gain; the test checks the
     two agree); ``p0`` = (position variance, scalar or [B], speed variance).  Used for the
     Monte Carlo realizations and the sensitivity sweeps.
-    Returns the position estimates [T, B]."""
+    Returns the position estimates [T, B].
+
+    Parameters
+    ----------
+    z_m : numpy.ndarray
+        Snapshot fixes [m], [T, B]; NaN: no measurement.
+    r_m2 : numpy.ndarray
+        Measurement variances [m^2], broadcastable to [T, B]; positive.
+    dt_s : float
+        Time between epochs [s]; positive.
+    accel_sigma : float
+        Standard deviation of the white acceleration noise [m/s^2]; positive.
+    x0_m : numpy.ndarray
+        Initial positions [m], [B] (or a scalar).
+    p0 : tuple
+        Initial variances: position [m^2] (scalar or [B]) and speed [m^2/s^2] (scalar).
+    gate_sigma : float or None
+        Innovation gate in standard deviations [1]; None: no gate.
+    start_at_first : bool
+        (x0_m, p0) is the state at the first epoch (as in :func:`kf_track`).
+
+    Returns
+    -------
+    numpy.ndarray
+        Filtered positions [T, B] [m].
+
+    Raises
+    ------
+    ValueError
+        When ``z_m`` is not 2-D, or ``r_m2``, ``dt_s`` or ``accel_sigma`` is not positive.
+    """
     z = np.asarray(z_m, dtype=float)
     if z.ndim != 2:
         raise ValueError("z_m must be [T, B]")
@@ -180,6 +244,44 @@ def pf_track(
     is redrawn around the candidate nearest the estimate (sensor resetting, so a filter
     that lost the train can find it again).  ``start_at_first`` as in :func:`kf_track`.
     Returns (x [T], var_x [T]).
+
+    Parameters
+    ----------
+    z_m : numpy.ndarray
+        Candidate fixes [m], [T] or [T, C]; NaN: no candidate.
+    r_m2 : float or numpy.ndarray
+        Measurement variance [m^2], scalar or [T].
+    dt_s : float
+        Time between epochs [s]; positive.
+    accel_sigma : float
+        Standard deviation of the white acceleration noise [m/s^2]; positive.
+    x0 : tuple of float
+        Mean of the initial particles: position [m] and speed [m/s].
+    p0 : tuple of float
+        Variances of the initial particles: position [m^2] and speed [m^2/s^2].
+    n_particles : int
+        Number N of particles; >= 10.
+    rng : numpy.random.Generator
+        Random stream of the filter.
+    outlier_prob : float
+        Weight of the uniform outlier density in the likelihood [1].
+    outlier_width_m : float
+        Width of the uniform outlier density [m].
+    inject_frac : float
+        Share of the particles redrawn around the nearest candidate after every update [1].
+    start_at_first : bool
+        (x0, p0) is the state at the first epoch (as in :func:`kf_track`).
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``(x, var_x)``, each [T]: the weighted mean position [m] and its weighted variance
+        [m^2].
+
+    Raises
+    ------
+    ValueError
+        When ``n_particles`` < 10, or ``dt_s`` or ``accel_sigma`` is not positive.
     """
     if n_particles < 10:
         raise ValueError("n_particles must be >= 10")
@@ -235,7 +337,25 @@ def systematic_resample_with(weights: np.ndarray, rng: np.random.Generator) -> n
     particle i is copied for every point (u + j) / N, j = 0 .. N-1, that falls in its
     interval of the cumulative weights.  The same algorithm as filterpy's
     ``systematic_resample`` (which draws from numpy's global state; the test checks the
-    two agree for the same offset), thread-safe and reproducible."""
+    two agree for the same offset), thread-safe and reproducible.
+
+    Parameters
+    ----------
+    weights : numpy.ndarray
+        Particle weights [N] (normalized here); finite and non-negative.
+    rng : numpy.random.Generator
+        Source of the one offset u in [0, 1).
+
+    Returns
+    -------
+    numpy.ndarray
+        Indices of the particles to copy [N] (non-decreasing integers).
+
+    Raises
+    ------
+    ValueError
+        When ``weights`` is not a non-empty 1-D array of finite non-negative numbers.
+    """
     w = np.asarray(weights, dtype=float)
     if w.ndim != 1 or w.size == 0 or np.any(w < 0) or not np.isfinite(w).all():
         raise ValueError("weights must be a non-empty 1-D array of finite non-negative numbers")
@@ -247,7 +367,23 @@ def systematic_resample_with(weights: np.ndarray, rng: np.random.Generator) -> n
 
 
 def robust_variance(errors_m: np.ndarray) -> float:
-    """(1.4826 MAD)^2 of the errors: the measurement variance from a calibration run."""
+    """(1.4826 MAD)^2 of the errors: the measurement variance from a calibration run.
+
+    Parameters
+    ----------
+    errors_m : numpy.ndarray
+        Errors [m], any shape; non-finite values are ignored.
+
+    Returns
+    -------
+    float
+        Robust variance [m^2]; at least 1e-6 (the scaled MAD is floored at 1e-3 m).
+
+    Raises
+    ------
+    ValueError
+        When fewer than two errors are finite.
+    """
     e = np.asarray(errors_m, dtype=float)
     e = e[np.isfinite(e)]
     if e.size < 2:

@@ -20,7 +20,23 @@ BOLTZMANN_DBM_HZ = -174.0
 def tone_response(table: xr.Dataset, mm: MeasurementModel) -> tuple[np.ndarray, np.ndarray]:
     """Baseband tone frequencies [tone] and every offset's frequency response [offset, tone]
     (taps at line-of-sight + excess delay: the line-of-sight phase times the taps' transform
-    over the excess-delay grid), computed once per table."""
+    over the excess-delay grid), computed once per table.
+
+    Parameters
+    ----------
+    table : xarray.Dataset
+        Tabulated channel (:func:`railradio.tunnel.channel.tabulate`): ``taps``
+        [offset_m, excess_delay_s], ``excess_delay_s`` [s], ``los_delay_s`` [offset_m] [s].
+    mm : MeasurementModel
+        ``n_tones`` and ``bandwidth_hz`` [Hz].
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``(f, resp)``: the tones' baseband frequencies, ``bandwidth_hz / n_tones`` apart
+        around 0 [tone] [Hz], and each offset's complex frequency response relative to the
+        cable power at the slot [offset, tone] [1].
+    """
     n_t = mm.n_tones
     f = (np.arange(n_t) - n_t // 2) * (mm.bandwidth_hz / n_t)
     excess = np.exp(-2j * math.pi * table["excess_delay_s"].values[:, None] * f[None, :])  # [bin, tone]
@@ -44,7 +60,38 @@ def wideband_delays(
     ``n_tones`` tones across the bandwidth, thermal noise kT F B (``rng``; none without
     ``thermal_noise``), zero-padded IFFT (``oversample`` times), parabolic refinement of the
     peak.  The parabola's own error on a single path is below
-    2 pi^2 / (45 sqrt(3) B oversample^3) (see :func:`peak_interp_bound_s`)."""
+    2 pi^2 / (45 sqrt(3) B oversample^3) (see :func:`peak_interp_bound_s`).
+
+    Parameters
+    ----------
+    table : xarray.Dataset
+        Tabulated slot-to-receiver channel (:func:`railradio.tunnel.channel.tabulate`).
+    tunnel : Tunnel
+        Slot positions and tunnel length.
+    cable : Cable
+        Cable power, delay and carrier phase at each slot.
+    x_rx_m : numpy.ndarray
+        Receiver positions along the tunnel [m], 1-D [rx].
+    rng : numpy.random.Generator or None
+        Source of the thermal noise; may be None without ``thermal_noise``.
+    mm : MeasurementModel
+        ``n_tones``, ``bandwidth_hz`` [Hz], ``noise_figure_db`` [dB], ``window_m`` [m] (the
+        slots within it of a receiver contribute; see :func:`wideband_view`).
+    tones : tuple of numpy.ndarray or None
+        :func:`tone_response` of ``table`` and ``mm``; None: computed here.
+    chunk : int
+        Scale of the number of receivers evaluated at a time (memory only).
+    oversample : int
+        Zero-padding factor of the IFFT.
+    thermal_noise : bool
+        Add thermal noise kT F B to every tone.
+
+    Returns
+    -------
+    numpy.ndarray
+        Delay of the strongest CIR peak [rx] [s], counted from the feeds (a path's delay is
+        its cable delay plus its radio delay); the IFFT's range is n_tones / bandwidth_hz.
+    """
     xs, pc_dbm, tc = slot_powers(tunnel, cable)
     amp_c = 10.0 ** ((pc_dbm - 30.0) / 20.0) * np.exp(-2j * math.pi * cable.frequency_hz * tc)
     f, resp = tones if tones is not None else tone_response(table, mm)
@@ -78,7 +125,20 @@ def wideband_delays(
 def wideband_view(table: xr.Dataset, mm: MeasurementModel) -> MeasurementModel:
     """The wideband receiver sees every slot of the table (by default the whole tunnel), not
     only those within ``window_m`` (which chooses the separable receiver's slots); a shorter
-    table's cut-off is measured by :func:`railradio.tunnel.engine_checks.cutoff_check`."""
+    table's cut-off is measured by :func:`railradio.tunnel.engine_checks.cutoff_check`.
+
+    Parameters
+    ----------
+    table : xarray.Dataset
+        Tabulated channel; its largest offset ``offset_m`` [m] is its extent.
+    mm : MeasurementModel
+        The receivers' measurement model.
+
+    Returns
+    -------
+    MeasurementModel
+        A copy of ``mm`` whose ``window_m`` is the larger of its own and the table's extent [m].
+    """
     return dataclasses.replace(mm, window_m=max(mm.window_m, float(table["offset_m"].values[-1])))
 
 
@@ -90,20 +150,72 @@ def peak_interp_bound_s(bandwidth_hz: float, oversample: int) -> float:
     order in b/a, whose largest magnitude (at delta = D / (2 sqrt 3)) is
     (b/a) D^3 / (3 sqrt 3) = 2 pi^2 / (45 sqrt(3) B os^3).  (The 64-tone Dirichlet kernel
     differs from the sinc by O(1/N^2); the next order in b/a D^2 = 2 pi^2/(15 os^2), 0.5 %
-    at os = 16: a 10 % margin covers both.)"""
+    at os = 16: a 10 % margin covers both.)
+
+    Parameters
+    ----------
+    bandwidth_hz : float
+        Bandwidth B [Hz]; positive.
+    oversample : int
+        Zero-padding factor os of the IFFT; >= 2.
+
+    Returns
+    -------
+    float
+        Bound on the peak's delay error with the 10 % margin [s].
+
+    Raises
+    ------
+    ValueError
+        When ``bandwidth_hz`` is not positive or ``oversample`` < 2.
+    """
     if not bandwidth_hz > 0 or oversample < 2:
         raise ValueError("bandwidth_hz must be positive and oversample >= 2")
     return 1.1 * 2.0 * math.pi**2 / (45.0 * math.sqrt(3.0) * bandwidth_hz * oversample**3)
 
 
 def cable_model_delay_s(x_m: np.ndarray, tunnel: Tunnel, cable: Cable) -> np.ndarray:
-    """The receiver's delay model: cable delay to the nearest cable point plus h / c [s]."""
+    """The receiver's delay model: cable delay to the nearest cable point plus h / c [s].
+
+    Parameters
+    ----------
+    x_m : numpy.ndarray
+        Receiver positions along the tunnel [m], any shape.
+    tunnel : Tunnel
+        Tunnel length and cross distance h between slot line and receiver.
+    cable : Cable
+        Feeds and velocity factor.
+
+    Returns
+    -------
+    numpy.ndarray
+        Model delay [s], the shape of ``x_m``.
+    """
     return cable.cable_delay_s(x_m, tunnel.length_m) + tunnel.cross_distance_m / SPEED_OF_LIGHT_M_S
 
 
 def wideband_candidates(tau_s: np.ndarray, tunnel: Tunnel, cable: Cable, bias_s: float = 0.0) -> np.ndarray:
     """Cable ranging x = x_feed +- v c (tau - bias - h/c) for every feed [epoch, 2 n_feeds];
-    which one is right the tracker decides (nearest its prediction)."""
+    which one is right the tracker decides (nearest its prediction).
+
+    Parameters
+    ----------
+    tau_s : numpy.ndarray
+        CIR peak delays (:func:`wideband_delays`) [s], [epoch].
+    tunnel : Tunnel
+        Tunnel length and cross distance h between slot line and receiver.
+    cable : Cable
+        Feeds, feed spacing and velocity factor.
+    bias_s : float
+        Calibrated delay bias of the peak, subtracted first [s].
+
+    Returns
+    -------
+    numpy.ndarray
+        Candidate positions [epoch, 2 n_feeds] [m]: x_feed - r for every feed, then
+        x_feed + r, with the range r clipped to [0, feed_spacing_m / 2] and the positions to
+        the tunnel.
+    """
     feeds = cable.feed_x_m(tunnel.length_m)
     half = cable.feed_spacing_m / 2.0
     r = (
@@ -133,6 +245,31 @@ def resolve_ambiguity(
     moves metres per epoch), starting from ``start_m`` = (lo, hi): the head is in that
     interval at the first epoch (the entry prior: the first feed section).
     Returns the head proposal [epoch] and each receiver's chosen candidate [epoch, receiver].
+
+    Parameters
+    ----------
+    cand_m : numpy.ndarray
+        Every receiver's candidate positions [m], [epoch, receiver, candidate].
+    offsets_m : numpy.ndarray
+        Each receiver's distance behind the head [m], [receiver].
+    feed_spacing_m : float
+        Length of the cable section of one feed [m]; positive.
+    start_m : tuple of float
+        Interval (lo, hi) that holds the head at the first epoch [m].
+    gate_m : float
+        Truncation of each receiver's misfit [m]; positive.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``(head, fix)``: the head position [epoch] [m] and each receiver's chosen
+        candidate [epoch, receiver] [m].
+
+    Raises
+    ------
+    ValueError
+        When ``offsets_m`` has not one entry per receiver, or ``gate_m`` or
+        ``feed_spacing_m`` is not positive.
     """
     c = np.asarray(cand_m, dtype=float)
     off = np.asarray(offsets_m, dtype=float)
@@ -165,7 +302,25 @@ def resolve_ambiguity(
 def ambiguity_wrong(cand_m: np.ndarray, fix_m: np.ndarray, x_true_m: np.ndarray, separation_m: float) -> np.ndarray:
     """Whether each fix took the wrong candidate [epoch, receiver]: not the candidate nearest
     the truth, while that one lies more than ``separation_m`` away from the chosen one (near
-    a feed or a section end the two sides coincide and the choice does not matter)."""
+    a feed or a section end the two sides coincide and the choice does not matter).
+
+    Parameters
+    ----------
+    cand_m : numpy.ndarray
+        Every receiver's candidate positions [m], [epoch, receiver, candidate].
+    fix_m : numpy.ndarray
+        The chosen candidates [m], [epoch, receiver].
+    x_true_m : numpy.ndarray
+        True receiver positions [m], [epoch, receiver].
+    separation_m : float
+        Distance between the chosen and the right candidate above which the choice is
+        wrong [m].
+
+    Returns
+    -------
+    numpy.ndarray
+        Boolean [epoch, receiver]: True where the fix took a wrong candidate.
+    """
     c = np.asarray(cand_m, dtype=float)
     best = np.take_along_axis(c, np.argmin(np.abs(c - np.asarray(x_true_m)[..., None]), axis=2)[..., None], axis=2)[
         ..., 0
