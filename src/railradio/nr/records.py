@@ -45,6 +45,14 @@ def fidelity_inputs(config: dict[str, Any]) -> dict[str, Any]:
     }
 
 
+def _nr_target_inputs(config: dict[str, Any], own: str, other: str) -> dict[str, Any]:
+    """The seed and ``nr`` without the ``other`` target's section, the fidelity target and
+    the shard counts (``nr.n_shards`` and ``nr.<own>.n_shards``)."""
+    nr = {k: v for k, v in config["nr"].items() if k not in (other, "fidelity", "n_shards")}
+    nr[own] = {k: v for k, v in nr[own].items() if k != "n_shards"}
+    return {"seed": config["seed"], "nr": nr}
+
+
 def map_inputs(config: dict[str, Any]) -> dict[str, Any]:
     """The config the reproduction map reads: the seed and the whole ``nr`` section but the
     sensitivity cases, the fidelity target and how the work is split into shards (results do
@@ -61,9 +69,7 @@ def map_inputs(config: dict[str, Any]) -> dict[str, Any]:
     dict
         ``seed`` and ``nr``.
     """
-    nr = {k: v for k, v in config["nr"].items() if k not in ("sensitivity", "fidelity", "n_shards")}
-    nr["map"] = {k: v for k, v in nr["map"].items() if k != "n_shards"}
-    return {"seed": config["seed"], "nr": nr}
+    return _nr_target_inputs(config, "map", "sensitivity")
 
 
 def cases_inputs(config: dict[str, Any]) -> dict[str, Any]:
@@ -82,9 +88,7 @@ def cases_inputs(config: dict[str, Any]) -> dict[str, Any]:
     dict
         ``seed`` and ``nr``.
     """
-    nr = {k: v for k, v in config["nr"].items() if k not in ("map", "fidelity", "n_shards")}
-    nr["sensitivity"] = {k: v for k, v in nr["sensitivity"].items() if k != "n_shards"}
-    return {"seed": config["seed"], "nr": nr}
+    return _nr_target_inputs(config, "sensitivity", "map")
 
 
 FIDELITY = Record(
