@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 
-from railradio.codedeps import script_closure, script_code_hash
+from railradio.codedeps import file_digest, script_closure, script_code_hash
 
 from .conftest import ROOT, copy_workflow
 
@@ -113,8 +113,9 @@ def test_static_closure_contains_everything_the_imports_load():
 
 
 def test_changing_a_module_changes_exactly_the_hashes_of_the_rules_that_run_it(tmp_path):
-    """For every library module, helper script and data file: appending to it changes the
-    code hash of exactly the rules whose script reaches it (and nothing else)."""
+    """For every library module, helper script and data file: appending to it (a statement
+    to Python) changes the code hash of exactly the rules whose script reaches it (and
+    nothing else)."""
     src = tmp_path / "src"
     shutil.copytree(ROOT / "src/railradio", src / "railradio", ignore=shutil.ignore_patterns("__pycache__"))
     shutil.copytree(ROOT / "workflow/scripts", tmp_path / "scripts")
@@ -130,7 +131,7 @@ def test_changing_a_module_changes_exactly_the_hashes_of_the_rules_that_run_it(t
     reached = set()
     for f in files:
         original = f.read_bytes()
-        f.write_bytes(original + (b"\n# edited\n" if f.suffix == ".py" else b"\n"))
+        f.write_bytes(original + (b"\n_edited = 1\n" if f.suffix == ".py" else b"\n"))
         try:
             changed = {r for r, s in rules.items() if script_code_hash(s, root) != base[r]}
         finally:
@@ -218,8 +219,42 @@ def test_a_data_file_named_by_the_script_itself_counts(tmp_path):
     )
     assert "data/tdl.json" in script_closure(scripts / "reader.py")
     a = script_code_hash(scripts / "reader.py")
-    (scripts / "reader.py").write_text((scripts / "reader.py").read_text() + "# edited\n")
-    assert script_code_hash(scripts / "reader.py") != a  # the script's own bytes count
+    (scripts / "reader.py").write_text((scripts / "reader.py").read_text() + "edited = True\n")
+    assert script_code_hash(scripts / "reader.py") != a  # the script's own code counts
+
+
+def test_comments_docstrings_and_layout_change_no_hash_and_code_does(tmp_path):
+    """The hashes hold what runs (file_digest): a comment, a docstring or a reformatting of
+    a module or a rule file re-runs nothing; a changed constant, even inside an f-string or a
+    rule's params, does."""
+    mod = tmp_path / "m.py"
+    mod.write_text('"""Module."""\n\ndef f(x):\n    """Doc."""\n    return x + 1  # one\n')
+    base = file_digest(mod)
+    for text in (
+        '"""Another module text."""\n\ndef f(x):\n    """Numpydoc\n\n    Parameters\n    ----------\n    """\n'
+        "    return x + 1\n",
+        "def f(x):\n    # a comment\n    return (x +\n            1)\n",
+    ):
+        mod.write_text(text)
+        assert file_digest(mod) == base, text
+    mod.write_text('def f(x):\n    """Doc."""\n    return x + 2\n')
+    assert file_digest(mod) != base
+    mod.write_text("def f(x):\n    y = x\n    return y\n")
+    later = file_digest(mod)
+    mod.write_text('def f(x):\n    y = x\n    "a string statement"\n    return y\n')
+    assert file_digest(mod) != later  # only the leading string is a docstring
+    rules = tmp_path / "r.smk"
+    rules.write_text('rule a:  # first\n    params:\n        k=f"{1}"\n    shell: "true"\n')
+    base = file_digest(rules)
+    rules.write_text('# header\n\nrule a:\n    params:\n        k=f"{1}"  # why\n    shell: "true"\n')
+    assert file_digest(rules) == base
+    rules.write_text('rule a:\n    params:\n        k=f"{2}"\n    shell: "true"\n')
+    assert file_digest(rules) != base
+    data = tmp_path / "t.json"
+    data.write_text('{"a": 1}')
+    first = file_digest(data)
+    data.write_text('{"a": 1} ')
+    assert file_digest(data) != first  # data: its bytes
 
 
 def test_third_party_versions_enter_exactly_the_hashes_of_the_rules_that_import_them(monkeypatch):

@@ -41,8 +41,12 @@ def test_a_record_goes_stale_with_its_code_its_rule_file_or_its_config(tmp_path)
     rec.publish(numbers, root, {"a": (1, 2)})
     assert json.loads((root / rec.numbers_file).read_text()) == {"t.x": {"value": 1.0}}
     assert rec.stale(root, {"a": [1, 2]}) == []  # as JSON reads it back
+    assert rec.fragment(root, {"a": [1, 2]}, "results/t.json") == rec.numbers_file  # the merge reads the record
     assert rec.stale(root, {"a": [1, 3]}) == ["config"]
-    script.write_text("import json  # edited\n", encoding="utf-8")
+    assert rec.fragment(root, {"a": [1, 3]}, "results/t.json") == "results/t.json"  # else the run's own
+    script.write_text("import json  # a comment is not code\n", encoding="utf-8")
+    assert rec.stale(root, {"a": [1, 2]}) == []
+    script.write_text("import json\nimport os\n", encoding="utf-8")
     assert rec.stale(root, {"a": [1, 2]}) == ["code"]
     script.write_text("import json\n", encoding="utf-8")
     rules.write_text("rule t:\n    output: 'y'\n", encoding="utf-8")

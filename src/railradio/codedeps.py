@@ -20,12 +20,20 @@ What counts as reached, from a file F:
 Third-party packages are not followed into their source: the hash holds the installed
 version of each distribution the reached files import, so upgrading numpy re-runs the
 rules that use it and nothing else.
+
+What of a file counts (:func:`file_digest`): of Python source, its syntax tree without
+docstrings, so that a comment, a docstring or a reformatting re-runs nothing; of a
+Snakemake rule file, its tokens without comments; of any other file, its bytes. The tree's
+printed form is the interpreter's, so the hash also holds the Python minor version.
 """
 
 from __future__ import annotations
 
 import ast
 import hashlib
+import io
+import sys
+import tokenize
 from functools import cache, lru_cache
 from pathlib import Path
 
@@ -230,6 +238,69 @@ def third_party(script: str | Path, root: Path = SRC_ROOT) -> dict[str, str]:
     return dict(sorted(out.items()))
 
 
+_DOC_OWNERS = (ast.Module, ast.ClassDef, ast.FunctionDef, ast.AsyncFunctionDef)
+
+
+def _without_docstrings(tree: ast.AST) -> ast.AST:
+    """``tree`` with the docstring (a leading string statement) of every module, class and
+    function removed, in place."""
+    for node in ast.walk(tree):
+        if isinstance(node, _DOC_OWNERS) and node.body:
+            first = node.body[0]
+            if isinstance(first, ast.Expr) and isinstance(first.value, ast.Constant):
+                if isinstance(first.value.value, str):
+                    node.body = node.body[1:]
+    return tree
+
+
+def _smk_tokens(text: str) -> bytes:
+    """A Snakemake rule file's tokens (type and text) without comments and blank lines."""
+    skip = {tokenize.COMMENT, tokenize.NL}
+    toks = tokenize.generate_tokens(io.StringIO(text).readline)
+    return "\0".join(f"{t.type}:{t.string}" for t in toks if t.type not in skip).encode()
+
+
+def file_digest(path: str | Path) -> bytes:
+    """What of a file the code hashes hold, as bytes.
+
+    Python source (``.py``): its syntax tree without docstrings, printed by :func:`ast.dump`
+    (no line numbers), after the Python minor version; so a comment, a docstring or a
+    reformatting leaves it unchanged and any change of what runs changes it. A Snakemake rule
+    file (``.smk``, ``Snakefile``): its tokens without comments and blank lines. Anything else
+    (package data): its bytes.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The file.
+
+    Returns
+    -------
+    bytes
+        The digestible form.
+
+    Raises
+    ------
+    OSError
+        If the file cannot be read.
+    SyntaxError
+        If a ``.py`` file is not valid Python.
+    """
+    path = Path(path)
+    st = path.stat()
+    return _file_digest_cached(path.resolve(), st.st_mtime_ns, st.st_size)
+
+
+@lru_cache(maxsize=1024)
+def _file_digest_cached(path: Path, mtime_ns: int, size: int) -> bytes:
+    if path.suffix == ".py":
+        tree = _without_docstrings(ast.parse(path.read_text(encoding="utf-8"), filename=str(path)))
+        return f"python{sys.version_info[0]}.{sys.version_info[1]}\0{ast.dump(tree)}".encode()
+    if path.suffix == ".smk" or path.name == "Snakefile":
+        return _smk_tokens(path.read_text(encoding="utf-8"))
+    return path.read_bytes()
+
+
 @lru_cache(maxsize=1)
 def _distributions() -> dict[str, tuple[tuple[str, str], ...]]:
     """Top-level import name -> ((distribution, version), ...) of the installed packages."""
@@ -239,9 +310,10 @@ def _distributions() -> dict[str, tuple[tuple[str, str], ...]]:
 
 
 def script_code_hash(script: str | Path, root: Path = SRC_ROOT) -> str:
-    """SHA-256 (16 hex digits) over the script's own bytes (Snakemake notices a changed
-    script by its time stamp only), the names and bytes of :func:`script_closure`, and the
-    versions of the third-party distributions they import (:func:`third_party`).
+    """SHA-256 (16 hex digits) over the script's own code (Snakemake notices a changed
+    script by its time stamp only), the names and code of :func:`script_closure` (each file
+    as :func:`file_digest` reads it), and the versions of the third-party distributions
+    they import (:func:`third_party`).
 
     Parameters
     ----------
@@ -264,11 +336,11 @@ def script_code_hash(script: str | Path, root: Path = SRC_ROOT) -> str:
         As :func:`script_closure`.
     """
     h = hashlib.sha256()
-    h.update(Path(script).read_bytes())
+    h.update(file_digest(script))
     for name, path in script_closure(script, root).items():
         h.update(name.encode())
         h.update(b"\0")
-        h.update(path.read_bytes())
+        h.update(file_digest(path))
         h.update(b"\0")
     for dist, ver in third_party(script, root).items():
         h.update(f"{dist}=={ver}\0".encode())

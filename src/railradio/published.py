@@ -10,7 +10,8 @@ produced them:
 
 * ``code``: per workflow script of the target, :func:`railradio.codedeps.script_code_hash`
   (the script, every library module and data file it reaches, the pinned third-party
-  versions), and per rule file, the SHA-256 of its bytes (its params lambdas);
+  versions), and per rule file, the SHA-256 of its tokens without comments (its params
+  lambdas; :func:`railradio.codedeps.file_digest`);
 * ``config``: the config sections the target reads.
 
 A record is *current* when both equal what is in the repository now. The key-number merge
@@ -27,7 +28,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from railradio.codedeps import script_code_hash
+from railradio.codedeps import file_digest, script_code_hash
 
 
 @dataclass(frozen=True)
@@ -45,7 +46,7 @@ class Record:
         ``inputs(config) -> dict``: the config sections the target reads, from the whole,
         validated workflow config.
     rule_files : tuple of str
-        Rule files (repository-relative) whose bytes are recorded too (default none).
+        Rule files (repository-relative) whose code (tokens without comments) is recorded too (default none).
     """
 
     name: str
@@ -80,7 +81,7 @@ class Record:
             The provenance, JSON-normalized.
         """
         code = {s: script_code_hash(root / s) for s in self.scripts}
-        code |= {f: hashlib.sha256((root / f).read_bytes()).hexdigest()[:16] for f in self.rule_files}
+        code |= {f: hashlib.sha256(file_digest(root / f)).hexdigest()[:16] for f in self.rule_files}
         return json.loads(json.dumps({"code": code, "config": self.inputs(config)}))
 
     def stale(self, root: Path, config: dict[str, Any]) -> list[str]:
@@ -104,6 +105,26 @@ class Record:
         recorded = json.loads((root / self.provenance_file).read_text(encoding="utf-8"))
         now = self.provenance(root, config)
         return [part for part in ("code", "config") if recorded.get(part) != now[part]]
+
+    def fragment(self, root: Path, config: dict[str, Any], run_numbers: str) -> str:
+        """The key-number fragment the merge reads: the record while it is current, else the
+        run's own (the target then runs in this workflow).
+
+        Parameters
+        ----------
+        root : pathlib.Path
+            The repository (or workflow copy) root.
+        config : dict
+            The whole workflow config, validated (defaults filled).
+        run_numbers : str
+            The target's key-numbers file, relative to ``root``, that a run writes.
+
+        Returns
+        -------
+        str
+            ``numbers_file`` when :meth:`stale` is empty, else ``run_numbers``.
+        """
+        return run_numbers if self.stale(root, config) else self.numbers_file
 
     def publish(self, numbers_json: Path, root: Path, config: dict[str, Any]) -> None:
         """Copy a run's key numbers to ``root/paper`` with their provenance.

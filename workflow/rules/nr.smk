@@ -46,9 +46,8 @@ if NR_CASES:
     # the cases' paper-scale key numbers are a published record (make records;
     # railradio.published), read while current, else the cases run here: CI's reproduction
     # skips their ~2 000 s of job time; at CI scale (another config) they always run
-    NR_CASES_STALE = nr_records.CASES.stale(Path(workflow.basedir), config)
     KEY_NUMBER_FRAGMENTS.append(
-        nr_records.CASES.numbers_file if not NR_CASES_STALE else "results/nr/cases/key_numbers.json"
+        nr_records.CASES.fragment(Path(workflow.basedir), config, "results/nr/cases/key_numbers.json")
     )
 
 

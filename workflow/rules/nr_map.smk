@@ -17,8 +17,7 @@ register_figures("nr_map", ["nr_reproduction_map"])
 # was published), else the map runs here. CI's reproduction thus skips the map, whose
 # 1 000-epoch segments of 19 cells are about a third of the paper scale's job time; at CI
 # scale (another config) the map always runs.
-NR_MAP_STALE = nr_records.MAP.stale(Path(workflow.basedir), config)
-KEY_NUMBER_FRAGMENTS.append(nr_records.MAP.numbers_file if not NR_MAP_STALE else "results/nr/map/key_numbers.json")
+KEY_NUMBER_FRAGMENTS.append(nr_records.MAP.fragment(Path(workflow.basedir), config, "results/nr/map/key_numbers.json"))
 
 
 rule nr_map_shard:
