@@ -20,20 +20,63 @@ ARRAY_NULL_FLOOR = 1e-3
 
 
 def wrap_rad(a: NDArray) -> NDArray:
-    """Wrap angles to (-π, π]."""
+    """Wrap angles to (-π, π].
+
+    Parameters
+    ----------
+    a : float or numpy.ndarray
+        Angles [rad], any shape.
+
+    Returns
+    -------
+    numpy.ndarray
+        The angles wrapped to (-π, π] [rad], the shape of ``a``.
+    """
     return -((-np.asarray(a) + np.pi) % (2 * np.pi) - np.pi)
 
 
 def element_gain_db(phi_rel_rad: NDArray) -> NDArray[np.float64]:
     """TR 38.901 element gain [dBi] at azimuth φ' from boresight:
-    8 - min(12 (φ'/65°)², 30)."""
+    8 - min(12 (φ'/65°)², 30).
+
+    Parameters
+    ----------
+    phi_rel_rad : float or numpy.ndarray
+        Azimuth from the element's boresight [rad] (any angle: wrapped here), any shape.
+
+    Returns
+    -------
+    numpy.ndarray
+        Element gain [dBi], the shape of ``phi_rel_rad``.
+    """
     phi_deg = np.degrees(wrap_rad(phi_rel_rad))
     return ELEMENT_MAX_GAIN_DBI - np.minimum(12.0 * (phi_deg / ELEMENT_HPBW_DEG) ** 2, ELEMENT_FRONT_BACK_DB)
 
 
 def ula_gain(phi_rel_rad: NDArray, steer_rel_rad: NDArray, n_elements: int) -> NDArray[np.float64]:
     """Linear array gain of an N-element λ/2 ULA steered to ``steer_rel_rad`` (angles from the
-    array broadside = panel boresight): |Σ_n e^{jπ n (sin φ - sin φ_s)}|² / N (peak N)."""
+    array broadside = panel boresight): |Σ_n e^{jπ n (sin φ - sin φ_s)}|² / N (peak N).
+
+    Parameters
+    ----------
+    phi_rel_rad : float or numpy.ndarray
+        Azimuth from broadside [rad]; broadcast against ``steer_rel_rad``.
+    steer_rel_rad : float or numpy.ndarray
+        Steering direction from broadside [rad].
+    n_elements : int
+        Number of elements N; >= 1.
+
+    Returns
+    -------
+    numpy.ndarray
+        Array-factor power gain [linear], floored at :data:`ARRAY_NULL_FLOOR`; the broadcast
+        shape of the two angles.
+
+    Raises
+    ------
+    ValueError
+        When ``n_elements`` < 1.
+    """
     if n_elements < 1:
         raise ValueError(f"n_elements must be >= 1, got {n_elements!r}")
     u = np.sin(np.asarray(phi_rel_rad, float)) - np.sin(np.asarray(steer_rel_rad, float))
@@ -63,15 +106,41 @@ class RrhArray:
 
     @cached_property
     def beam_angles_rad(self) -> NDArray[np.float64]:
+        """Pointing azimuth of every SS beam, -(k + 0.5)·180°/n_beams.
+
+        Returns
+        -------
+        numpy.ndarray
+            Beam azimuths from the +x axis [rad], in (-π, 0): [n_beams].
+        """
         k = np.arange(self.n_beams)
         return -np.radians((k + 0.5) * 180.0 / self.n_beams)
 
     @cached_property
     def beam_panel(self) -> NDArray[np.int64]:
+        """Panel of every SS beam: 0 (first boresight) for the first half, 1 for the rest.
+
+        Returns
+        -------
+        numpy.ndarray of int64
+            Panel index per beam: [n_beams].
+        """
         return (np.arange(self.n_beams) >= self.n_beams // 2).astype(np.int64)
 
     def beam_gains_db(self, aod_rad: NDArray) -> NDArray[np.float64]:
-        """Gain [dBi] of every beam toward ``aod_rad``: shape [..., n_beams]."""
+        """Gain [dBi] of every beam toward ``aod_rad``: shape [..., n_beams].
+
+        Parameters
+        ----------
+        aod_rad : float or numpy.ndarray
+            Azimuth of departure toward the train [rad] (:meth:`Deployment.aod_rad
+            <railradio.nr.geometry.Deployment.aod_rad>`), shape [...].
+
+        Returns
+        -------
+        numpy.ndarray
+            Element plus array gain of each beam on its panel [dBi]: [..., n_beams].
+        """
         aod = np.asarray(aod_rad)[..., None]
         bore = np.radians(np.asarray(self.boresights_deg))[self.beam_panel]
         phi_rel = wrap_rad(aod - bore)
@@ -106,15 +175,46 @@ class TrainArray:
 
     @property
     def co_located(self) -> bool:
+        """Whether both panels sit at the train's reference point (``panel_x_m`` = (0, 0)).
+
+        Returns
+        -------
+        bool
+            True when both along-track offsets are 0.
+        """
         return all(float(v) == 0.0 for v in self.panel_x_m)
 
     def panel_gain_db(self, aoa_rad: NDArray, panel: int) -> NDArray[np.float64]:
-        """Receive gain [dBi] of one panel (0 head, 1 tail) toward azimuth ``aoa_rad``."""
+        """Receive gain [dBi] of one panel (0 head, 1 tail) toward azimuth ``aoa_rad``.
+
+        Parameters
+        ----------
+        aoa_rad : float or numpy.ndarray
+            Azimuth of arrival from the +x axis [rad], any shape.
+        panel : int
+            0 (head, boresight 0) or 1 (tail, boresight π).
+
+        Returns
+        -------
+        numpy.ndarray
+            Element plus broadside-array gain [dBi], the shape of ``aoa_rad``.
+        """
         phi = wrap_rad(np.asarray(aoa_rad) - self.BORESIGHTS_RAD[panel])
         return element_gain_db(phi) + 10 * np.log10(ula_gain(phi, 0.0 * phi, self.n_elements))
 
     def gain_db(self, aoa_rad: NDArray) -> NDArray[np.float64]:
-        """Total receive gain [dBi] toward azimuth ``aoa_rad`` (both panels, co-located)."""
+        """Total receive gain [dBi] toward azimuth ``aoa_rad`` (both panels, co-located).
+
+        Parameters
+        ----------
+        aoa_rad : float or numpy.ndarray
+            Azimuth of arrival from the +x axis [rad], any shape.
+
+        Returns
+        -------
+        numpy.ndarray
+            10 log10 of the sum of both panels' linear gains [dBi], the shape of ``aoa_rad``.
+        """
         total = np.zeros(np.shape(aoa_rad))
         for panel in (0, 1):
             total = total + 10 ** (self.panel_gain_db(aoa_rad, panel) / 10)
@@ -123,7 +223,24 @@ class TrainArray:
 
 def facing_panel(x_m: NDArray, rrh_x_m: NDArray, offset_m: float, panel_x_m: tuple[float, float]) -> NDArray[np.int64]:
     """The panel (0 head, 1 tail) that sees each RRH closer to its boresight: the one a
-    receiver with the train's geometry expects to measure it (the tracker's rule) [ours]."""
+    receiver with the train's geometry expects to measure it (the tracker's rule) [ours].
+
+    Parameters
+    ----------
+    x_m : float or numpy.ndarray
+        Train reference positions along the track [m]; broadcast against ``rrh_x_m``.
+    rrh_x_m : float or numpy.ndarray
+        RRH positions along the track [m].
+    offset_m : float
+        RRH distance from the track [m].
+    panel_x_m : tuple of float
+        (head, tail) along-track panel offsets from the reference point [m].
+
+    Returns
+    -------
+    numpy.ndarray of int64
+        0 (head) or 1 (tail), the broadcast shape of ``x_m`` and ``rrh_x_m``.
+    """
     x = np.asarray(x_m, float)
     rx = np.asarray(rrh_x_m, float)
     off_head = np.abs(np.arctan2(offset_m, rx - (x + panel_x_m[0])))  # from +x

@@ -66,7 +66,21 @@ def block_e_over_n0(links, n_chains: int | None = None) -> NDArray[np.float64]:
     """[links, blocks] E_b/N0_b of every link's PSS+SSS in every SS block: its energy after
     the block's beam gain over thermal noise plus the other links' PSS+SSS of the same block
     (their beam b) as white interference over those subcarriers. ``links``: a
-    :class:`railradio.nr.synthesis.Links`."""
+    :class:`railradio.nr.synthesis.Links`.
+
+    Parameters
+    ----------
+    links : railradio.nr.synthesis.Links
+        The epoch's links: ``amp`` [√W] [links], ``beam_amp`` [links, blocks], ``noise_psd_w_hz``
+        [W/Hz], ``n_chains``.
+    n_chains : int or None
+        Receive chains whose thermal noise adds up (``None``: ``links.n_chains``).
+
+    Returns
+    -------
+    numpy.ndarray
+        E_b/N0_b (linear, 1), [links, blocks].
+    """
     t_u = 1.0 / SUBCARRIER_SPACING_HZ
     chains = links.n_chains if n_chains is None else n_chains
     p_sc = links.amp[:, None] ** 2 * links.beam_amp**2  # [links, blocks] power per subcarrier [W]
@@ -77,7 +91,18 @@ def block_e_over_n0(links, n_chains: int | None = None) -> NDArray[np.float64]:
 
 
 def detected_blocks(e_over_n0_b: NDArray) -> NDArray[np.bool_]:
-    """The blocks whose E_b/N0 reaches :data:`DETECT_E_OVER_N0`."""
+    """The blocks whose E_b/N0 reaches :data:`DETECT_E_OVER_N0`.
+
+    Parameters
+    ----------
+    e_over_n0_b : array_like
+        E_b/N0_b (linear, 1), e.g. [links, blocks] (:func:`block_e_over_n0`).
+
+    Returns
+    -------
+    numpy.ndarray of bool
+        Detected in expectation, same shape.
+    """
     return np.asarray(e_over_n0_b) >= DETECT_E_OVER_N0
 
 

@@ -91,7 +91,23 @@ def inlier_sigma(e: NDArray, gate_prob: float = 0.99, n_iter: int = 50) -> tuple
     gate at ``gate_prob`` keeps (|e − median| ≤ k σ, k = √χ²₁(gate_prob)), with σ the
     inliers' own spread corrected for the truncation at ±k (a normal truncated there has
     variance σ² [1 − 2kφ(k)/(2Φ(k) − 1)]); a fixed point started from 1.4826 · MAD. The
-    outliers (another RRH's peak, a false detection) then do not set W [ours]."""
+    outliers (another RRH's peak, a false detection) then do not set W [ours].
+
+    Parameters
+    ----------
+    e : numpy.ndarray
+        Errors, any shape and unit (e.g. AOD [rad] or range [m]); NaN entries are ignored.
+    gate_prob : float
+        χ²₁ gate probability [1], in (0, 1).
+    n_iter : int
+        Most fixed-point iterations.
+
+    Returns
+    -------
+    tuple of float
+        ``(sigma, share)``: the inliers' standard deviation, in the unit of ``e``, and the share
+        of the finite errors that are inliers [1]; (NaN, 0) without finite errors.
+    """
     from scipy.stats import norm
 
     e = np.asarray(e, float)
@@ -128,7 +144,32 @@ def robust_sigmas(
     """σ_AOD [rad] and σ_TOA [s] of the calibration errors' inliers (:func:`inlier_sigma`
     at ``gate_prob``), σ_TOA floored at the integer-sample quantization 1/(√12 F_s); with
     ``distance_edges_m`` also per bin of ``dist_m`` (a bin with fewer than ``min_per_bin``
-    errors takes the overall values), returned as :class:`TrackerConfig` keyword arguments."""
+    errors takes the overall values), returned as :class:`TrackerConfig` keyword arguments.
+
+    Parameters
+    ----------
+    e_aod_rad : numpy.ndarray
+        [N] AOD errors [rad] (wrapped).
+    e_range_m : numpy.ndarray
+        [N] TOA range errors c·Δτ [m].
+    dist_m : numpy.ndarray
+        [N] 2-D train–RRH distances of those measurements [m] (used only with bins).
+    distance_edges_m : tuple of float
+        Increasing distance bin edges [m]; empty: no bins.
+    min_per_bin : int
+        Fewest errors for a bin's own σ values.
+    fs_hz : float
+        Sample rate F_s [Hz] of the TOA quantization floor.
+    gate_prob : float
+        χ²₁ gate probability [1] of :func:`inlier_sigma`.
+
+    Returns
+    -------
+    tuple of (float, float, dict)
+        σ_AOD [rad] (at least 1e-4 rad), σ_TOA [s] (at least 1/(√12 F_s)) and, with bins,
+        ``distance_edges_m`` [m], ``sigma_aod_bins_rad`` [rad], ``sigma_toa_bins_s`` [s] (one
+        entry per bin, ``len(distance_edges_m) + 1``); an empty dict without bins.
+    """
 
     def spread(e):
         return inlier_sigma(e, gate_prob)[0] if e.size else np.nan

@@ -42,7 +42,14 @@ from railradio.nr.receiver import ReceiverConfig
 
 @dataclass(frozen=True)
 class CellSearchConfig:
-    """Cell-search settings [ours]; see the module docstring for the rule behind each."""
+    """Cell-search settings [ours]; see the module docstring for the rule behind each.
+
+    Raises
+    ------
+    ValueError
+        When ``n_neighbours``, ``acquire_every``, ``confirm_epochs`` or ``lost_epochs`` is not an
+        integer ≥ 1, or ``pfa`` is outside (0, 1).
+    """
 
     template: str = "sss"
     detector: str = "cacfar"
@@ -62,7 +69,19 @@ class CellSearchConfig:
 
     def receiver_config(self, burst: ReceiverConfig) -> ReceiverConfig:
         """The correlation settings of the search on bursts of ``burst``'s decimation,
-        SS-block pattern and window."""
+        SS-block pattern and window.
+
+        Parameters
+        ----------
+        burst : ReceiverConfig
+            The front end's receiver configuration (decimation, SS-block pattern and count, lag
+            window, detection and pre-screen thresholds are taken from it).
+
+        Returns
+        -------
+        ReceiverConfig
+            That configuration with this search's ``template``.
+        """
         return ReceiverConfig(
             decimation=burst.decimation,
             ssb_pattern=burst.ssb_pattern,
@@ -76,7 +95,23 @@ class CellSearchConfig:
 
 def correlation_key(cfg: ReceiverConfig, detector: str, pfa: float) -> tuple:
     """What the per-block statistics (η, μ, σ, detection) of a correlator depend on: two
-    correlators with the same key give the same :class:`BlockCorrelation` detections."""
+    correlators with the same key give the same :class:`BlockCorrelation` detections.
+
+    Parameters
+    ----------
+    cfg : ReceiverConfig
+        The correlator's receiver configuration.
+    detector : str
+        Detection rule (:data:`railradio.nr.correlator.DETECTORS`).
+    pfa : float
+        False-alarm probability per block of the CFAR tests.
+
+    Returns
+    -------
+    tuple
+        (decimation, SS-block pattern, n_blocks, search_lags, detect_k_sigma,
+        prescreen_k_sigma, template, detector, pfa).
+    """
     return (
         cfg.decimation,
         cfg.ssb_pattern,
@@ -92,7 +127,18 @@ def correlation_key(cfg: ReceiverConfig, detector: str, pfa: float) -> tuple:
 
 def ss_rsrp_db(res: BlockCorrelation) -> NDArray[np.float64]:
     """SS-RSRP per candidate [dB, arbitrary common reference]: 10 log10 of the largest
-    squared SSS correlation η² over the candidate's detected blocks; NaN if none."""
+    squared SSS correlation η² over the candidate's detected blocks; NaN if none.
+
+    Parameters
+    ----------
+    res : BlockCorrelation
+        The candidates' correlation (``eta``, ``detected`` [n_cand, n_blocks]).
+
+    Returns
+    -------
+    numpy.ndarray
+        SS-RSRP [dB, arbitrary common reference], [n_cand]; NaN where no block is detected.
+    """
     p = np.where(res.detected, np.asarray(res.eta, float) ** 2, -np.inf).max(axis=1)
     with np.errstate(divide="ignore"):
         out = 10 * np.log10(np.where(np.isfinite(p), p, np.nan))
@@ -101,7 +147,27 @@ def ss_rsrp_db(res: BlockCorrelation) -> NDArray[np.float64]:
 
 def neighbour_list(dep: Deployment, anchor: int, n: int) -> NDArray[np.int64]:
     """The ``n`` RRHs nearest RRH ``anchor`` along the track, the anchor first (ties: the
-    lower index first)."""
+    lower index first).
+
+    Parameters
+    ----------
+    dep : Deployment
+        The RRH deployment.
+    anchor : int
+        Index of the anchor RRH, in ``0..dep.n_rrh - 1``.
+    n : int
+        List length (at most ``dep.n_rrh`` are returned).
+
+    Returns
+    -------
+    numpy.ndarray of int64
+        RRH indices, [min(n, n_rrh)], the anchor first.
+
+    Raises
+    ------
+    ValueError
+        When ``anchor`` is not an RRH index of ``dep``.
+    """
     if not 0 <= anchor < dep.n_rrh:
         raise ValueError(f"anchor must be in 0..{dep.n_rrh - 1}, got {anchor!r}")
     return dep.nearest(float(dep.x_m[anchor]), min(n, dep.n_rrh)).astype(np.int64)
@@ -135,11 +201,23 @@ class CellSearch:
     """
 
     def __init__(self, cfg: CellSearchConfig, deployment: Deployment, correlator: Correlator):
+        """Start in the searching state (no anchor: the first epoch runs a blind acquisition).
+
+        Parameters
+        ----------
+        cfg : CellSearchConfig
+            The cell-search settings.
+        deployment : Deployment
+            RRH positions and PCIs (the receiver's only knowledge of the network).
+        correlator : Correlator
+            The correlator measuring SS-RSRP (:meth:`CellSearchConfig.receiver_config`'s settings).
+        """
         self.cfg, self.dep, self.correlator = cfg, deployment, correlator
         self.n_id1, self.n_id2 = deployment.n_id()
         self.reset()
 
     def reset(self) -> None:
+        """Forget all state (anchor, challenger, counts): the next epoch runs a blind acquisition."""
         self.anchor = -1
         self.searching = True
         self.challenger, self.count, self.misses = -1, 0, 0
@@ -147,7 +225,18 @@ class CellSearch:
     def acquire(self, z, s_min: int, zf=None) -> None:
         """Blind acquisition: every PCI of the deployment, the strongest SS-RSRP becomes the
         anchor. When nothing is detected the largest correlation (η² over all blocks) is
-        taken, and the search repeats at the next epoch."""
+        taken, and the search repeats at the next epoch.
+
+        Parameters
+        ----------
+        z : numpy.ndarray of complex64
+            The burst's samples at the correlator's rate, [n_samples].
+        s_min : int
+            Symbol index of the burst's first sample.
+        zf : numpy.ndarray of complex64 or None
+            The burst's :meth:`railradio.nr.correlator.Correlator.window_spectra`, [n_blocks, n_win]
+            (``None``: computed here).
+        """
         res = self.correlator.correlate(z, s_min, self.n_id1, self.n_id2, zf=zf)
         rsrp = ss_rsrp_db(res)
         self.reset()
@@ -158,7 +247,29 @@ class CellSearch:
             self.anchor = int(np.argmax(np.asarray(res.eta, float).max(axis=1)))
 
     def candidates(self, epoch: int, z, s_min: int, zf=None) -> tuple[NDArray[np.int64], bool]:
-        """The neighbour list measured at ``epoch`` and whether a blind acquisition ran."""
+        """The neighbour list measured at ``epoch`` and whether a blind acquisition ran.
+
+        An acquisition runs at the fixed acquisition epochs, while searching and when there is
+        no anchor.
+
+        Parameters
+        ----------
+        epoch : int
+            Epoch index.
+        z : numpy.ndarray of complex64
+            The burst's samples at the correlator's rate, [n_samples] (read only when an
+            acquisition runs, as are ``s_min`` and ``zf``).
+        s_min : int
+            Symbol index of the burst's first sample.
+        zf : numpy.ndarray of complex64 or None
+            The burst's window spectra, [n_blocks, n_win], as in :meth:`acquire`.
+
+        Returns
+        -------
+        tuple
+            (RRH indices to measure, int64 [min(n_neighbours, n_rrh)], anchor first;
+            whether a blind acquisition ran, bool).
+        """
         acquired = int(epoch) % self.cfg.acquire_every == 0 or self.searching or self.anchor < 0
         if acquired:
             self.acquire(z, s_min, zf)
@@ -166,7 +277,15 @@ class CellSearch:
 
     def update(self, cand: NDArray[np.int64], rsrp_db: NDArray[np.float64]) -> None:
         """Follow the strongest cell of the list once confirmed; start a new search after
-        ``lost_epochs`` epochs without the anchor."""
+        ``lost_epochs`` epochs without the anchor.
+
+        Parameters
+        ----------
+        cand : numpy.ndarray of int64
+            The epoch's neighbour list (:meth:`candidates`), [n_cand].
+        rsrp_db : numpy.ndarray
+            Its SS-RSRP (:func:`ss_rsrp_db`) [dB, arbitrary common reference], [n_cand]; NaN: not detected.
+        """
         cand = np.asarray(cand)
         at = np.flatnonzero(cand == self.anchor)
         if at.size and np.isfinite(rsrp_db[at[0]]):

@@ -24,7 +24,22 @@ from railradio.constants import SPEED_OF_LIGHT_M_S
 
 
 def breakpoint_distance_m(h_bs_m: float, h_ut_m: float, fc_hz: float) -> float:
-    """UMi breakpoint d'_BP = 4 h'_BS h'_UT f_c / c with h' = h - 1 m [m]."""
+    """UMi breakpoint d'_BP = 4 h'_BS h'_UT f_c / c with h' = h - 1 m [m].
+
+    Parameters
+    ----------
+    h_bs_m : float
+        Base-station (RRH) antenna height [m].
+    h_ut_m : float
+        User-terminal (train) antenna height [m].
+    fc_hz : float
+        Carrier frequency [Hz].
+
+    Returns
+    -------
+    float
+        Breakpoint distance d'_BP [m].
+    """
     return 4.0 * (h_bs_m - 1.0) * (h_ut_m - 1.0) * fc_hz / SPEED_OF_LIGHT_M_S
 
 
@@ -35,6 +50,29 @@ def pathloss_umi_los_db(
 
     PL1 = 32.4 + 21 log10(d3D) + 20 log10(f_c/GHz) for d2D ≤ d'_BP,
     PL2 = 32.4 + 40 log10(d3D) + 20 log10(f_c/GHz) - 9.5 log10(d'_BP² + (h_BS - h_UT)²).
+
+    Parameters
+    ----------
+    d3d_m : float or numpy.ndarray
+        3-D distances [m]; all > 0.
+    d2d_m : float or numpy.ndarray
+        2-D distances [m] (select PL1 or PL2), the shape of ``d3d_m`` or broadcast with it.
+    fc_hz : float
+        Carrier frequency [Hz].
+    h_bs_m : float
+        RRH antenna height [m].
+    h_ut_m : float
+        Train antenna height [m].
+
+    Returns
+    -------
+    numpy.ndarray
+        Path loss [dB], the broadcast shape of ``d3d_m`` and ``d2d_m``.
+
+    Raises
+    ------
+    ValueError
+        When any ``d3d_m`` <= 0.
     """
     d3d = np.asarray(d3d_m, dtype=float)
     d2d = np.asarray(d2d_m, dtype=float)
@@ -51,7 +89,31 @@ def shadowing_field_db(
     rng: np.random.Generator, n_points: int, sigma_db: float, corr_dist_m: float, step_m: float = 1.0
 ) -> NDArray[np.float64]:
     """A stationary Gauss–Markov field on a grid: s[i+1] = ρ s[i] + σ √(1-ρ²) w,
-    ρ = exp(-step/d_corr), s[0] ~ N(0, σ²): autocorrelation σ² exp(-|Δ|/d_corr) [dB]."""
+    ρ = exp(-step/d_corr), s[0] ~ N(0, σ²): autocorrelation σ² exp(-|Δ|/d_corr) [dB].
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Generator of the white innovations w.
+    n_points : int
+        Grid points; >= 1.
+    sigma_db : float
+        Standard deviation σ [dB]; >= 0.
+    corr_dist_m : float
+        Decorrelation distance d_corr [m]; > 0.
+    step_m : float
+        Grid step [m].
+
+    Returns
+    -------
+    numpy.ndarray
+        The field [dB]: [n_points], point i at i·step_m.
+
+    Raises
+    ------
+    ValueError
+        When ``sigma_db`` < 0, ``corr_dist_m`` <= 0 or ``n_points`` < 1.
+    """
     if sigma_db < 0 or corr_dist_m <= 0 or n_points < 1:
         raise ValueError("sigma_db must be >= 0, corr_dist_m > 0, n_points >= 1")
     rho = np.exp(-step_m / corr_dist_m)
@@ -83,7 +145,13 @@ class TdlProfile:
     @property
     def rice_k_db(self) -> float:
         """K-factor of the first tap: LOS vs the Rayleigh tap at the same delay [dB];
-        -inf for an NLOS profile (TDL-A, B, C: no specular component)."""
+        -inf for an NLOS profile (TDL-A, B, C: no specular component).
+
+        Returns
+        -------
+        float
+            Rice K-factor [dB].
+        """
         if self.los_power == 0.0:
             return float("-inf")
         first = self.powers[self.delays_s == self.los_delay_s].sum()
@@ -96,7 +164,25 @@ def _table() -> dict:
 
 
 def tdl_profile(name: str, delay_spread_s: float) -> TdlProfile:
-    """Load a TDL profile from package data, scale delays by the delay spread, normalize."""
+    """Load a TDL profile from package data, scale delays by the delay spread, normalize.
+
+    Parameters
+    ----------
+    name : str
+        Profile name in ``railradio/data/tdl.json``: ``"TDL-A"`` … ``"TDL-E"``.
+    delay_spread_s : float
+        RMS delay spread [s] that scales the table's normalized delays; > 0.
+
+    Returns
+    -------
+    TdlProfile
+        Powers normalized to unit total power [linear], delays [s].
+
+    Raises
+    ------
+    ValueError
+        When ``name`` is not in the table or ``delay_spread_s`` <= 0.
+    """
     table = _table()
     if name not in table:
         raise ValueError(f"TDL profile must be one of {sorted(k for k in table if k[0] != '_')}, got {name!r}")
@@ -112,7 +198,22 @@ def tdl_profile(name: str, delay_spread_s: float) -> TdlProfile:
 
 
 def sos_params(rng: np.random.Generator, n_taps: int, n_sinusoids: int) -> tuple[NDArray, NDArray]:
-    """Random arrival angles α and phases φ [rad] of a sum-of-sinusoids process, [taps, M]."""
+    """Random arrival angles α and phases φ [rad] of a sum-of-sinusoids process, [taps, M].
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Generator of the draws (α first, then φ).
+    n_taps : int
+        Number of taps L.
+    n_sinusoids : int
+        Sinusoids per tap M.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        (α [rad], φ [rad]), each uniform on [0, 2π): [n_taps, n_sinusoids].
+    """
     alpha = rng.uniform(0, 2 * np.pi, size=(n_taps, n_sinusoids))
     phi = rng.uniform(0, 2 * np.pi, size=(n_taps, n_sinusoids))
     return alpha, phi
@@ -121,7 +222,26 @@ def sos_params(rng: np.random.Generator, n_taps: int, n_sinusoids: int) -> tuple
 def sos_eval(
     powers: NDArray, doppler_hz: float, times_s: NDArray, alpha: NDArray, phi: NDArray
 ) -> NDArray[np.complex128]:
-    """Evaluate a sum-of-sinusoids process with given (α, φ) at ``times_s``: [n_times, n_taps]."""
+    """Evaluate a sum-of-sinusoids process with given (α, φ) at ``times_s``: [n_times, n_taps].
+
+    Parameters
+    ----------
+    powers : numpy.ndarray
+        Tap powers P_l [linear]: [n_taps].
+    doppler_hz : float
+        Maximum Doppler f_D [Hz].
+    times_s : numpy.ndarray
+        Evaluation times [s]: [n_times].
+    alpha : numpy.ndarray
+        Arrival angles α [rad]: [n_taps, M] (:func:`sos_params`).
+    phi : numpy.ndarray
+        Phases φ [rad]: [n_taps, M].
+
+    Returns
+    -------
+    numpy.ndarray of complex
+        Tap gains [√linear]: [n_times, n_taps] (phases evaluated in float32).
+    """
     powers = np.asarray(powers, dtype=float)
     f = doppler_hz * np.cos(alpha)
     t = np.asarray(times_s, dtype=float)
@@ -139,9 +259,23 @@ def sos_taps(
     a_l(t) = sqrt(P_l / M) Σ_m exp(j(2π f_D cos α_{l,m} t + φ_{l,m})), α, φ ~ U[0, 2π):
     E|a_l|² = P_l, autocorrelation → P_l J0(2π f_D τ) as M grows.
 
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Generator of α and φ (:func:`sos_params`).
+    powers : numpy.ndarray
+        Tap powers P_l [linear]: [n_taps].
+    doppler_hz : float
+        Maximum Doppler f_D [Hz].
+    times_s : numpy.ndarray
+        Evaluation times [s]: [n_times].
+    n_sinusoids : int
+        Sinusoids per tap M.
+
     Returns
     -------
-    ndarray, shape [n_times, n_taps]
+    numpy.ndarray of complex
+        Tap gains a_l(t) [√linear]: [n_times, n_taps].
     """
     alpha, phi = sos_params(rng, np.asarray(powers).size, n_sinusoids)
     return sos_eval(powers, doppler_hz, times_s, alpha, phi)

@@ -14,7 +14,29 @@ KEY_SYNC = 4
 def clock_offsets_s(seed: int, key: tuple[int, ...], rrh: NDArray, rrh_sigma_s: float) -> NDArray[np.float64]:
     """Timing offset [s] of each RRH in ``rrh`` against the network's time reference: one
     N(0, σ²) draw per realization and RRH, keyed (realization key, KEY_SYNC, RRH id), so
-    an RRH keeps its offset along the whole run and whatever the sharding [ours]."""
+    an RRH keeps its offset along the whole run and whatever the sharding [ours].
+
+    Parameters
+    ----------
+    seed : int
+        The config seed.
+    key : tuple of int
+        The realization's spawn key (:func:`railradio.rng.spawn_key`).
+    rrh : numpy.ndarray of int
+        RRH ids, any shape (e.g. the candidates' ``rrh`` [epoch, cand]).
+    rrh_sigma_s : float
+        Standard deviation σ of the offsets [s]; >= 0 (0: no offsets).
+
+    Returns
+    -------
+    numpy.ndarray
+        Offset of each entry of ``rrh`` [s], same shape as ``rrh``.
+
+    Raises
+    ------
+    ValueError
+        When ``rrh_sigma_s`` is not >= 0 (negative or NaN).
+    """
     if not rrh_sigma_s >= 0:
         raise ValueError(f"rrh_sigma_s must be >= 0 [s], got {rrh_sigma_s!r}")
     from railradio.rng import make_rng
@@ -39,6 +61,31 @@ def apply_clock_errors(ds, seed: int, key: tuple[int, ...], rrh_sigma_s: float =
     differ per epoch by under one sample but have the same distribution when the
     fractional delay is uniform; the offsets (nanoseconds) are far below the SS-block
     spacing, so detection and AOD do not change [ours]. Zero offsets return ``ds`` itself.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        Estimates (:func:`railradio.nr.simulate.simulate_epochs`) with ``rrh`` (candidate RRH ids,
+        dims (``epoch``, ``cand``)) and ``toa_hat`` [s].
+    seed : int
+        The config seed.
+    key : tuple of int
+        The realization's spawn key.
+    rrh_sigma_s : float
+        Standard deviation of the RRH timing offsets [s]; >= 0.
+    train_bias_s : float
+        The train clock's bias b [s]; finite.
+
+    Returns
+    -------
+    xarray.Dataset
+        A copy of ``ds`` with δ_k + b added to ``toa_hat`` [s] (its attributes kept), or ``ds``
+        itself when both ``rrh_sigma_s`` and ``train_bias_s`` are 0.
+
+    Raises
+    ------
+    ValueError
+        When ``train_bias_s`` is not finite or ``rrh_sigma_s`` is not >= 0.
     """
     if not np.isfinite(train_bias_s):
         raise ValueError(f"train_bias_s must be finite [s], got {train_bias_s!r}")

@@ -58,7 +58,27 @@ but 0.5 % of its power (4 lags at F_s/8) [ours]."""
 
 def cfar_threshold(window_s: float, pfa: float, n_sc: int = 127) -> float:
     """t with T sqrt(2π) β_rms t exp(-t²/2) = P_fa (Rice's envelope up-crossing rate), in
-    units of the Rayleigh parameter σ_R; β_rms = Δf sqrt((n_sc² - 1)/12) [Hz]."""
+    units of the Rayleigh parameter σ_R; β_rms = Δf sqrt((n_sc² - 1)/12) [Hz].
+
+    Parameters
+    ----------
+    window_s : float
+        Duration T of the tested lag window [s].
+    pfa : float
+        False-alarm probability P_fa per block (over its lag window), in (0, 1).
+    n_sc : int
+        Subcarriers of the reference (127: PSS, SSS).
+
+    Returns
+    -------
+    float
+        The threshold t [σ_R], the root in [1, 50].
+
+    Raises
+    ------
+    ValueError
+        From :func:`scipy.optimize.brentq` when no root lies in [1, 50].
+    """
     from scipy.optimize import brentq
 
     beta = SUBCARRIER_SPACING_HZ * np.sqrt((n_sc**2 - 1) / 12)
@@ -166,7 +186,18 @@ class Correlator:
         return out
 
     def spectrum(self, n_id1: int, n_id2: int) -> NDArray[np.complex64]:
-        """conj(B): the conjugate reference spectrum of a cell, n_win bins."""
+        """conj(B): the conjugate reference spectrum of a cell, n_win bins (cached per cell).
+
+        Parameters
+        ----------
+        n_id1, n_id2 : int
+            The cell's N_ID1 and N_ID2 (PCI = 3 N_ID1 + N_ID2).
+
+        Returns
+        -------
+        numpy.ndarray of complex64
+            conj(FFT) of the ``cfg.template`` reference zero-padded to n_win, [n_win].
+        """
         key = (int(n_id1), int(n_id2))
         if key not in self._spectra:
             b = self._template(*key, self.cfg.template)
@@ -184,7 +215,20 @@ class Correlator:
 
     def window_spectra(self, z: NDArray[np.complex64], s_min: int) -> NDArray[np.complex64]:
         """FFT of the received burst over each SS block's window (v_i ... v_i + N - 1),
-        [n_blocks, N]; receivers with the same window length can share it."""
+        [n_blocks, N]; receivers with the same window length can share it.
+
+        Parameters
+        ----------
+        z : numpy.ndarray of complex64
+            The burst's samples at the correlation rate F_s/D, [n_samples] (taken as zero beyond its end).
+        s_min : int
+            Symbol index of the burst's first sample.
+
+        Returns
+        -------
+        numpy.ndarray of complex64
+            [n_blocks, n_win] window spectra.
+        """
         num = self.cfg.num
         v = num.symbol_start(self.cfg.ssb_first) - num.symbol_start(s_min)  # [B]
         idx = v[:, None] + np.arange(self.n_win)[None, :]
@@ -205,6 +249,26 @@ class Correlator:
         """Per-block correlation, detection, AOD and TOA of the candidate cells (seed eq. 4–9).
 
         ``zf``: the burst's :meth:`window_spectra`, when already computed for ``z``.
+
+        Parameters
+        ----------
+        z : numpy.ndarray of complex64
+            The burst's samples at the correlation rate F_s/D, [n_samples].
+        s_min : int
+            Symbol index of the burst's first sample.
+        n_id1, n_id2 : numpy.ndarray of int
+            The candidates' N_ID1 and N_ID2, [n_cand] each.
+        keep_corr : bool
+            Keep the decimated-rate |r̃_i[k]| in ``corr``.
+        zf : numpy.ndarray of complex64 or None
+            [n_blocks, n_win] window spectra of ``z`` (``None``: computed here).
+
+        Returns
+        -------
+        BlockCorrelation
+            η, μ, σ, detections [n_cand, n_blocks]; TOA [full-rate samples], AOD [rad] and the
+            combined peak [n_cand] (NaN TOA/AOD, 0 peak: nothing detected); ``corr``
+            [n_cand, n_blocks, K_d] or ``None``.
         """
         cfg = self.cfg
         if zf is None:
@@ -335,5 +399,8 @@ class Correlator:
 
     @cached_property
     def beam_angles(self) -> NDArray[np.float64]:
+        """Direction of each SS block's beam, the AOD it stands for (seed eq. 7) [rad]:
+        -(k + 1/2) · 180°/n_blocks, [n_blocks].
+        """
         k = np.arange(self.cfg.n_blocks)
         return -np.radians((k + 0.5) * 180.0 / self.cfg.n_blocks)

@@ -38,7 +38,20 @@ class EpochRecord:
     @classmethod
     def empty(cls, n_r: int, n_e: int, n_c: int) -> EpochRecord:
         """Arrays for ``n_r`` receivers, ``n_e`` epochs and ``n_c`` candidates (NaN, or 0 and -1
-        for the integers)."""
+        for the integers).
+
+        Parameters
+        ----------
+        n_r, n_e, n_c : int
+            Receivers, reported epochs and candidates per epoch.
+
+        Returns
+        -------
+        EpochRecord
+            ``truth`` [n_e] (``x``, ``v``, ``a``, ``sir``: NaN), ``serving`` [n_e] (-1),
+            ``out`` [n_e, n_c] (``rrh``, ``panel``: 0; the rest NaN), ``meas`` [n_r, n_e, n_c]
+            (``n_detected``: 0; the rest NaN), ``acquired`` [n_e] (False).
+        """
         truth = {name: np.full(n_e, np.nan) for name in ("x", "v", "a", "sir")}
         serving = np.full(n_e, -1, dtype=np.int64)
         out = {name: np.full((n_e, n_c), np.nan) for name in ("d3d_m", "aod_true_rad", "rx_power_dbm", "ss_rsrp")}
@@ -51,7 +64,21 @@ class EpochRecord:
 
     def record(self, i: int, e: int, b: Burst, m: EpochEstimates, dep: Deployment) -> None:
         """Store epoch ``e`` (the ``i``-th reported): the estimates ``m`` and, for scoring, the
-        truth of the burst ``b``."""
+        truth of the burst ``b``.
+
+        Parameters
+        ----------
+        i : int
+            Row of the epoch in the record, in ``0..n_e - 1``.
+        e : int
+            Epoch index (the key of a kept correlation).
+        b : Burst
+            The epoch's burst and truth (position [m], speed [m/s], acceleration [m/s²], link budget).
+        m : EpochEstimates
+            The receiver's measurements at the epoch.
+        dep : Deployment
+            The deployment (geometry of candidates out of radio range).
+        """
         truth, serving, out, meas, acquired = self.truth, self.serving, self.out, self.meas, self.acquired
         n_c = out["rrh"].shape[1]
         cand = m.cand
@@ -79,7 +106,26 @@ class EpochRecord:
 
 
 def estimates_dataset(scn: Scenario, epochs: np.ndarray, receivers: list[str], rec: EpochRecord) -> xr.Dataset:
-    """:func:`simulate_epochs`'s dataset from the record of its epochs."""
+    """:func:`simulate_epochs`'s dataset from the record of its epochs.
+
+    Parameters
+    ----------
+    scn : Scenario
+        The scenario (trajectory ``dt_s``, train panels).
+    epochs : numpy.ndarray of int
+        The reported epoch indices, [n_e].
+    receivers : list of str
+        Receiver names, in the order of the record's first axis.
+    rec : EpochRecord
+        The filled record.
+
+    Returns
+    -------
+    xarray.Dataset
+        Dims ``epoch``, ``cand``, ``receiver``, ``panel_id`` (and ``block``, ``lag`` for a kept
+        correlation); the variables and their units are those of
+        :func:`railradio.nr.simulate.simulate_epochs`.
+    """
     n_c = rec.out["rrh"].shape[1]
     ds = xr.Dataset(
         _train_vars(scn, epochs, rec)

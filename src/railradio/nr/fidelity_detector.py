@@ -30,7 +30,27 @@ DETECTOR_SETTINGS = {
 
 def detector_variants(scn: Scenario, name: str = "robust") -> dict[str, tuple]:
     """{label: (ReceiverConfig, detector, Correlator kwargs, attribute overrides)} for the
-    settings of :data:`DETECTOR_SETTINGS` applied to the receiver ``name`` of ``scn.variants``."""
+    settings of :data:`DETECTOR_SETTINGS` applied to the receiver ``name`` of ``scn.variants``.
+
+    Parameters
+    ----------
+    scn : Scenario
+        The scenario (its ``variants`` and correlation decimation).
+    name : str
+        The receiver variant whose detector constants are varied.
+
+    Returns
+    -------
+    dict of str to tuple
+        ``"<setting>_<value>"`` -> (ReceiverConfig, detector, kwargs of
+        :class:`railradio.nr.correlator.Correlator` (``ca_window``, ``ca_guard`` [lags at F_s/D_c]),
+        attributes to set on the correlator (``ca_prescreen``)).
+
+    Raises
+    ------
+    StopIteration
+        When ``scn.variants`` has no receiver ``name``.
+    """
     rc, det = next((rc, det) for n, rc, det in scn.variants if n == name)
     d_c = scn.search_decimation or scn.receiver.decimation
     out = {}

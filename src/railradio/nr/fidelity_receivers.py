@@ -33,6 +33,26 @@ class Receivers:
     duration)."""
 
     def __init__(self, scn: Scenario, selection: dict[str, str], decimation: int, n_use: int = 3):
+        """One correlator per receiver at F_s/``decimation`` (and the cell search's, unless a
+        receiver's settings equal it).
+
+        Parameters
+        ----------
+        scn : Scenario
+            The scenario (its ``receiver``, ``detector``, ``variants``, ``pfa``, ``cell_search``).
+        selection : dict of str to str
+            Receiver name -> the strength it selects its cells by (``ss_rsrp``, ``best_score`` or ``peak``).
+        decimation : int
+            D_c: the correlation rate F_s/D_c (a divisor of the front end's decimation).
+        n_use : int
+            Cells selected per receiver.
+
+        Raises
+        ------
+        ValueError
+            From :class:`railradio.nr.correlator.Correlator` when ``decimation`` does not divide
+            ``scn.receiver.decimation``.
+        """
         base = scn.receiver.decimation
         self.decimation = decimation
         rx = [("seed", scn.receiver, scn.detector)] + list(scn.variants)
@@ -53,6 +73,23 @@ class Receivers:
         self.cs_cor = None if self.cs_shared is not None else cor(cs_rc, cs.detector, cs.pfa)
 
     def __call__(self, z: NDArray[np.complex64], s_min: int, n1: NDArray, n2: NDArray) -> dict[str, ReceiverDecisions]:
+        """Every receiver's decisions on one burst.
+
+        Parameters
+        ----------
+        z : numpy.ndarray of complex64
+            The burst's samples at the correlation rate F_s/D_c, [n_samples].
+        s_min : int
+            Symbol index of the burst's first sample.
+        n1, n2 : numpy.ndarray of int
+            The candidates' N_ID1 and N_ID2, [n_cand] each.
+
+        Returns
+        -------
+        dict of str to ReceiverDecisions
+            Receiver name -> its decisions (TOA [full-rate samples], AOD [rad]; strength: SS-RSRP [dB,
+            arbitrary reference], best score or peak; the ``n_use`` strongest with TOA and AOD selected).
+        """
         spectra = {}
 
         def zf(c):

@@ -14,18 +14,61 @@ from railradio.nr.numerology import SAMPLE_RATE_HZ
 
 
 def toa_error_m(toa_samples: NDArray, d3d_m: NDArray) -> NDArray[np.float64]:
-    """TOA range error [m] (NaN where nothing was detected)."""
+    """TOA range error [m] (NaN where nothing was detected).
+
+    Parameters
+    ----------
+    toa_samples : numpy.ndarray
+        TOA estimates [full-rate samples] (NaN: nothing detected), e.g. [E, C].
+    d3d_m : numpy.ndarray
+        True 3-D train-RRH distances [m], same shape.
+
+    Returns
+    -------
+    numpy.ndarray
+        toa_samples / F_s · c - d3d_m [m], same shape.
+    """
     return toa_samples / SAMPLE_RATE_HZ * SPEED_OF_LIGHT_M_S - d3d_m
 
 
 def aod_error_deg(aod_rad: NDArray, aod_true_rad: NDArray) -> NDArray[np.float64]:
+    """AOD error [deg], wrapped to (-180, 180].
+
+    Parameters
+    ----------
+    aod_rad : numpy.ndarray
+        AOD estimates [rad] (NaN: nothing detected), e.g. [E, C].
+    aod_true_rad : numpy.ndarray
+        True AODs [rad], same shape.
+
+    Returns
+    -------
+    numpy.ndarray
+        The wrapped difference aod_rad - aod_true_rad [deg], same shape.
+    """
     return np.degrees(wrap_rad(aod_rad - aod_true_rad))
 
 
 def changed(kind: str, a: dict[str, NDArray], b: dict[str, NDArray]) -> NDArray[np.float64]:
     """Per-decision change indicators of decision ``kind`` between two runs' arrays
     (``detected`` [E, C, B], ``selected``/``toa``/``aod`` [E, C]): 1 changed, 0 not, NaN
-    where neither run made that decision (no TOA/AOD in either). Returns [E, n]."""
+    where neither run made that decision (no TOA/AOD in either). Returns [E, n].
+
+    Parameters
+    ----------
+    kind : str
+        ``"detection"``, ``"selection"``, ``"toa"`` or ``"aod"`` (any other value is taken as
+        ``"aod"``). A TOA changes by more than :data:`railradio.nr.fidelity.TOA_CHANGE_SAMPLES`,
+        an AOD by more than :data:`railradio.nr.fidelity.AOD_CHANGE_DEG`, or it exists in one run only.
+    a, b : dict of str to numpy.ndarray
+        The two runs' arrays (one receiver's entry of :func:`stack`): ``detected`` (bool) [E, C, B],
+        ``selected`` (bool) [E, C], ``toa`` [full-rate samples] [E, C], ``aod`` [rad] [E, C].
+
+    Returns
+    -------
+    numpy.ndarray
+        [E, C·B] for ``"detection"``, else [E, C]: 1.0 changed, 0.0 not, NaN no decision (TOA, AOD).
+    """
     if kind == "detection":
         out = (a["detected"] != b["detected"]).astype(float)
         return out.reshape(out.shape[0], -1)
@@ -42,7 +85,22 @@ def changed(kind: str, a: dict[str, NDArray], b: dict[str, NDArray]) -> NDArray[
 
 def stack(epochs: list[dict], receivers: list[str]) -> dict:
     """The per-epoch results of :meth:`railradio.nr.fidelity.FidelityRun.epoch` as arrays:
-    ``{variant: {receiver: {"detected" [E, C, B], "selected", "toa", "aod" [E, C]}}}``."""
+    ``{variant: {receiver: {"detected" [E, C, B], "selected", "toa", "aod" [E, C]}}}``.
+
+    Parameters
+    ----------
+    epochs : list of dict
+        E results of :meth:`railradio.nr.fidelity.FidelityRun.epoch` (same variants, receivers
+        and candidate count).
+    receivers : list of str
+        Receiver names.
+
+    Returns
+    -------
+    dict
+        Variant -> receiver -> ``detected`` (bool) [E, C, B], ``selected`` (bool) [E, C],
+        ``toa`` [full-rate samples] [E, C], ``aod`` [rad] [E, C].
+    """
     out = {}
     for v in epochs[0]["decisions"]:
         out[v] = {}
@@ -65,7 +123,22 @@ GOAL_CHANGE_FRAC = 0.005
 
 def within_share(toa: NDArray, d3d_m: NDArray, in_range: NDArray) -> NDArray[np.float64]:
     """[E, C] 1 where the TOA range error is within :data:`TOA_WITHIN_M`, 0 where not (no
-    TOA counts as not), NaN for candidates out of range (they send nothing)."""
+    TOA counts as not), NaN for candidates out of range (they send nothing).
+
+    Parameters
+    ----------
+    toa : numpy.ndarray
+        TOA estimates [full-rate samples] (NaN: nothing detected), [E, C].
+    d3d_m : numpy.ndarray
+        True 3-D distances [m], [E, C].
+    in_range : numpy.ndarray of bool
+        Whether each candidate is within radio range (sends), [E, C].
+
+    Returns
+    -------
+    numpy.ndarray
+        1.0, 0.0 or NaN per candidate, [E, C].
+    """
     with np.errstate(invalid="ignore"):
         ok = np.abs(toa_error_m(toa, d3d_m)) <= TOA_WITHIN_M
     return np.where(in_range, ok.astype(float), np.nan)
@@ -75,7 +148,24 @@ def paired_bootstrap_diff(
     a: NDArray, b: NDArray, rng: np.random.Generator, n_boot: int = 2000, level: float = 0.95
 ) -> tuple[float, float, float]:
     """Difference of means mean(a) - mean(b) of per-epoch values a, b [E, n] (NaN ignored)
-    with a bootstrap interval over epochs (the epochs resampled, pairs kept)."""
+    with a bootstrap interval over epochs (the epochs resampled, pairs kept).
+
+    Parameters
+    ----------
+    a, b : numpy.ndarray
+        Paired values, [E, n] each (e.g. :func:`within_share`).
+    rng : numpy.random.Generator
+        Generator of the resampled epochs.
+    n_boot : int
+        Bootstrap resamples.
+    level : float
+        Confidence level of the percentile interval, in (0, 1).
+
+    Returns
+    -------
+    tuple of float
+        (difference, lower end, upper end), in the unit of ``a`` and ``b``.
+    """
 
     def diff(idx):
         return np.nanmean(a[idx]) - np.nanmean(b[idx])
@@ -162,7 +252,19 @@ KS_ALPHA = 0.05
 
 def distributions_agree(m: dict) -> bool:
     """KS p-values of the TOA and AOD errors ≥ :data:`KS_ALPHA` and the TOA-within-5-m
-    difference's interval inside ±:data:`DIST_TOL`."""
+    difference's interval inside ±:data:`DIST_TOL`.
+
+    Parameters
+    ----------
+    m : dict
+        One receiver's measures of a comparison (:func:`summarize`): ``toa_ks_p``,
+        ``aod_ks_p`` (NaN p-values are ignored), ``within5_diff_lo``, ``within5_diff_hi``.
+
+    Returns
+    -------
+    bool
+        Whether the two paths' error distributions count as the same.
+    """
     ks = [p for p in (m["toa_ks_p"], m["aod_ks_p"]) if np.isfinite(p)]
     return all(p >= KS_ALPHA for p in ks) and m["within5_diff_lo"] >= -DIST_TOL and m["within5_diff_hi"] <= DIST_TOL
 
@@ -173,7 +275,22 @@ def bounded(m: dict, noise: dict, stochastic: bool) -> bool:
     every decision's changed share is at most :data:`GOAL_CHANGE_FRAC` — or, for a decision
     that a redraw of the noise alone changes more often than that (``noise``, the same
     receiver's ``noise`` comparison: the decision is not reproducible under the model's own
-    randomness), when the error distributions agree."""
+    randomness), when the error distributions agree.
+
+    Parameters
+    ----------
+    m : dict
+        One receiver's measures of the comparison (:func:`summarize`).
+    noise : dict
+        The same receiver's measures of the ``noise`` comparison (used only when deterministic).
+    stochastic : bool
+        Whether the comparison is stochastic (:attr:`railradio.nr.fidelity.Comparison.stochastic`).
+
+    Returns
+    -------
+    bool
+        Whether the shortcut is bounded.
+    """
     if stochastic:
         return distributions_agree(m)
     for k in DECISIONS:

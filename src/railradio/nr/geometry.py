@@ -51,17 +51,52 @@ class Trajectory:
 
     @property
     def duration_s(self) -> float:
+        """Total duration of the phases.
+
+        Returns
+        -------
+        float
+            Sum of the phase durations [s].
+        """
         return float(sum(d for d, _ in self.phases))
 
     @property
     def n_epochs(self) -> int:
+        """Number of measurement epochs: floor(duration / dt).
+
+        Returns
+        -------
+        int
+            Epochs at 0, dt, ..., (n_epochs - 1)·dt.
+        """
         return int(math.floor(self.duration_s / self.dt_s + 1e-9))
 
     def times_s(self) -> NDArray[np.float64]:
+        """Epoch times from the start.
+
+        Returns
+        -------
+        numpy.ndarray
+            k·dt_s for k = 0 .. n_epochs - 1 [s]: [n_epochs].
+        """
         return np.arange(self.n_epochs) * self.dt_s
 
     def state(self, t_s: NDArray[np.float64]) -> tuple[NDArray, NDArray, NDArray]:
-        """Exact position [m], speed [m/s] and acceleration [m/s²] at times ``t_s``."""
+        """Exact position [m], speed [m/s] and acceleration [m/s²] at times ``t_s``.
+
+        Times after the last phase continue its acceleration; times before 0 give x0_m and
+        zero speed and acceleration.
+
+        Parameters
+        ----------
+        t_s : numpy.ndarray
+            Times from the start [s], any shape.
+
+        Returns
+        -------
+        tuple of numpy.ndarray
+            (x [m], v [m/s], a [m/s²]), each the shape of ``t_s``.
+        """
         t = np.asarray(t_s, dtype=float)
         x = np.full_like(t, self.x0_m)
         v = np.zeros_like(t)
@@ -107,43 +142,135 @@ class Deployment:
 
     @property
     def n_rrh(self) -> int:
+        """Number of RRHs: those at 0, spacing, 2·spacing, ... ≤ track length.
+
+        Returns
+        -------
+        int
+            floor(track_length_m / spacing_m) + 1.
+        """
         return int(math.floor(self.track_length_m / self.spacing_m + 1e-9)) + 1
 
     @property
     def x_m(self) -> NDArray[np.float64]:
-        """RRH positions along the track [m]."""
+        """RRH positions along the track [m].
+
+        Returns
+        -------
+        numpy.ndarray
+            k·spacing_m [m]: [n_rrh].
+        """
         return np.arange(self.n_rrh) * self.spacing_m
 
     def n_id(self) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
         """(N_ID1, N_ID2) per RRH: N_ID2 = k mod 3 (adjacent RRHs always differ),
-        N_ID1 = (k div 3) mod 336, so PCI = k: unique up to 1008 RRHs [seed rules]."""
+        N_ID1 = (k div 3) mod 336, so PCI = k: unique up to 1008 RRHs [seed rules].
+
+        Returns
+        -------
+        tuple of numpy.ndarray of int64
+            (N_ID1, N_ID2), each [n_rrh].
+        """
         k = np.arange(self.n_rrh)
         return (k // 3) % (N_ID1_MAX + 1), k % 3
 
     def pci(self) -> NDArray[np.int64]:
+        """Physical cell ID 3 N_ID1 + N_ID2 of every RRH (see :meth:`n_id`).
+
+        Returns
+        -------
+        numpy.ndarray of int64
+            PCI per RRH: [n_rrh].
+        """
         n1, n2 = self.n_id()
         return pci(n1, n2)
 
     def distance_3d_m(self, x_m: NDArray, rrh: NDArray) -> NDArray[np.float64]:
-        """3-D distance [m] between a train at (x, 0, h_UT) and RRH ``rrh`` at (x_k, offset, h_BS)."""
+        """3-D distance [m] between a train at (x, 0, h_UT) and RRH ``rrh`` at (x_k, offset, h_BS).
+
+        Parameters
+        ----------
+        x_m : float or numpy.ndarray
+            Train antenna positions along the track [m]; broadcast against ``rrh``.
+        rrh : int or numpy.ndarray of int
+            RRH indices k (into the RRH positions ``self.x_m``).
+
+        Returns
+        -------
+        numpy.ndarray
+            3-D distances [m], the broadcast shape of ``x_m`` and ``rrh``.
+        """
         dx = np.asarray(x_m) - self.x_m[np.asarray(rrh)]
         return np.sqrt(dx**2 + self.offset_m**2 + (self.h_bs_m - self.h_ut_m) ** 2)
 
     def distance_2d_m(self, x_m: NDArray, rrh: NDArray) -> NDArray[np.float64]:
+        """Horizontal (2-D) distance [m] between a train at (x, 0) and RRH ``rrh`` at (x_k, offset).
+
+        Parameters
+        ----------
+        x_m : float or numpy.ndarray
+            Train antenna positions along the track [m]; broadcast against ``rrh``.
+        rrh : int or numpy.ndarray of int
+            RRH indices k (into the RRH positions ``self.x_m``).
+
+        Returns
+        -------
+        numpy.ndarray
+            2-D distances [m], the broadcast shape of ``x_m`` and ``rrh``.
+        """
         dx = np.asarray(x_m) - self.x_m[np.asarray(rrh)]
         return np.hypot(dx, self.offset_m)
 
     def aod_rad(self, x_m: NDArray, rrh: NDArray) -> NDArray[np.float64]:
-        """Azimuth of departure at the RRH toward the train, atan2(0 - y_k, x - x_k) ∈ (-π, 0)."""
+        """Azimuth of departure at the RRH toward the train, atan2(0 - y_k, x - x_k) ∈ (-π, 0).
+
+        Parameters
+        ----------
+        x_m : float or numpy.ndarray
+            Train antenna positions along the track [m]; broadcast against ``rrh``.
+        rrh : int or numpy.ndarray of int
+            RRH indices k (into the RRH positions ``self.x_m``).
+
+        Returns
+        -------
+        numpy.ndarray
+            AOD from the +x axis [rad], the broadcast shape of ``x_m`` and ``rrh``.
+        """
         dx = np.asarray(x_m) - self.x_m[np.asarray(rrh)]
         return np.arctan2(-self.offset_m * np.ones_like(dx), dx)
 
     def aoa_rad(self, x_m: NDArray, rrh: NDArray) -> NDArray[np.float64]:
-        """Azimuth of arrival at the train from the RRH, atan2(y_k, x_k - x) ∈ (0, π)."""
+        """Azimuth of arrival at the train from the RRH, atan2(y_k, x_k - x) ∈ (0, π).
+
+        Parameters
+        ----------
+        x_m : float or numpy.ndarray
+            Train antenna positions along the track [m]; broadcast against ``rrh``.
+        rrh : int or numpy.ndarray of int
+            RRH indices k (into the RRH positions ``self.x_m``).
+
+        Returns
+        -------
+        numpy.ndarray
+            AOA from the +x axis [rad], the broadcast shape of ``x_m`` and ``rrh``.
+        """
         dx = self.x_m[np.asarray(rrh)] - np.asarray(x_m)
         return np.arctan2(self.offset_m * np.ones_like(dx), dx)
 
     def nearest(self, x_m: float, n: int) -> NDArray[np.int64]:
-        """Indices of the ``n`` RRHs nearest to track position ``x_m`` (nearest first)."""
+        """Indices of the ``n`` RRHs nearest to track position ``x_m`` (nearest first).
+
+        Parameters
+        ----------
+        x_m : float
+            Position along the track [m].
+        n : int
+            Number of RRHs.
+
+        Returns
+        -------
+        numpy.ndarray of int64
+            RRH indices by along-track distance (ties: lower index first): [min(n, n_rrh)].
+        """
         order = np.argsort(np.abs(self.x_m - x_m), kind="stable")
         return order[:n]

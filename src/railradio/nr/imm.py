@@ -40,7 +40,26 @@ from railradio.nr.tracking import Reacquire, Select, TrackerConfig, run_ekf, tra
 def markov_matrix(sojourn_s, dt_s: float) -> NDArray[np.float64]:
     """Mode transition matrix Π[i, j] = P(mode j at k+1 | mode i at k) from the mean
     sojourn times ``sojourn_s`` [s] of the modes: p_ii = 1 − dt/τ_i (BLK §11.6.3), the
-    remainder split equally among the other modes. One mode: [[1]]."""
+    remainder split equally among the other modes. One mode: [[1]].
+
+    Parameters
+    ----------
+    sojourn_s : float or sequence of float
+        Mean sojourn time τ_j of each of the m modes [s], [m].
+    dt_s : float
+        Epoch interval [s]; > 0.
+
+    Returns
+    -------
+    numpy.ndarray
+        [m, m] row-stochastic transition matrix Π [1].
+
+    Raises
+    ------
+    ValueError
+        When ``dt_s`` is not > 0, ``sojourn_s`` is empty or not 1-D, or (with more than one mode)
+        a sojourn time is shorter than ``dt_s``.
+    """
     tau = np.atleast_1d(np.asarray(sojourn_s, dtype=float))
     if not dt_s > 0:
         raise ValueError(f"dt_s must be > 0 [s], got {dt_s!r}")
@@ -58,7 +77,19 @@ def markov_matrix(sojourn_s, dt_s: float) -> NDArray[np.float64]:
 
 
 def stationary(pi: NDArray) -> NDArray[np.float64]:
-    """Stationary distribution μ = μ Π of a Markov matrix (the initial mode probabilities)."""
+    """Stationary distribution μ = μ Π of a Markov matrix (the initial mode probabilities).
+
+    Parameters
+    ----------
+    pi : numpy.ndarray
+        [m, m] Markov transition matrix Π [1] (:func:`markov_matrix`).
+
+    Returns
+    -------
+    numpy.ndarray
+        [m] mode probabilities μ [1], summing to 1 (the left eigenvector of Π whose
+        eigenvalue is nearest 1).
+    """
     w, v = np.linalg.eig(np.asarray(pi, float).T)
     mu = np.real(v[:, np.argmin(np.abs(w - 1.0))])
     return mu / mu.sum()
@@ -66,7 +97,25 @@ def stationary(pi: NDArray) -> NDArray[np.float64]:
 
 def q_for_jump(delta_a_m_s2: float, dt_s: float) -> float:
     """White-jerk intensity [m² s⁻⁵] whose acceleration change over one interval,
-    √(q·T), equals the jump Δa [m/s²] (BLK §6.2.3): q = Δa²/T."""
+    √(q·T), equals the jump Δa [m/s²] (BLK §6.2.3): q = Δa²/T.
+
+    Parameters
+    ----------
+    delta_a_m_s2 : float
+        Acceleration jump Δa [m/s²]; > 0.
+    dt_s : float
+        Epoch interval T [s]; > 0.
+
+    Returns
+    -------
+    float
+        White-jerk intensity q [m² s⁻⁵].
+
+    Raises
+    ------
+    ValueError
+        When ``delta_a_m_s2`` or ``dt_s`` is not > 0.
+    """
     if not delta_a_m_s2 > 0:
         raise ValueError(f"delta_a_m_s2 must be > 0 [m/s²], got {delta_a_m_s2!r}")
     if not dt_s > 0:
@@ -78,7 +127,23 @@ def q_for_jump(delta_a_m_s2: float, dt_s: float) -> float:
 class ImmConfig:
     """Model set of the IMM: white-jerk intensities ``q`` [m² s⁻⁵] and mean sojourn times
     ``sojourn_s`` [s], one per model (the first is the quiet model); ``mu0``: initial mode
-    probabilities (None: the stationary distribution of the Markov chain)."""
+    probabilities (None: the stationary distribution of the Markov chain).
+
+    Attributes
+    ----------
+    q : tuple of float
+        White-jerk intensity of each model [m² s⁻⁵], [m]; > 0.
+    sojourn_s : tuple of float
+        Mean sojourn time of each mode [s], [m]; > 0.
+    mu0 : tuple of float or None
+        Initial mode probabilities [1], [m], summing to 1; None: stationary.
+
+    Raises
+    ------
+    ValueError
+        When ``q`` is empty or not > 0, ``sojourn_s`` has not one positive entry per model, or
+        ``mu0`` is not m probabilities summing to 1.
+    """
 
     q: tuple[float, ...]
     sojourn_s: tuple[float, ...]
@@ -99,10 +164,28 @@ class ImmConfig:
 
     @property
     def n_models(self) -> int:
+        """Number of models m."""
         return len(np.atleast_1d(self.q))
 
     def initial(self, dt_s: float) -> tuple[NDArray, NDArray]:
-        """(Π, μ0) for interval ``dt_s``."""
+        """(Π, μ0) for interval ``dt_s``.
+
+        Parameters
+        ----------
+        dt_s : float
+            Epoch interval [s]; > 0.
+
+        Returns
+        -------
+        tuple of numpy.ndarray
+            ``(pi, mu0)``: Markov matrix Π [m, m] (:func:`markov_matrix`) and initial mode
+            probabilities [m] (``mu0``, or :func:`stationary` of Π) [1].
+
+        Raises
+        ------
+        ValueError
+            From :func:`markov_matrix` (``dt_s`` not > 0 or a sojourn time shorter than it).
+        """
         pi = markov_matrix(self.sojourn_s, dt_s)
         mu0 = stationary(pi) if self.mu0 is None else np.asarray(self.mu0, float)
         return pi, mu0
@@ -146,6 +229,40 @@ def run_imm(
 
     Returns ``state`` [n, 6] and ``cov`` [n, 6, 6] (combined posterior), ``mu`` [n, m] (mode
     probabilities), ``n_used`` [n] (RRHs used after gating), ``reacquired`` [n].
+
+    Parameters
+    ----------
+    select : Select
+        ``select(n, x_pred) -> (rrh_xy [m_n, 2] [m], aod [m_n] [rad], toa [m_n] [s])``, the
+        measurements of epoch n chosen from the mode-weighted predicted state [6].
+    dt_s : float
+        Epoch interval [s].
+    dh_m : float
+        Height difference between the RRHs and the train antenna [m].
+    cfg : TrackerConfig
+        Variant, measurement noise W and gate (its ``q`` is not used).
+    imm : ImmConfig
+        The model set.
+    s0, p0 : numpy.ndarray
+        Initial state [6] (x, y [m], v_x, v_y [m/s], a_x, a_y [m/s²]) and covariance [6, 6]
+        (SI units squared), common to every model.
+    n_epochs : int
+        Epochs to run; >= 0.
+    reacquire : Reacquire or None
+        ``reacquire(n) -> (position [2] [m], covariance [2, 2] [m²]) | None``; None: never.
+    reacquire_after : int
+        Consecutive epochs with all measurements rejected before ``reacquire`` is called; >= 1.
+
+    Returns
+    -------
+    dict of str to numpy.ndarray
+        ``state`` [n, 6], ``cov`` [n, 6, 6] (units as ``s0``, ``p0``), ``mu`` [n, m] [1],
+        ``n_used`` [n] (int), ``reacquired`` [n] (bool).
+
+    Raises
+    ------
+    ValueError
+        When ``n_epochs`` < 0 or ``reacquire_after`` < 1, or from :meth:`ImmConfig.initial`.
     """
     if n_epochs < 0:
         raise ValueError(f"n_epochs must be >= 0, got {n_epochs!r}")
@@ -290,6 +407,41 @@ def track_filters(
     re-acquisition rules. Returns ``{"ekf": ..., "imm": ...}``, each with ``state`` [n, 6],
     ``cov`` [n, 6, 6] (NaN before the first measured epoch ``k0``), ``reacquired`` [n]
     and, for the IMM, ``mu`` [n, models]; plus ``k0``.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        One receiver's estimates (:func:`railradio.nr.simulate.simulate_epochs` selected at one
+        ``receiver``): ``rrh``, ``aod_hat`` [rad], ``toa_hat`` [s] and the ``strength`` variable, dims
+        (``epoch``, ``cand``); ``train_panel_x`` [m] for the panels' lever arm.
+    rrh_x : numpy.ndarray
+        [n_rrh] along-track positions of the RRHs, increasing [m].
+    rrh_y : float
+        Lateral offset of the RRHs from the track [m].
+    dh_m : float
+        Height difference between the RRHs and the train antenna [m].
+    dt_s : float
+        Epoch interval [s].
+    cfg : TrackerConfig
+        The EKF's settings (and the IMM's W, variant and gate).
+    imm : ImmConfig or None
+        The IMM's model set; None: EKF only.
+    strength : str
+        Variable ranking the candidates: ``"peak"``, ``"ss_rsrp"`` or ``"best_score"``.
+    n_use : int
+        Measured RRHs used per epoch.
+
+    Returns
+    -------
+    dict
+        ``"ekf"`` (and ``"imm"``): dicts of ``state`` [n, 6] (x, y [m], v [m/s], a [m/s²]),
+        ``cov`` [n, 6, 6], ``reacquired`` [n] (bool) and ``mu`` [n, models] [1] (IMM);
+        ``"k0"``: int.
+
+    Raises
+    ------
+    ValueError
+        From :meth:`ImmConfig.initial` (``dt_s`` not > 0 or a sojourn time shorter than it).
     """
     setup = track_setup(ds, rrh_x, rrh_y, dh_m, cfg, strength, n_use)
     k0, n, s0, p0 = setup.k0, setup.n_epochs, setup.s0, setup.p0
@@ -313,7 +465,24 @@ def track_filters(
 
 
 def position_nees(state: NDArray, cov: NDArray, x_true: NDArray, y_true: NDArray | float = 0.0) -> NDArray:
-    """2-D position NEES eᵀ P_xy⁻¹ e per epoch (χ²₂ with mean 2 for a consistent filter)."""
+    """2-D position NEES eᵀ P_xy⁻¹ e per epoch (χ²₂ with mean 2 for a consistent filter).
+
+    Parameters
+    ----------
+    state : numpy.ndarray
+        [n, 6] states (x, y [m] first).
+    cov : numpy.ndarray
+        [n, 6, 6] their covariances (position block [m²]).
+    x_true : numpy.ndarray
+        [n] true along-track positions [m].
+    y_true : numpy.ndarray or float
+        True lateral positions [m], [n] or scalar (0: on the track).
+
+    Returns
+    -------
+    numpy.ndarray
+        [n] position NEES [1]; NaN where the error or the position covariance is not finite.
+    """
     e = np.stack([state[:, 0] - x_true, state[:, 1] - y_true], axis=1)
     pxy = cov[:, :2, :2]
     good = np.all(np.isfinite(e), axis=1) & np.all(np.isfinite(pxy), axis=(1, 2))

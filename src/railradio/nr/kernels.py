@@ -20,6 +20,22 @@ def sos_taps(amp_l: np.ndarray, f_lm_hz: np.ndarray, phi_lm: np.ndarray, t_s: np
     Phasor recursion over increasing times in complex128 (the rotation recomputed when the
     time step changes by more than 1 ps), re-anchored exactly every 32 steps; equals
     ``amp_l[None, :] * railradio.nr.channel.sos_eval(...)`` sums to ~1e-13.
+
+    Parameters
+    ----------
+    amp_l : numpy.ndarray
+        Per-tap amplitude √(P_l / M) [√linear]: [L].
+    f_lm_hz : numpy.ndarray
+        Sinusoid frequencies f_D cos α_lm [Hz]: [L, M].
+    phi_lm : numpy.ndarray
+        Sinusoid phases [rad]: [L, M].
+    t_s : numpy.ndarray
+        Evaluation times [s], increasing: [S].
+
+    Returns
+    -------
+    numpy.ndarray of complex128
+        Tap gains a_l(t_s) [√linear]: [S, L].
     """
     n_t = t_s.size
     n_l, n_m = f_lm_hz.shape
@@ -74,6 +90,35 @@ def fill_grid(
     unless ``has_h`` (flat channel); ``long_of[s] < 0`` means no long-CP ramp for that row.
     NumPy form, with the dense mask M and values V (M[s] = ov_mask[ov_row[s]], V alike):
     ``grid = pool[pool_idx]; grid[M] = V[M]; x = grid * h * ramp * g[:, None]; x[long] *= long_ramp``.
+
+    Parameters
+    ----------
+    x : numpy.ndarray of complex64
+        Output, overwritten: the symbols' received spectra [S, n] (reduced-FFT bin order).
+    pool : numpy.ndarray of complex64
+        Data pool over the synthesized band [P, n], unit EPRE.
+    pool_idx : numpy.ndarray of int64
+        Pool row of each symbol: [S].
+    ov_row : numpy.ndarray of int64
+        Overlay row of each symbol, -1 for none: [S].
+    ov_full : numpy.ndarray of bool
+        Whether an overlay row covers every bin: [O].
+    ov_mask : numpy.ndarray of bool
+        Bins an overlay row writes: [O, n].
+    ov_val : numpy.ndarray of complex64
+        The overlay's values (PSS, SSS, zeros, PBCH): [O, n].
+    h : numpy.ndarray of complex64
+        Channel response per symbol and bin [S, n] (read only when ``has_h``).
+    has_h : bool
+        Apply ``h``.
+    ramp : numpy.ndarray of complex64
+        The link's delay and CP phase ramp per bin: [n].
+    g_row : numpy.ndarray of float32
+        Amplitude per symbol (× n for the unnormalized IFFT) [√W]: [S].
+    long_of : numpy.ndarray of int64
+        Row of ``long_ramp`` for each symbol, -1 for none: [S].
+    long_ramp : numpy.ndarray of complex64
+        Extra phase ramps of the long-CP symbols: [n_long, n].
     """
     n_s, n = x.shape
     f = np.empty(n, dtype=np.complex64)
@@ -121,6 +166,27 @@ def place(
     read cyclically from y[i] (0..n-1, then the cyclic extension 0..cps[i]-1: the CP is
     folded into the subcarrier phase ramp); samples past the end of z are dropped. The
     phasor is exact at each symbol start times a per-sample factor within the symbol.
+
+    Parameters
+    ----------
+    z : numpy.ndarray of complex64
+        The burst [T], added to in place.
+    y : numpy.ndarray of complex64
+        IFFT output of every symbol: [S, n].
+    starts : numpy.ndarray of int64
+        Symbol starts relative to n_c, increasing [samples]: [S].
+    cps : numpy.ndarray of int64
+        CP lengths [samples]: [S].
+    n_c : int
+        Sample of z where the first symbol starts (the link's integer delay) [samples].
+    w_rad_s : float
+        LOS Doppler angular frequency w = 2π f [rad/s].
+    t_first_s : float
+        Receive time of sample n_c [s].
+    phase0_rad : float
+        LOS phase φ0 [rad].
+    dt_s : float
+        Sample period [s].
     """
     n_s, n = y.shape
     total = z.size
@@ -145,7 +211,20 @@ def place(
 @njit(cache=True, nogil=True)
 def magnitude_stats(c: np.ndarray, k: int) -> tuple:
     """|c[..., :k]| and its per-row mean, standard deviation (ddof 0), max and argmax, in
-    one pass over rows of c [R, N] (complex64): (r [R, k] float32, mu, sigma, eta, k_max)."""
+    one pass over rows of c [R, N] (complex64): (r [R, k] float32, mu, sigma, eta, k_max).
+
+    Parameters
+    ----------
+    c : numpy.ndarray of complex64
+        Correlation rows [R, N] (lags along the last axis).
+    k : int
+        Number of leading lags used; k <= N.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        r [R, k] float32; mu, sigma, eta [R] float64 (units of |c|); k_max [R] int64 (lag index).
+    """
     n_r = c.shape[0]
     r = np.empty((n_r, k), dtype=np.float32)
     mu = np.empty(n_r)
@@ -193,7 +272,19 @@ def local_mean_argmax(r: np.ndarray, window: int, guard: int) -> tuple:
     ``window`` lags on each side beyond ``guard``, fewer at the ends, as the CA-CFAR detector of
     :class:`railradio.nr.correlator.Correlator` defines it) and the lag maximizing r/floor.
 
-    Returns (k_best [R] int64, eta = r at k_best [R], floor at k_best [R]).
+    Parameters
+    ----------
+    r : numpy.ndarray
+        Correlation magnitudes [R, K] (float32 from the correlator).
+    window : int
+        Averaging lags on each side [lags].
+    guard : int
+        Guard lags on each side of the tested lag [lags].
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        (k_best [R] int64, eta = r at k_best [R], floor at k_best [R]); eta, floor float64 in units of r.
     """
     n_r, k = r.shape
     c = np.empty(k + 1)
@@ -234,7 +325,24 @@ def local_mean_argmax(r: np.ndarray, window: int, guard: int) -> tuple:
 def shifted_parts(p: np.ndarray, k0: np.ndarray, roots: np.ndarray, rows: np.ndarray) -> np.ndarray:
     """q_i[f] = p[rows[i], f] · e^{j2π f k0[i]/N} split into parts, [2R, N] float32: rows
     0 … R-1 the real parts, R … 2R-1 the imaginary parts. ``roots[q] = e^{j2π q/N}``; the
-    index advances by k0 mod N per bin (no modulo per bin)."""
+    index advances by k0 mod N per bin (no modulo per bin).
+
+    Parameters
+    ----------
+    p : numpy.ndarray of complex64
+        Cross-spectra [M, N].
+    k0 : numpy.ndarray of int64
+        Lag of each row [samples at the correlation rate]: [R].
+    roots : numpy.ndarray of complex64
+        e^{j2π q/N} for q = 0 .. N - 1: [N].
+    rows : numpy.ndarray of int64
+        Rows of ``p`` to use: [R].
+
+    Returns
+    -------
+    numpy.ndarray of float32
+        Real parts (rows 0 .. R-1) over imaginary parts: [2R, N].
+    """
     n = p.shape[1]
     n_r = rows.shape[0]
     out = np.empty((2 * n_r, n), dtype=np.float32)
@@ -263,6 +371,24 @@ def at_offsets(p: np.ndarray, k0: np.ndarray, roots: np.ndarray, cs_t: np.ndarra
     offset are one float32 matrix product [2R, N] × [N, 2H] (BLAS sgemm: its summation
     order is fixed by the kernel, which the jobs pin, ``railradio.workflow.JOB_ENV``, so
     the result does not depend on the CPU). Relative error ~1e-5. Returns [R, 2H - 1].
+
+    Parameters
+    ----------
+    p : numpy.ndarray of complex64
+        Cross-spectra [M, N].
+    k0 : numpy.ndarray of int64
+        Centre lag of each row [samples at the correlation rate]: [R].
+    roots : numpy.ndarray of complex64
+        e^{j2π q/N} for q = 0 .. N - 1: [N].
+    cs_t : numpy.ndarray of float32
+        cos | sin of 2π f δ_h/N for the H offsets δ_h >= 0: [N, 2H].
+    rows : numpy.ndarray of int64
+        Rows of ``p`` to use: [R].
+
+    Returns
+    -------
+    numpy.ndarray of float64
+        |c(k0 + δ)| (units of |c|), offsets ascending: [R, 2H - 1].
     """
     n = p.shape[1]
     n_h = cs_t.shape[1] // 2
@@ -279,7 +405,17 @@ def at_offsets(p: np.ndarray, k0: np.ndarray, roots: np.ndarray, cs_t: np.ndarra
 @njit(cache=True, nogil=True)
 def cross_spectra(zf: np.ndarray, bspec: np.ndarray, out: np.ndarray) -> None:
     """out[c, b, :] = zf[b, :] · bspec[c, :]: the per-candidate, per-block cross-spectra
-    (complex64, written into a reused buffer)."""
+    (complex64, written into a reused buffer).
+
+    Parameters
+    ----------
+    zf : numpy.ndarray of complex64
+        Window spectra of the received burst: [B, N].
+    bspec : numpy.ndarray of complex64
+        Conjugate reference spectra of the candidates: [C, N].
+    out : numpy.ndarray of complex64
+        Output, overwritten: [C, B, N].
+    """
     n_c, n = bspec.shape
     n_b = zf.shape[0]
     for c in range(n_c):
@@ -306,7 +442,29 @@ def mix_taps(
     g_l(m) is ``coarse[sym_of[m], l]`` when ``per_symbol`` (gains held per symbol), else the
     linear interpolation of ``coarse`` [C, L], given at samples 0, step, 2·step, …. NumPy
     form (per sample): ``g = interp(m, step·arange(C), coarse)``;
-    ``z += los_amp·los·delayed[0] + mult·(g·delayed[1:].T).sum(1)``. ``delayed`` [1 + L, T]."""
+    ``z += los_amp·los·delayed[0] + mult·(g·delayed[1:].T).sum(1)``. ``delayed`` [1 + L, T].
+
+    Parameters
+    ----------
+    z : numpy.ndarray of complex
+        Received samples [T], added to in place.
+    delayed : numpy.ndarray of complex64
+        The burst delayed by the LOS tap (row 0) and by each Rayleigh tap: [1 + L, T].
+    coarse : numpy.ndarray of complex
+        Tap gains [√linear]: [S, L] per symbol, or [C, L] at samples 0, step, 2·step, ….
+    step : int
+        Samples between rows of ``coarse`` (interpolated case) [samples].
+    sym_of : numpy.ndarray of int64
+        Symbol of each sample (read only when ``per_symbol``): [T].
+    per_symbol : bool
+        Hold the gains per symbol instead of interpolating.
+    mult : numpy.ndarray of complex
+        Phasor multiplying the Rayleigh taps' sum: [T].
+    los : numpy.ndarray of complex
+        LOS phasor: [T].
+    los_amp : float
+        LOS tap amplitude √P_LOS [√linear].
+    """
     n_t = z.size
     n_l = coarse.shape[1]
     for m in range(n_t):
@@ -344,7 +502,33 @@ def add_spill(
     sample positions, and the receive symbol's held tap gains; LOS(m) is :func:`place`'s
     phasor (exact at each symbol start times a per-sample factor). Samples past the end of z
     are dropped. NumPy form: ``for s, l, j: z[n_c + starts[s] + j] += los[m] * gains[s, l] *
-    at[s, col_of[l, j]]`` over j < b[l]."""
+    at[s, col_of[l, j]]`` over j < b[l].
+
+    Parameters
+    ----------
+    z : numpy.ndarray of complex64
+        The burst [T], added to in place.
+    at : numpy.ndarray of complex64
+        Boundary differences' waveform at the taps' delayed sample positions: [S, Q].
+    col_of : numpy.ndarray of int64
+        Column of ``at`` for tap l and sample j: [L, max(b)] or wider.
+    b : numpy.ndarray of int64
+        Spill length of each tap [samples]: [L].
+    gains : numpy.ndarray of complex64
+        Held tap gains per receive symbol [√linear]: [S, L].
+    starts : numpy.ndarray of int64
+        Symbol starts relative to n_c [samples]: [S].
+    n_c : int
+        Sample of z where the first symbol starts [samples].
+    w_rad_s : float
+        LOS Doppler angular frequency [rad/s].
+    t_first_s : float
+        Receive time of sample n_c [s].
+    phase0_rad : float
+        LOS phase φ0 [rad].
+    dt_s : float
+        Sample period [s].
+    """
     n_s = at.shape[0]
     n_l = b.size
     total = z.size
@@ -375,7 +559,17 @@ def place_symbols(z: np.ndarray, y: np.ndarray, first: np.ndarray) -> None:
     """z[first[s] + j] = y[s, j mod n] for first[s] <= first[s] + j < first[s + 1] (the last
     symbol: n + its CP, given as ``first[S]``), samples outside z dropped: rectangular symbol
     extents read cyclically from each symbol's IFFT output (the exact reference's placement,
-    :mod:`railradio.nr.reference`). NumPy form: for each s, ``z[a:b] = y[s, arange(b - a) % n]``."""
+    :mod:`railradio.nr.reference`). NumPy form: for each s, ``z[a:b] = y[s, arange(b - a) % n]``.
+
+    Parameters
+    ----------
+    z : numpy.ndarray of complex64
+        Output samples [T], written in place (samples outside every extent untouched).
+    y : numpy.ndarray of complex64
+        IFFT output of every symbol: [S, n].
+    first : numpy.ndarray of int64
+        First sample of each symbol's extent, then the end of the last [samples]: [S + 1].
+    """
     n_s, n = y.shape
     total = z.size
     for s in range(n_s):

@@ -41,14 +41,35 @@ class RadioParams:
 
     @property
     def wavelength_m(self) -> float:
+        """Carrier wavelength λ = c / f_c.
+
+        Returns
+        -------
+        float
+            Wavelength [m].
+        """
         return SPEED_OF_LIGHT_M_S / self.carrier_hz
 
     @property
     def noise_psd_w_hz(self) -> float:
+        """Noise power spectral density N0 of one receive chain: -174 dBm/Hz + noise figure.
+
+        Returns
+        -------
+        float
+            N0 [W/Hz].
+        """
         return 10 ** ((BOLTZMANN_DBM_HZ + self.noise_figure_db - 30) / 10)
 
     @property
     def epre_w(self) -> float:
+        """Energy per resource element: the transmit power spread evenly over the N_ACTIVE subcarriers.
+
+        Returns
+        -------
+        float
+            Power per subcarrier [W].
+        """
         return 10 ** ((self.tx_power_dbm - 30) / 10) / N_ACTIVE
 
 
@@ -75,6 +96,19 @@ class ShadowingMap:
         self._fields: dict[int, NDArray[np.float64]] = {}
 
     def field(self, rrh: int) -> NDArray[np.float64]:
+        """The shadowing field of one RRH (drawn on first use, then cached).
+
+        Parameters
+        ----------
+        rrh : int
+            RRH index k.
+
+        Returns
+        -------
+        numpy.ndarray
+            Shadowing [dB] on a 1 m grid, point i at x_k - range_m + i [m]:
+            [int(2·range_m) + 2].
+        """
         if rrh not in self._fields:
             n = int(2 * self.radio.range_m) + 2
             rng = make_rng(self.seed, self.key + (int(rrh),))
@@ -82,6 +116,21 @@ class ShadowingMap:
         return self._fields[rrh]
 
     def at(self, x_m: float, rrh: NDArray[np.int64]) -> NDArray[np.float64]:
+        """Shadowing of the RRHs ``rrh`` toward a receiver at ``x_m`` (nearest grid point).
+
+        Parameters
+        ----------
+        x_m : float
+            Receiver position along the track [m]; positions beyond a field's ends take
+            its end values.
+        rrh : numpy.ndarray of int64
+            RRH indices: [R].
+
+        Returns
+        -------
+        numpy.ndarray
+            Shadowing [dB]: [R].
+        """
         out = np.empty(len(rrh))
         for i, k in enumerate(rrh):
             pos = int(round(x_m - self.dep.x_m[k] + self.radio.range_m))
@@ -115,7 +164,13 @@ class LinkBudget:
 
     @cached_property
     def rx_power_dbm(self) -> NDArray[np.float64]:
-        """Received power over the carrier with the best beam [dBm]."""
+        """Received power over the carrier with the best beam [dBm].
+
+        Returns
+        -------
+        numpy.ndarray
+            P_T - PL + S + max beam gain + receive gain per RRH in range [dBm]: [R].
+        """
         return (
             self.links.extra["tx_power_dbm"]
             - self.pathloss_db
@@ -184,7 +239,22 @@ class _Paths:
 
     def path(self, xp: float, gain_db) -> dict:
         """Geometry and large-scale terms of every RRH's path to a receiver at ``xp``;
-        ``gain_db(aoa)``: its receive gain [dBi]."""
+        ``gain_db(aoa)``: its receive gain [dBi].
+
+        Parameters
+        ----------
+        xp : float
+            Receiver (panel) position along the track [m].
+        gain_db : callable
+            Maps AOA [rad], [R], to the receive gain [dBi], [R].
+
+        Returns
+        -------
+        dict
+            ``xp`` [m]; over the R RRHs ``rrh``: ``d3d``, ``d2d`` [m], ``aod``, ``aoa`` [rad],
+            ``gt`` [dBi] ([R, n_beams]), ``gr`` [dBi], ``pl`` [dB] and ``sh`` [dB] (0 without
+            shadowing), each [R] unless noted.
+        """
         dep, radio, rrh = self.dep, self.radio, self.rrh
         d3d = dep.distance_3d_m(xp, rrh)
         d2d = dep.distance_2d_m(xp, rrh)

@@ -59,7 +59,25 @@ def rrh_spacing_m(ds: xr.Dataset) -> float:
 
 
 def lost_mask(err_m: NDArray[np.float64], spacing_m: float) -> NDArray[np.bool_]:
-    """Epochs whose 2-D error exceeds half the RRH spacing, or that have no position."""
+    """Epochs whose 2-D error exceeds half the RRH spacing, or that have no position.
+
+    Parameters
+    ----------
+    err_m : numpy.ndarray
+        2-D position errors [m], any shape; NaN: no position.
+    spacing_m : float
+        RRH spacing [m]; > 0.
+
+    Returns
+    -------
+    numpy.ndarray of bool
+        True where lost (error > spacing_m / 2 or NaN), the shape of ``err_m``.
+
+    Raises
+    ------
+    ValueError
+        When ``spacing_m`` <= 0.
+    """
     if not spacing_m > 0:
         raise ValueError(f"spacing_m must be > 0, got {spacing_m!r}")
     err_m = np.asarray(err_m, dtype=float)
@@ -68,7 +86,20 @@ def lost_mask(err_m: NDArray[np.float64], spacing_m: float) -> NDArray[np.bool_]
 
 def time_to_loss_s(runs: list[tuple[NDArray, NDArray]], spacing_m: float) -> float | None:
     """Mean over the runs ``(t [s], err [m])`` that lose the track of the time of their first
-    lost epoch; None when no run loses it."""
+    lost epoch; None when no run loses it.
+
+    Parameters
+    ----------
+    runs : list of tuple of numpy.ndarray
+        Per run ``(t, err)``: epoch times [s] and 2-D position errors [m], each [T].
+    spacing_m : float
+        RRH spacing [m] (:func:`lost_mask`).
+
+    Returns
+    -------
+    float or None
+        Mean time of the first lost epoch over the runs that lose the track [s].
+    """
     firsts = []
     for t, err in runs:
         lost = lost_mask(err, spacing_m)
@@ -79,7 +110,20 @@ def time_to_loss_s(runs: list[tuple[NDArray, NDArray]], spacing_m: float) -> flo
 
 def accuracy(value: float | None, lost_frac: float) -> float | None:
     """An all-epoch accuracy as reported: None when the track is lost too often
-    (``lost_frac >= LOST_FRAC_MAX``), the value is not finite, or it exceeds the cap."""
+    (``lost_frac >= LOST_FRAC_MAX``), the value is not finite, or it exceeds the cap.
+
+    Parameters
+    ----------
+    value : float or None
+        The all-epoch accuracy statistic [m].
+    lost_frac : float
+        Share of the scored epochs lost, in [0, 1].
+
+    Returns
+    -------
+    float or None
+        ``value`` [m], or None (see above).
+    """
     if value is None or not np.isfinite(value) or lost_frac >= LOST_FRAC_MAX or value > ACCURACY_CAP_M:
         return None
     return float(value)

@@ -19,7 +19,28 @@ VARIANTS = {"aod": (True, False), "toa": (False, True), "aod_toa": (True, True)}
 
 def h_terms(dx: NDArray, dy: NDArray, dh_m: float, variant: str) -> NDArray[np.float64]:
     """h per RRH, [..., per] (AOD [rad] then TOA [s]), from the train-minus-RRH offsets
-    dx, dy [...] [m] (seed eq. 14, 3-D range with the known height difference)."""
+    dx, dy [...] [m] (seed eq. 14, 3-D range with the known height difference).
+
+    Parameters
+    ----------
+    dx, dy : numpy.ndarray
+        Train-minus-RRH offsets along and across the track [m], same shape [...].
+    dh_m : float
+        Height difference between the RRHs and the train antenna [m].
+    variant : str
+        Measurement variant: ``aod``, ``toa`` or ``aod_toa`` (:data:`VARIANTS`).
+
+    Returns
+    -------
+    numpy.ndarray
+        [..., per] (per = 1 or 2 measurements per RRH): AOD atan2(dy, dx) [rad] then TOA
+        (3-D distance over c) [s], as used by the variant.
+
+    Raises
+    ------
+    KeyError
+        When ``variant`` is not a key of :data:`VARIANTS`.
+    """
     use_aod, use_toa = VARIANTS[variant]
     out = np.empty(np.shape(dx) + (int(use_aod) + int(use_toa),))
     if use_aod:
@@ -30,7 +51,27 @@ def h_terms(dx: NDArray, dy: NDArray, dh_m: float, variant: str) -> NDArray[np.f
 
 
 def jac_terms(dx: NDArray, dy: NDArray, dh_m: float, variant: str) -> NDArray[np.float64]:
-    """∂h/∂(x, y) per RRH, [..., per, 2], from the offsets dx, dy [...] [m]."""
+    """∂h/∂(x, y) per RRH, [..., per, 2], from the offsets dx, dy [...] [m].
+
+    Parameters
+    ----------
+    dx, dy : numpy.ndarray
+        Train-minus-RRH offsets along and across the track [m], same shape [...].
+    dh_m : float
+        Height difference between the RRHs and the train antenna [m].
+    variant : str
+        Measurement variant: ``aod``, ``toa`` or ``aod_toa`` (:data:`VARIANTS`).
+
+    Returns
+    -------
+    numpy.ndarray
+        [..., per, 2] derivatives by the train's x and y: AOD row [rad/m], TOA row [s/m].
+
+    Raises
+    ------
+    KeyError
+        When ``variant`` is not a key of :data:`VARIANTS`.
+    """
     use_aod, use_toa = VARIANTS[variant]
     out = np.empty(np.shape(dx) + (int(use_aod) + int(use_toa), 2))
     if use_aod:
@@ -45,13 +86,58 @@ def jac_terms(dx: NDArray, dy: NDArray, dh_m: float, variant: str) -> NDArray[np
 
 
 def hx(s: NDArray, rrh_xy: NDArray, dh_m: float, variant: str) -> NDArray[np.float64]:
-    """Stacked measurement function (seed eq. 14) for RRHs at ``rrh_xy`` [n, 2]."""
+    """Stacked measurement function (seed eq. 14) for RRHs at ``rrh_xy`` [n, 2].
+
+    Parameters
+    ----------
+    s : numpy.ndarray
+        State [6] (x, y [m] first; the rest is not used).
+    rrh_xy : numpy.ndarray
+        [n, 2] RRH positions (x, y) [m].
+    dh_m : float
+        Height difference between the RRHs and the train antenna [m].
+    variant : str
+        Measurement variant: ``aod``, ``toa`` or ``aod_toa`` (:data:`VARIANTS`).
+
+    Returns
+    -------
+    numpy.ndarray
+        [n·per] predicted measurements [aod_0, toa_0, aod_1, ...] (AOD [rad], TOA [s]).
+
+    Raises
+    ------
+    KeyError
+        When ``variant`` is not a key of :data:`VARIANTS`.
+    """
     h = h_terms(s[0] - rrh_xy[:, 0], s[1] - rrh_xy[:, 1], dh_m, variant)
     return h.ravel()  # [aod_0, toa_0, aod_1, toa_1, ...]
 
 
 def jacobian(s: NDArray, rrh_xy: NDArray, dh_m: float, variant: str) -> NDArray[np.float64]:
-    """Analytic ∂h/∂s at s: [n·m, 6] (only x, y enter)."""
+    """Analytic ∂h/∂s at s: [n·m, 6] (only x, y enter).
+
+    Parameters
+    ----------
+    s : numpy.ndarray
+        State [6] (x, y [m] first).
+    rrh_xy : numpy.ndarray
+        [n, 2] RRH positions (x, y) [m].
+    dh_m : float
+        Height difference between the RRHs and the train antenna [m].
+    variant : str
+        Measurement variant: ``aod``, ``toa`` or ``aod_toa`` (:data:`VARIANTS`).
+
+    Returns
+    -------
+    numpy.ndarray
+        [n·per, 6] Jacobian, rows ordered as :func:`hx`: AOD rows [rad/m], TOA rows [s/m] in
+        the x, y columns, zero in the speed and acceleration columns.
+
+    Raises
+    ------
+    KeyError
+        When ``variant`` is not a key of :data:`VARIANTS`.
+    """
     jac = jac_terms(s[0] - rrh_xy[:, 0], s[1] - rrh_xy[:, 1], dh_m, variant)
     out = np.zeros(jac.shape[:2] + (6,))
     out[..., :2] = jac
@@ -59,7 +145,24 @@ def jacobian(s: NDArray, rrh_xy: NDArray, dh_m: float, variant: str) -> NDArray[
 
 
 def residual_fn(variant: str):
-    """y - h with angle components wrapped to (-π, π]."""
+    """y - h with angle components wrapped to (-π, π].
+
+    Parameters
+    ----------
+    variant : str
+        Measurement variant: ``aod``, ``toa`` or ``aod_toa`` (:data:`VARIANTS`).
+
+    Returns
+    -------
+    callable
+        ``residual(a, b) -> a - b`` for stacked measurement vectors [n·per] (as :func:`hx`),
+        with the AOD components [rad] wrapped; TOA components [s] unchanged.
+
+    Raises
+    ------
+    KeyError
+        When ``variant`` is not a key of :data:`VARIANTS`.
+    """
     use_aod, use_toa = VARIANTS[variant]
     per = int(use_aod) + int(use_toa)
 
@@ -73,5 +176,18 @@ def residual_fn(variant: str):
 
 
 def distances_m(s: NDArray, rrh_xy: NDArray) -> NDArray[np.float64]:
-    """2-D distances [m] from the position in state (or position) ``s`` to ``rrh_xy`` [n, 2]."""
+    """2-D distances [m] from the position in state (or position) ``s`` to ``rrh_xy`` [n, 2].
+
+    Parameters
+    ----------
+    s : numpy.ndarray
+        State [6] or position [2], x, y [m] first.
+    rrh_xy : numpy.ndarray
+        [n, 2] RRH positions (x, y) [m].
+
+    Returns
+    -------
+    numpy.ndarray
+        [n] horizontal distances [m].
+    """
     return np.hypot(s[0] - rrh_xy[:, 0], s[1] - rrh_xy[:, 1])

@@ -70,22 +70,66 @@ class BurstMotion:
 
     def position_m(self, t_s: NDArray) -> NDArray[np.float64]:
         """[links, T] along-track position of each link's receiving panel at times ``t_s``
-        ([T], common to every link, or [links, T]) [m]."""
+        ([T], common to every link, or [links, T]) [m].
+
+        Parameters
+        ----------
+        t_s : numpy.ndarray
+            Times [s]: [T], common to every link, or [links, T].
+
+        Returns
+        -------
+        numpy.ndarray
+            [links, T] along-track positions of the panels [m].
+        """
         dt = self._times(t_s) - self.t0_s
         x = self.x0_m + self.v_m_s * dt + 0.5 * self.a_m_s2 * dt**2
         return np.asarray(self.panel_x_m, float)[:, None] + x
 
     def distance_m(self, t_s: NDArray) -> NDArray[np.float64]:
-        """[links, T] 3-D link distance [m]."""
+        """[links, T] 3-D link distance [m].
+
+        Parameters
+        ----------
+        t_s : numpy.ndarray
+            Times [s]: [T], common to every link, or [links, T].
+
+        Returns
+        -------
+        numpy.ndarray
+            [links, T] 3-D distance from each link's RRH to its panel [m].
+        """
         return self.deployment.distance_3d_m(self.position_m(t_s), np.asarray(self.link_rrh)[:, None])
 
     def delay_s(self, t_s: NDArray) -> NDArray[np.float64]:
-        """[links, T] bulk delay τ(t) = d(t)/c [s]."""
+        """[links, T] bulk delay τ(t) = d(t)/c [s].
+
+        Parameters
+        ----------
+        t_s : numpy.ndarray
+            Times [s]: [T], common to every link, or [links, T].
+
+        Returns
+        -------
+        numpy.ndarray
+            [links, T] bulk delays [s].
+        """
         return self.distance_m(t_s) / SPEED_OF_LIGHT_M_S
 
     def phase_excess_rad(self, t_s: NDArray) -> NDArray[np.float64]:
         """[links, T] the exact LOS carrier phase minus the production's linear one,
-        -2π [d(t) - d0 - ḋ0 (t - t0)]/λ [rad] (0 at t0 and of second order in t - t0)."""
+        -2π [d(t) - d0 - ḋ0 (t - t0)]/λ [rad] (0 at t0 and of second order in t - t0).
+
+        Parameters
+        ----------
+        t_s : numpy.ndarray
+            Times [s]: [T], common to every link, or [links, T].
+
+        Returns
+        -------
+        numpy.ndarray
+            [links, T] phase excess [rad].
+        """
         t = self._times(t_s)
         d = self.distance_m(t)
         d0 = self.distance_m(np.array([self.t0_s]))
@@ -96,7 +140,19 @@ class BurstMotion:
         return -2 * np.pi * (d - lin) / self.wavelength_m
 
     def beam_amp(self, t_s: NDArray) -> NDArray[np.float64]:
-        """[links, T, n_beams] amplitude gain of every beam toward the panel at ``t_s``."""
+        """[links, T, n_beams] amplitude gain of every beam toward the panel at ``t_s``.
+
+        Parameters
+        ----------
+        t_s : numpy.ndarray
+            Times [s]: [T], common to every link, or [links, T].
+
+        Returns
+        -------
+        numpy.ndarray
+            [links, T, n_beams] linear amplitude gains [1] (10^(G/20), G the beam gain [dBi]
+            toward the panel's AOD).
+        """
         x = self.position_m(t_s)
         aod = self.deployment.aod_rad(x, np.asarray(self.link_rrh)[:, None])
         return 10 ** (self.rrh_array.beam_gains_db(aod) / 20)
@@ -104,7 +160,30 @@ class BurstMotion:
 
 def burst_motion(lb, scn, x0_m: float, v_m_s: float, a_m_s2: float, t0_s: float) -> BurstMotion:
     """The :class:`BurstMotion` of the links of a link budget ``lb``
-    (:class:`railradio.nr.link.LinkBudget`) in scenario ``scn``."""
+    (:class:`railradio.nr.link.LinkBudget`) in scenario ``scn``.
+
+    Parameters
+    ----------
+    lb : LinkBudget
+        The epoch's link budget (one link per RRH in ``rrh`` or per RRH and panel in
+        ``link_rrh``, with the panels' offsets ``link_panel_x_m`` [m]).
+    scn : Scenario
+        The scenario (:class:`railradio.nr.simulate.Scenario`): deployment, RRH beams and the
+        carrier wavelength.
+    x0_m : float
+        The train's reference position at ``t0_s`` [m].
+    v_m_s : float
+        Its speed at ``t0_s`` [m/s].
+    a_m_s2 : float
+        Its acceleration [m/s²].
+    t0_s : float
+        The epoch instant [s].
+
+    Returns
+    -------
+    BurstMotion
+        The links' geometry over the burst (panel offsets 0 without separate panels).
+    """
     rrh = lb.rrh if lb.link_rrh is None else lb.link_rrh
     panel = np.zeros(len(rrh)) if lb.link_panel_x_m is None else lb.link_panel_x_m
     return BurstMotion(

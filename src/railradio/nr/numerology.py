@@ -52,27 +52,69 @@ class Numerology:
 
     @property
     def n_fft(self) -> int:
+        """FFT size at this rate, N_FFT / D.
+
+        Returns
+        -------
+        int
+            Useful samples per OFDM symbol.
+        """
         return N_FFT // self.decimation
 
     @property
     def sample_rate_hz(self) -> float:
+        """Sample rate F_s / D.
+
+        Returns
+        -------
+        float
+            Sample rate [Hz].
+        """
         return SAMPLE_RATE_HZ / self.decimation
 
     @property
     def subcarriers(self) -> NDArray[np.int64]:
-        """Subcarrier indices k (relative to the carrier centre) in the synthesized band,
-        in FFT-bin order (0, 1, ..., n/2-1, -n/2, ..., -1), restricted to active ones."""
+        """Subcarrier index k (relative to the carrier centre) of every FFT bin at this rate,
+        in FFT-bin order (0, 1, ..., n/2-1, -n/2, ..., -1); active or not (no mask applied).
+
+        Returns
+        -------
+        numpy.ndarray of int64
+            k of every FFT bin: [n_fft].
+        """
         k = np.fft.fftfreq(self.n_fft, 1.0 / self.n_fft).astype(np.int64)
         return k
 
     def cp_length(self, symbol: NDArray[np.int64] | int) -> NDArray[np.int64]:
-        """CP length [samples] of symbol index l (counted from a subframe start)."""
+        """CP length [samples] of symbol index l (counted from a subframe start).
+
+        Parameters
+        ----------
+        symbol : int or numpy.ndarray of int
+            Symbol indices l, any shape.
+
+        Returns
+        -------
+        numpy.ndarray of int64
+            (200 if l mod 112 == 0 else 72) // D [samples], the shape of ``symbol``.
+        """
         sym = np.asarray(symbol)
         long = (sym % (SYMBOLS_PER_SUBFRAME // 2)) == 0
         return np.where(long, CP_LONG, CP_NORMAL) // self.decimation
 
     def symbol_start(self, symbol: NDArray[np.int64] | int) -> NDArray[np.int64]:
-        """First sample (CP start) of symbol l, counted from the first subframe's start."""
+        """First sample (CP start) of symbol l, counted from the first subframe's start.
+
+        Parameters
+        ----------
+        symbol : int or numpy.ndarray of int
+            Symbol indices l (negative: before the first subframe), any shape.
+
+        Returns
+        -------
+        numpy.ndarray of int64
+            Sample index at F_s/D [samples], the shape of ``symbol``.
+        """
         sym = np.asarray(symbol, dtype=np.int64)
         sf, l_in = np.divmod(sym, SYMBOLS_PER_SUBFRAME)
         base = (self.n_fft + CP_NORMAL // self.decimation) * l_in
@@ -83,7 +125,18 @@ class Numerology:
         return sf * (SAMPLES_PER_SUBFRAME // self.decimation) + base + extra
 
     def symbol_length(self, symbol: NDArray[np.int64] | int) -> NDArray[np.int64]:
-        """CP + useful length [samples] of symbol l."""
+        """CP + useful length [samples] of symbol l.
+
+        Parameters
+        ----------
+        symbol : int or numpy.ndarray of int
+            Symbol indices l, any shape.
+
+        Returns
+        -------
+        numpy.ndarray of int64
+            cp_length + n_fft [samples], the shape of ``symbol``.
+        """
         return self.cp_length(symbol) + self.n_fft
 
 
@@ -93,6 +146,23 @@ def ssb_first_symbols(pattern: str = "seed", n_blocks: int = 64) -> NDArray[np.i
     ``"seed"``: two blocks per slot from the first slot at symbols {2, 8} + 14 n [ours,
     following the seed's "two per slot"]; ``"caseE"``: TS 38.213 §4.1 case E,
     {8, 12, 16, 20, 32, 36, 40, 44} + 56 n, n ∈ {0, 1, 2, 3, 5, 6, 7, 8}.
+
+    Parameters
+    ----------
+    pattern : str
+        ``"seed"`` or ``"caseE"``.
+    n_blocks : int
+        Number of SS blocks, 1..64 (the first ones of the pattern).
+
+    Returns
+    -------
+    numpy.ndarray of int64
+        First symbol index of each block, ascending: [n_blocks].
+
+    Raises
+    ------
+    ValueError
+        When ``pattern`` is unknown or ``n_blocks`` is not in 1..64.
     """
     if pattern == "seed":
         first = (np.array([2, 8])[None, :] + 14 * np.arange(32)[:, None]).ravel()

@@ -19,7 +19,22 @@ def fft_rows(a: NDArray[np.complex64], inverse: bool = False, out: NDArray | Non
     """FFT (or the 1/N-normalized inverse, as ``numpy.fft.ifft``) of each row of ``a``
     [..., N], on one thread, with ``scipy.fft`` (pocketfft, compiled for the wheel's
     baseline instruction set: the result does not depend on the CPU's vector unit).
-    ``out``, when given, receives the result (it may be ``a`` itself)."""
+    ``out``, when given, receives the result (it may be ``a`` itself).
+
+    Parameters
+    ----------
+    a : numpy.ndarray of complex64
+        Rows to transform, [..., N].
+    inverse : bool
+        Inverse FFT (1/N-normalized) instead of the forward one.
+    out : numpy.ndarray or None
+        Array receiving the result, [..., N] (``None``: a new array).
+
+    Returns
+    -------
+    numpy.ndarray of complex64
+        The row transforms, [..., N] (``out`` when given).
+    """
     f = sfft.ifft if inverse else sfft.fft
     y = f(a, axis=-1, workers=1, overwrite_x=out is a)
     if out is None:
@@ -48,6 +63,12 @@ class ReceiverConfig:
         Blocks averaged for the AOD (seed eq. 7: 3).
     subsample
         Parabolic sub-sample TOA interpolation [ours; off for the reproduction].
+
+    Raises
+    ------
+    ValueError
+        When ``decimation`` is not 1, 2, 4 or 8, ``ssb_pattern`` is unknown, ``n_blocks`` is
+        outside 1..64, ``search_lags`` < 1 or ``detect_k_sigma`` ≤ 0.
     """
 
     decimation: int = 4
@@ -74,25 +95,29 @@ class ReceiverConfig:
 
     @cached_property
     def num(self) -> Numerology:
+        """The :class:`railradio.nr.numerology.Numerology` of the rate F_s/D."""
         return Numerology(self.decimation)
 
     @cached_property
     def ssb_first(self) -> NDArray[np.int64]:
+        """First OFDM symbol of each SS block (from the burst's first subframe start), int64 [n_blocks]."""
         return ssb_first_symbols(self.ssb_pattern, self.n_blocks)
 
     @cached_property
     def block_start_full(self) -> NDArray[np.int64]:
-        """v_i: first full-rate sample of each block (CP start of its symbol 0)."""
+        """v_i: first full-rate sample of each block (CP start of its symbol 0), int64 [n_blocks]."""
         return Numerology(1).symbol_start(self.ssb_first)
 
     @cached_property
     def lags_full(self) -> int:
-        """K [full-rate samples]."""
+        """K [full-rate samples]: ``search_lags``, else the minimum spacing of the SS blocks (6576
+        for a single block).
+        """
         if self.search_lags is not None:
             return int(self.search_lags)
         return int(np.min(np.diff(self.block_start_full))) if self.n_blocks > 1 else 6576
 
     @cached_property
     def lags(self) -> int:
-        """K at the decimated rate."""
+        """K at the decimated rate: ceil(K/D) [samples at F_s/D]."""
         return -(-self.lags_full // self.decimation)

@@ -308,14 +308,45 @@ def _add_fading_taps(
 def full_rate_noise(rng: np.random.Generator, links: Links, n_samples: int) -> NDArray[np.complex64]:
     """Complex white Gaussian noise of the train's receive chains at the full rate:
     variance N0 · F_s · chains per sample (its :func:`railradio.nr.resample.project` by D has
-    N0 · F_s/D · chains,
-    the fast path's decimated-rate noise)."""
+    N0 · F_s/D · chains, the fast path's decimated-rate noise).
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Generator of the noise.
+    links : railradio.nr.synthesis.Links
+        The epoch's links (``noise_psd_w_hz`` N0 [W/Hz] of one chain, ``n_chains``).
+    n_samples : int
+        Samples to draw.
+
+    Returns
+    -------
+    numpy.ndarray of complex64
+        [n_samples] noise samples at F_s (amplitude √W).
+    """
     var = links.noise_psd_w_hz * Numerology(1).sample_rate_hz * links.n_chains
     return (np.float32(np.sqrt(var / 2)) * rng.standard_normal(2 * n_samples, dtype=np.float32)).view(np.complex64)
 
 
 def reference_correlation(cfg: ReceiverConfig, z: NDArray, s_min: int, n_id1: int, n_id2: int) -> NDArray[np.float64]:
-    """r̃_i[k] = |Σ_n b*[n] z[v_i + n + k]| at every full-rate lag k < K: [n_blocks, K]."""
+    """r̃_i[k] = |Σ_n b*[n] z[v_i + n + k]| at every full-rate lag k < K: [n_blocks, K].
+
+    Parameters
+    ----------
+    cfg : ReceiverConfig
+        SS-block pattern, block count and lag window K (``lags_full``).
+    z : numpy.ndarray
+        The burst's full-rate samples, [n_samples].
+    s_min : int
+        Symbol index of the burst's first sample.
+    n_id1, n_id2 : int
+        The cell's N_ID1 and N_ID2 (PSS+SSS reference).
+
+    Returns
+    -------
+    numpy.ndarray
+        |r̃_i[k]| at full-rate lags, [n_blocks, K].
+    """
     num = Numerology(1)
     b = reference_waveform(num, n_id1, n_id2, int(cfg.ssb_first[0]))
     v = num.symbol_start(cfg.ssb_first) - num.symbol_start(s_min)

@@ -145,7 +145,18 @@ def cells(nr: dict, nr_schema: dict) -> dict[str, dict[str, Any]]:
 
 
 def default_cell(nr: dict) -> str:
-    """The cell with the main run's settings."""
+    """The cell with the main run's settings.
+
+    Parameters
+    ----------
+    nr : dict
+        The ``nr`` section of the workflow config (with its ``map`` section).
+
+    Returns
+    -------
+    str
+        ``mt<M>_<data>``: the main run's M_T and the first data assumption of ``map.data``.
+    """
     return f"mt{nr['antenna']['rrh_elements']}_{next(iter(nr['map']['data']))}"
 
 
@@ -269,7 +280,25 @@ def calibration_section(nr: dict) -> dict:
 
 def block_indices(rng: np.random.Generator, n: int, block: int, n_boot: int) -> np.ndarray:
     """Moving-block-bootstrap resamples of ``n`` epochs: [n_boot, n] indices, each row
-    ⌈n/block⌉ blocks of ``block`` consecutive epochs with uniform starts, cut to n."""
+    ⌈n/block⌉ blocks of ``block`` consecutive epochs with uniform starts, cut to n.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Generator of the block starts.
+    n, block, n_boot : int
+        Epochs, block length [epochs] (in 1..n) and resamples (≥ 1).
+
+    Returns
+    -------
+    numpy.ndarray of int
+        [n_boot, n] epoch indices.
+
+    Raises
+    ------
+    ValueError
+        When ``block`` is outside 1..n or ``n_boot`` < 1.
+    """
     if not 1 <= block <= n:
         raise ValueError(f"block must be in 1..n={n}, got {block!r}")
     if n_boot < 1:
@@ -296,8 +325,22 @@ def cell_metrics(
     """Every metric of :data:`METRICS` (and each tracker's lost share) of one receiver on
     the epochs ``idx`` ([n_boot, n] resamples; None: the sample itself, shape [1, n]).
 
-    ``aod_err_rad``, ``range_err_m``: [n, 3] errors of the selected RRHs (NaN: none);
-    ``pos_err_m``: variant -> [n] 2-D EKF errors."""
+    Parameters
+    ----------
+    aod_err_rad, range_err_m : numpy.ndarray
+        AOD [rad] and TOA range [m] errors of the selected RRHs, [n, 3] (NaN: none).
+    pos_err_m : dict of str to numpy.ndarray
+        Tracker variant (``aod``, ``toa``, ``aod_toa``: all three) -> 2-D EKF errors [m], [n].
+    spacing_m : float
+        RRH spacing [m] (an epoch is lost beyond half of it).
+    idx : numpy.ndarray of int or None
+        Resampled epochs (:func:`block_indices`).
+
+    Returns
+    -------
+    dict of str to numpy.ndarray
+        Metric -> [n_boot] values ([1] without ``idx``; units of :data:`METRICS`), and ``track.<variant>.lost_frac``.
+    """
     n = aod_err_rad.shape[0]
     if idx is None:
         idx = np.arange(n)[None, :]
@@ -326,7 +369,22 @@ def cell_metrics(
 
 def status(claim: Claim, lo: float | None, hi: float | None, lost: bool) -> float:
     """:data:`HOLDS`, :data:`FAILS` or :data:`UNRESOLVED` for an interval [lo, hi] of the
-    claim's metric (a lost tracker fails its accuracy claims)."""
+    claim's metric (a lost tracker fails its accuracy claims).
+
+    Parameters
+    ----------
+    claim : Claim
+        The claim.
+    lo, hi : float or None
+        The interval's ends, in the claim's unit (None: no interval, not resolved).
+    lost : bool
+        Whether the claim's tracker is lost (the claim then fails).
+
+    Returns
+    -------
+    float
+        1.0 holds, 0.0 not resolved, -1.0 fails.
+    """
     if lost:
         return FAILS
     if lo is None or hi is None:
@@ -361,10 +419,8 @@ def cell_key_numbers(
 
     Parameters
     ----------
-    cell : str
-        The cell name.
-    rx : str
-        The receiver name.
+    cell, rx : str
+        The cell and receiver names.
     aod_err_rad : numpy.ndarray
         [n, 3] AOD errors of the selected RRHs over the segment's scored epochs, rad (NaN: none).
     range_err_m : numpy.ndarray
@@ -452,10 +508,8 @@ def diagnostic_key_numbers(
 
     Parameters
     ----------
-    cell : str
-        The cell name.
-    rx : str
-        The receiver name.
+    cell, rx : str
+        The cell and receiver names.
     aod_err_rad : numpy.ndarray
         AOD errors of the selected RRHs, rad (NaN: none).
     aod_true_rad : numpy.ndarray

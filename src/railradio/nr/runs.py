@@ -105,7 +105,22 @@ def point_model(ds: xr.Dataset, tracker: dict[str, Any]) -> xr.Dataset:
 
 
 def tracker_name(rx: str, variant: str, gate: bool) -> str:
-    """The calibration record's key of one tracker: ``receiver/variant/gate|nogate``."""
+    """The calibration record's key of one tracker: ``receiver/variant/gate|nogate``.
+
+    Parameters
+    ----------
+    rx : str
+        Receiver name.
+    variant : str
+        Tracker variant: ``aod``, ``toa`` or ``aod_toa``.
+    gate : bool
+        Whether the tracker runs with the χ² innovation gate.
+
+    Returns
+    -------
+    str
+        The key, e.g. ``"<rx>/aod_toa/gate"``.
+    """
     return f"{rx}/{variant}/{'gate' if gate else 'nogate'}"
 
 

@@ -36,6 +36,16 @@ def _sss_x() -> tuple[NDArray[np.int64], NDArray[np.int64]]:
 def pss(n_id2: int) -> NDArray[np.int64]:
     """PSS d_PSS(n) = 1 - 2 x((n + 43 N_ID2) mod 127), n = 0..126, values ±1.
 
+    Parameters
+    ----------
+    n_id2 : int
+        N_ID^(2), 0..2.
+
+    Returns
+    -------
+    numpy.ndarray of int64
+        The sequence, ±1: [127].
+
     Raises
     ------
     ValueError
@@ -51,6 +61,18 @@ def sss(n_id1: int, n_id2: int) -> NDArray[np.int64]:
     """SSS d_SSS(n) = [1 - 2 x0((n + m0) mod 127)][1 - 2 x1((n + m1) mod 127)], ±1.
 
     m0 = 15 floor(N_ID1 / 112) + 5 N_ID2, m1 = N_ID1 mod 112.
+
+    Parameters
+    ----------
+    n_id1 : int
+        N_ID^(1), 0..335 (an integer type).
+    n_id2 : int
+        N_ID^(2), 0..2.
+
+    Returns
+    -------
+    numpy.ndarray of int64
+        The sequence, ±1: [127].
 
     Raises
     ------
@@ -69,5 +91,18 @@ def sss(n_id1: int, n_id2: int) -> NDArray[np.int64]:
 
 
 def pci(n_id1: int, n_id2: int) -> int:
-    """Physical cell ID N_ID^cell = 3 N_ID1 + N_ID2."""
+    """Physical cell ID N_ID^cell = 3 N_ID1 + N_ID2.
+
+    Parameters
+    ----------
+    n_id1 : int or numpy.ndarray of int
+        N_ID^(1) (not checked).
+    n_id2 : int or numpy.ndarray of int
+        N_ID^(2) (not checked); broadcast against ``n_id1``.
+
+    Returns
+    -------
+    int or numpy.ndarray of int
+        The PCI, the broadcast shape of the inputs.
+    """
     return 3 * n_id1 + n_id2

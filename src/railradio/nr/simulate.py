@@ -112,6 +112,9 @@ class Scenario:
 
     @cached_property
     def profile(self):
+        """The TDL profile ``tdl`` scaled to ``delay_spread_s``
+        (:class:`railradio.nr.channel.TdlProfile`).
+        """
         return tdl_profile(self.tdl, self.delay_spread_s)
 
 
@@ -197,6 +200,18 @@ class Synthesis:
         return x, v, a, lb, self.network.update(epoch, lb.rrh, lb.rx_power_dbm)
 
     def __call__(self, epoch: int) -> Burst:
+        """The received burst of ``epoch`` and its truth.
+
+        Parameters
+        ----------
+        epoch : int
+            Epoch index (t = epoch · ``trajectory.dt_s``).
+
+        Returns
+        -------
+        Burst
+            The front end's samples at F_s/D (complex64) with ``s_min`` and the truth.
+        """
         x, v, a, lb, serving = self.advance(epoch)
         t = epoch * self.scn.trajectory.dt_s
         link_rrh = lb.rrh if lb.link_rrh is None else lb.link_rrh
@@ -236,6 +251,20 @@ class Estimator:
     """
 
     def __init__(self, scn: Scenario):
+        """One correlator per receiver and the cell search (sharing a receiver's correlator when
+        the settings match).
+
+        Parameters
+        ----------
+        scn : Scenario
+            The scenario (receivers, cell search, deployment; its truth is never read).
+
+        Raises
+        ------
+        ValueError
+            When a receiver variant differs from ``scn.receiver`` in decimation or SS-block
+            pattern, or ``scn.search_decimation`` does not divide the front end's decimation.
+        """
         self.scn = scn
         self.receivers = [("seed", scn.receiver, scn.detector)] + list(scn.variants)
         for _, rc, _ in self.receivers:
@@ -264,7 +293,19 @@ class Estimator:
 
     def start(self, epoch: int) -> int:
         """The first epoch to process before reporting ``epoch`` (state reset there when a
-        fixed acquisition epoch lies between the last processed epoch and ``epoch``)."""
+        fixed acquisition epoch lies between the last processed epoch and ``epoch``).
+
+        Parameters
+        ----------
+        epoch : int
+            The epoch to report.
+
+        Returns
+        -------
+        int
+            The epoch to start from: the earlier of the last fixed acquisition and serving-cell
+            reset epochs at or before ``epoch`` (the search reset), or the next unprocessed epoch.
+        """
         w = min(
             warmup_start(epoch, self.scn.cell_search.acquire_every), warmup_start(epoch, self.scn.serving.reset_every)
         )
@@ -277,7 +318,28 @@ class Estimator:
         self, epoch: int, z: np.ndarray, s_min: int, report: bool = True, keep_corr: bool = False
     ) -> EpochEstimates | None:
         """Measure one epoch; ``report=False`` (a replayed warm-up epoch) runs the cell
-        search only."""
+        search only.
+
+        Parameters
+        ----------
+        epoch : int
+            Epoch index.
+        z : numpy.ndarray of complex64
+            The burst's front-end samples at F_s/D, [n_samples].
+        s_min : int
+            Symbol index of the burst's first sample.
+        report : bool
+            Correlate every receiver and return the estimates.
+        keep_corr : bool
+            Keep the seed receiver's per-block correlation (``corr``).
+
+        Returns
+        -------
+        EpochEstimates or None
+            The neighbour list and its SS-RSRP [dB, arbitrary reference], [n_cand]; per receiver
+            AOD [rad], TOA [s], peak, best score, detected blocks, [n_receivers, n_cand]; None when
+            ``report`` is False.
+        """
         if self.next_epoch is not None and epoch != self.next_epoch:
             self.search.reset()
         self.next_epoch = int(epoch) + 1

@@ -24,6 +24,30 @@ def rts_smooth(states: NDArray, covs: NDArray, f: NDArray, q: NDArray) -> tuple[
     """Smoothed states [n, d] and covariances [n, d, d] from the filtered ones.
 
     Leading epochs with a NaN state (no track yet) stay NaN; the rest must be finite.
+
+    Parameters
+    ----------
+    states : numpy.ndarray
+        [n, d] filtered states (e.g. [x, y, vx, vy, ax, ay] in m, m/s, m/s²); NaN rows first
+        for the epochs before the track starts.
+    covs : numpy.ndarray
+        [n, d, d] their filtered covariances (the states' units squared).
+    f : numpy.ndarray
+        [d, d] transition matrix F of one epoch interval.
+    q : numpy.ndarray
+        [d, d] process noise covariance Q of one epoch interval.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``(x_s, p_s)``: smoothed states [n, d] and covariances [n, d, d], in the units of
+        ``states`` and ``covs`` (the leading NaN epochs copied unchanged).
+
+    Raises
+    ------
+    ValueError
+        When ``states`` is not [n, d] or ``covs`` not [n, d, d], ``f`` or ``q`` is not
+        [d, d], or a state after the first finite one is not finite.
     """
     xs = np.asarray(states, float)
     ps = np.asarray(covs, float)

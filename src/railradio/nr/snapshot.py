@@ -20,7 +20,33 @@ def snapshot_ls(
     rrh_xy: NDArray, aod: NDArray, toa: NDArray, dh_m: float, cfg: TrackerConfig, x_init: NDArray, n_iter: int = 20
 ) -> tuple[NDArray, NDArray]:
     """Weighted Gauss–Newton position fix [x, y] from one epoch and its covariance [m²]
-    (:func:`snapshot_ls_batch` for one epoch)."""
+    (:func:`snapshot_ls_batch` for one epoch).
+
+    Parameters
+    ----------
+    rrh_xy : numpy.ndarray
+        [m, 2] positions (x, y) of the measured RRHs [m].
+    aod, toa : numpy.ndarray
+        [m] their measured AODs [rad] and TOAs [s] (only those of ``cfg.variant`` are used).
+    dh_m : float
+        Height difference between the RRHs and the train antenna [m].
+    cfg : TrackerConfig
+        Variant and measurement noise W (the weights).
+    x_init : numpy.ndarray
+        [2] initial guess (x, y) [m].
+    n_iter : int
+        Most Gauss–Newton iterations.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``(fix, cov)``: the position (x, y) [2] [m] and its covariance pinv(JᵀWJ) [2, 2] [m²].
+
+    Raises
+    ------
+    ValueError
+        When no RRH position in ``rrh_xy`` is finite.
+    """
     rrh_xy = np.asarray(rrh_xy, float).reshape(-1, 2)
     p, cov = snapshot_ls_batch(
         rrh_xy[None],
@@ -53,6 +79,34 @@ def snapshot_ls_batch(
     at most ``n_iter`` times, and stops early where det JᵀWJ = 0; W is the inverse of
     :meth:`TrackerConfig.noise` at the initial guess. Returns the fixes [E, 2] and, with
     ``with_cov``, the covariances pinv(JᵀWJ) at the fixes [E, 2, 2] [m²].
+
+    Parameters
+    ----------
+    rrh_xy : numpy.ndarray
+        [E, m, 2] positions (x, y) of each epoch's measured RRHs [m]; NaN rows: padding.
+    aod, toa : numpy.ndarray
+        [E, m] measured AODs [rad] and TOAs [s] (only those of ``cfg.variant`` are used).
+    dh_m : float
+        Height difference between the RRHs and the train antenna [m].
+    cfg : TrackerConfig
+        Variant and measurement noise W (:meth:`TrackerConfig.variances`).
+    x_init : numpy.ndarray
+        [E, 2] initial guesses (x, y) [m].
+    n_iter : int
+        Most Gauss–Newton iterations per epoch.
+    with_cov : bool
+        Also return the covariances.
+
+    Returns
+    -------
+    tuple
+        ``(fixes, covs)``: positions (x, y) [E, 2] [m] and, with ``with_cov``, covariances
+        [E, 2, 2] [m²], else None.
+
+    Raises
+    ------
+    ValueError
+        When an epoch has no finite RRH position in ``rrh_xy``.
     """
     xy = np.asarray(rrh_xy, float)
     valid = np.isfinite(xy[..., 0])  # [E, m]

@@ -21,12 +21,36 @@ PSS_SSS_FIRST = 56  # block subcarriers 56..182
 
 
 def carrier_k(block_sc: NDArray) -> NDArray[np.int64]:
-    """Carrier subcarrier index (relative to the centre) of SS-block subcarriers."""
+    """Carrier subcarrier index (relative to the centre) of SS-block subcarriers.
+
+    Parameters
+    ----------
+    block_sc : int or numpy.ndarray of int
+        Block subcarrier indices (0..239), any shape.
+
+    Returns
+    -------
+    numpy.ndarray of int64
+        Carrier subcarrier k = block_sc - 120, the shape of ``block_sc``.
+    """
     return SSB_FIRST_K + np.asarray(block_sc)
 
 
 def kbin(k: NDArray, n_fft: int) -> NDArray[np.int64]:
-    """FFT bin of carrier subcarrier k for an n_fft-point FFT (k must be in [-n/2, n/2))."""
+    """FFT bin of carrier subcarrier k for an n_fft-point FFT (k must be in [-n/2, n/2)).
+
+    Parameters
+    ----------
+    k : int or numpy.ndarray of int
+        Carrier subcarrier indices, any shape (not checked).
+    n_fft : int
+        FFT size.
+
+    Returns
+    -------
+    numpy.ndarray of int64
+        k mod n_fft, the shape of ``k``.
+    """
     return np.asarray(k) % n_fft
 
 
@@ -68,7 +92,18 @@ def qpsk_pool(rng: np.random.Generator, n_pool: int) -> NDArray[np.complex64]:
 
 def band_bins(num: Numerology) -> NDArray[np.int64]:
     """The full-rate FFT bins (N_FFT order) of the subcarriers synthesized at ``num``'s rate,
-    in the reduced FFT's bin order."""
+    in the reduced FFT's bin order.
+
+    Parameters
+    ----------
+    num : Numerology
+        The synthesis rate F_s/D (FFT size N_FFT/D).
+
+    Returns
+    -------
+    numpy.ndarray of int64
+        Full-rate bin of each reduced bin: [num.n_fft].
+    """
     k = np.fft.fftfreq(num.n_fft, 1.0 / num.n_fft).astype(np.int64)
     return k % N_FFT
 
@@ -86,19 +121,27 @@ def burst_grid(
 
     Parameters
     ----------
-    symbols
-        Symbol indices (from the burst's first subframe start; negative = before it).
-    ssb_first
-        First symbol of each SS block.
-    pool, pool_idx
-        QPSK pool [P, N_FFT] and one pool index per symbol (data and PBCH).
+    num : Numerology
+        The synthesis rate F_s/D.
+    symbols : numpy.ndarray of int64
+        Symbol indices (from the burst's first subframe start; negative = before it): [n_symbols].
+    ssb_first : numpy.ndarray of int64
+        First symbol of each SS block: [n_blocks].
+    n_id1 : int
+        N_ID^(1) (0..335): selects the SSS.
+    n_id2 : int
+        N_ID^(2) (0..2): selects the PSS and SSS.
+    pool : numpy.ndarray of complex64
+        QPSK pool [P, N_FFT] (:func:`qpsk_pool`).
+    pool_idx : numpy.ndarray of int64
+        One pool index per symbol (data and PBCH): [n_symbols].
 
     Returns
     -------
-    grid
+    grid : numpy.ndarray of complex64
         [n_symbols, num.n_fft] unit-EPRE subcarrier values, reduced-FFT bin order.
-    block_of_symbol
-        SS-block index carried by each symbol, -1 for data-only symbols.
+    block_of_symbol : numpy.ndarray of int64
+        SS-block index carried by each symbol, -1 for data-only symbols: [n_symbols].
     """
     bins = band_bins(num)
     grid = pool[pool_idx][:, bins].copy()  # [S, n]

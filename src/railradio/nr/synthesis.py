@@ -67,6 +67,7 @@ class Links:
 
     @property
     def n(self) -> int:
+        """Number of links R (int): ``tau_s.size``."""
         return int(self.tau_s.size)
 
 
@@ -177,7 +178,19 @@ class Synthesizer:
         self._span: tuple | None = None
 
     def span(self, max_tau_s: float) -> dict:
-        """Symbol layout covering delays up to ``max_tau_s`` (cached by pre-burst length)."""
+        """Symbol layout covering delays up to ``max_tau_s`` (cached by pre-burst length).
+
+        Parameters
+        ----------
+        max_tau_s : float
+            Largest bulk delay of the links [s].
+
+        Returns
+        -------
+        dict
+            ``symbols`` [S] from ``s_min`` = -``n_pre``; ``cps``, ``starts`` (from the first symbol), ``total``
+            [samples at F_s/D]; ``slot``, ``block_of`` (-1: no SS block), ``long_of`` [S]; ``long_ramp``; ``cp0``.
+        """
         cfg, num = self.cfg, self.cfg.num
         n = num.n_fft
         num1 = Numerology(1)
@@ -234,7 +247,19 @@ class Synthesizer:
         """Where and what the cell's SS blocks write over the pool data, compact (cached per
         cell): ``(ov_row [symbols], ov_full, ov_mask, ov_val)`` as :func:`kernels.fill_grid`
         takes them — the overlay row of each symbol (-1: none), whether it covers the whole
-        band, and its mask and values."""
+        band, and its mask and values. Needs :meth:`span` first.
+
+        Parameters
+        ----------
+        n_id1, n_id2 : int
+            The cell's N_ID^(1) and N_ID^(2).
+
+        Returns
+        -------
+        tuple of numpy.ndarray
+            ov_row [S] int64, ov_full [O] bool, ov_mask [O, n] bool, ov_val [O, n] complex64 (O: the
+            rows with an overlay; n: n_fft at F_s/D).
+        """
         key = (int(n_id1), int(n_id2))
         if key not in self._overlays:
             sp = self._span
@@ -258,7 +283,21 @@ class Synthesizer:
 
     def draws(self, links: Links, rng: np.random.Generator) -> list[dict]:
         """The random draws of one burst per RRH: data pool indices, fading (α, φ), and per
-        slot the beam and whether the slot carries data (used by non-serving RRHs)."""
+        slot the beam and whether the slot carries data (used by non-serving RRHs).
+
+        Parameters
+        ----------
+        links : Links
+            The R links in range.
+        rng : numpy.random.Generator
+            The epoch's generator.
+
+        Returns
+        -------
+        list of dict
+            Per link: ``pool_idx`` [S], ``alpha``, ``phi`` [L, n_sinusoids] [rad], and per symbol (held
+            over its slot) ``data_beam`` (SS-beam index) and ``busy`` (bool), [S].
+        """
         sp = self.span(float(np.max(links.tau_s)) if links.n else 0.0)
         slot = sp["slot"]
         n_slots = int(slot.max()) + 1

@@ -192,17 +192,32 @@ def run_ekf(
     reacquire: Reacquire | None = None,
     reacquire_after: int = 10,
 ) -> dict[str, NDArray]:
-    """Run the EKF over ``n_epochs`` epochs; ``select(n, x_pred) -> (rrh_xy, aod, toa)``
-    chooses the measurements of epoch n from the predicted state: from the RRHs
-    ``rrh_xy`` [m_n, 2] (possibly none: prediction only).
-    With the gate on, ``reacquire(n) -> (position [2], covariance [2, 2]) | None`` re-seeds
-    the position after ``reacquire_after`` consecutive epochs whose measurements were all
-    rejected (track loss: a gate alone never lets a lost filter back) [ours].
+    """Run the EKF over ``n_epochs`` epochs; ``select(n, x_pred) -> (rrh_xy, aod, toa)`` chooses the measurements
+    of epoch n from the predicted state: from the RRHs ``rrh_xy`` [m_n, 2] (possibly none: prediction only).
+    With the gate on, ``reacquire(n) -> (position [2], covariance [2, 2]) | None`` re-seeds the position after
+    ``reacquire_after`` consecutive epochs whose measurements were all rejected (track loss: a gate alone never
+    lets a lost filter back) [ours].
+
+    Parameters
+    ----------
+    select : Select
+        The measurements of each epoch: RRH positions [m], AODs [rad], TOAs [s] (:data:`Select`).
+    dt_s, dh_m : float
+        Epoch interval [s]; height difference between the RRHs and the train antenna [m].
+    cfg : TrackerConfig
+        Variant, q, W and gate.
+    s0, p0 : numpy.ndarray
+        Initial state [6] (x, y [m], v_x, v_y [m/s], a_x, a_y [m/s²]) and its covariance [6, 6].
+    n_epochs, reacquire_after : int
+        Epochs to run; consecutive all-rejected epochs before ``reacquire`` is called.
+    reacquire : Reacquire or None
+        The re-acquisition fix: position [2] [m], covariance [2, 2] [m²]; None: never re-acquires.
 
     Returns
     -------
-    dict with ``state`` [n, 6] (posterior), ``cov`` [n, 6, 6], ``nis`` [n] (NaN without
-    measurements), ``n_used`` [n] (RRHs used after gating).
+    dict of str to numpy.ndarray
+        ``state`` [n, 6] (posterior, units as ``s0``), ``cov`` [n, 6, 6], ``nis`` [n] [1] (NaN without
+        measurements), ``n_used`` [n] (RRHs used after gating), ``reacquired`` [n] (bool).
     """
     f = transition(dt_s)
     ekf = ExtendedKalmanFilter(dim_x=6, dim_z=1)
@@ -343,6 +358,7 @@ class MeasuredCandidates:
 
     @property
     def n_epochs(self) -> int:
+        """Number of epochs (rows of the candidate arrays)."""
         return self.rrh.shape[0]
 
     def pick(self, k: int, x_pred: float) -> tuple[NDArray, NDArray, NDArray]:
@@ -438,16 +454,26 @@ class _Follower:
 def track_setup(
     ds, rrh_x: NDArray, rrh_y: float, dh_m: float, cfg: TrackerConfig, strength: str, n_use: int, lever_arm: bool = True
 ) -> TrackSetup:
-    """Measurement selection (:meth:`MeasuredCandidates.pick`), the snapshot re-acquisition
-    fix (:meth:`MeasuredCandidates.snapshot_fix`), the first epoch with measurements k0, the
-    initial state and P0 (snapshot LS position at rest; speed and acceleration σ 1 m/s and
-    1 m/s² [ours]) and the number of epochs: the set-up shared by :func:`track` and the IMM.
+    """Measurement selection (:meth:`MeasuredCandidates.pick`), the snapshot re-acquisition fix
+    (:meth:`MeasuredCandidates.snapshot_fix`), the first epoch with measurements k0, the initial state and P0
+    (snapshot LS position at rest; speed and acceleration σ 1 m/s and 1 m/s² [ours]) and the number of epochs:
+    the set-up shared by :func:`track` and the IMM.
 
-    Separate head/tail panels (``ds["train_panel_x"]`` nonzero): each measurement is taken
-    at the panel facing its RRH at the predicted position (:func:`railradio.nr.antenna.facing_panel`),
-    whose along-track lever arm ℓ enters h(x) as an RRH shifted by -ℓ (on the straight
-    track, x + ℓ - x_k = x - (x_k - ℓ); the Jacobian is unchanged). ``lever_arm=False``
-    ignores it: the seed's point model [ours]."""
+    Separate head/tail panels (``ds["train_panel_x"]`` nonzero): each measurement is taken at the panel facing
+    its RRH at the predicted position (:func:`railradio.nr.antenna.facing_panel`), whose along-track lever arm ℓ
+    enters h(x) as an RRH shifted by -ℓ (on the straight track, x + ℓ - x_k = x - (x_k - ℓ); the Jacobian is
+    unchanged). ``lever_arm=False`` ignores it: the seed's point model [ours].
+
+    Parameters
+    ----------
+    ds, rrh_x, rrh_y, dh_m, cfg, strength, n_use, lever_arm
+        As for :func:`track` (estimates [rad], [s]; RRH positions [n_rrh], offset, height difference [m]).
+
+    Returns
+    -------
+    TrackSetup
+        ``meas``, ``k0``, ``s0`` [6] (x, y [m], speed and acceleration 0) and ``p0`` [6, 6] (SI units squared).
+    """
     panel_x = tuple(float(v) for v in ds["train_panel_x"].values) if lever_arm and "train_panel_x" in ds else (0.0, 0.0)
     rrh = ds["rrh"].values
     aod = ds["aod_hat"].values

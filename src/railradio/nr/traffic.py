@@ -45,11 +45,27 @@ class ServingCell:
         self.serving = -1
 
     def reset(self) -> None:
+        """Forget the serving cell (-1: none); the next :meth:`update` picks the strongest RRH."""
         self.serving = -1
 
     def update(self, epoch: int, rrh: NDArray[np.int64], power_dbm: NDArray[np.float64]) -> int:
         """The serving RRH at ``epoch`` given the RRHs in range and their large-scale power
-        [dBm]; -1 when no RRH is in range."""
+        [dBm]; -1 when no RRH is in range.
+
+        Parameters
+        ----------
+        epoch : int
+            Epoch index; at multiples of ``rule.reset_every`` the strongest RRH serves.
+        rrh : numpy.ndarray of int64
+            Indices of the RRHs in range: [R].
+        power_dbm : numpy.ndarray
+            Their large-scale received power [dBm]: [R].
+
+        Returns
+        -------
+        int
+            The serving RRH index, or -1.
+        """
         rrh = np.asarray(rrh)
         if rrh.size == 0:
             self.serving = -1

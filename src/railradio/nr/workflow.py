@@ -54,7 +54,28 @@ def case_shard_paths(
     """Estimate shards a sensitivity case's calibration (``real="cal"``) or track
     (``real="r0"``) reads: the main run's own when the case changes nothing that the
     bursts or the calibration run depend on (a tracker-only case), else those of the first
-    case in ``cases`` (config order) with the same bursts, else the case's own."""
+    case in ``cases`` (config order) with the same bursts, else the case's own.
+
+    Parameters
+    ----------
+    case : str
+        The case name.
+    case_cfg, main_cfg : dict
+        The case's merged ``nr`` config and the main one (``n_shards``).
+    real : str
+        ``"cal"`` (the calibration run) or ``"r0"`` (the track's realization).
+    n_cal_shards : int
+        Shards of a calibration run.
+    n_case_shards : int
+        Shards of a case's own r0 run.
+    cases : dict or None
+        Case name -> merged ``nr`` config, config order (``None``: none).
+
+    Returns
+    -------
+    list of str
+        Paths of the estimate shards (netCDF), shard order.
+    """
 
     def same(a: dict, b: dict) -> bool:
         return sim_config(a) == sim_config(b) and a["calibration"] == b["calibration"]
