@@ -166,7 +166,8 @@ def robust_sigmas(
     Returns
     -------
     tuple of (float, float, dict)
-        σ_AOD [rad] (at least 1e-4 rad), σ_TOA [s] (at least 1/(√12 F_s)) and, with bins,
+        σ_AOD [rad] (at least 1e-4 rad), σ_TOA [s] (at least 1/(√12 F_s)); both NaN without
+        errors; and, with bins,
         ``distance_edges_m`` [m], ``sigma_aod_bins_rad`` [rad], ``sigma_toa_bins_s`` [s] (one
         entry per bin, ``len(distance_edges_m) + 1``); an empty dict without bins.
     """

@@ -80,7 +80,9 @@ class CellSearchConfig:
         Returns
         -------
         ReceiverConfig
-            That configuration with this search's ``template``.
+            A new configuration with the burst's decimation, SS-block pattern and count,
+            ``search_lags``, ``detect_k_sigma`` and ``prescreen_k_sigma``, and this search's
+            ``template``; its other fields at their defaults.
         """
         return ReceiverConfig(
             decimation=burst.decimation,

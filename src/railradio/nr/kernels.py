@@ -106,7 +106,8 @@ def fill_grid(
     ov_mask : numpy.ndarray of bool
         Bins an overlay row writes: [O, n].
     ov_val : numpy.ndarray of complex64
-        The overlay's values (PSS, SSS, zeros, PBCH): [O, n].
+        The overlay's values (PSS, SSS and the zeroed subcarriers around them; 0 outside
+        ``ov_mask``): [O, n]. The PBCH is not in it: it comes from the data pool.
     h : numpy.ndarray of complex64
         Channel response per symbol and bin [S, n] (read only when ``has_h``).
     has_h : bool

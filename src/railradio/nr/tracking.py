@@ -455,9 +455,9 @@ def track_setup(
     ds, rrh_x: NDArray, rrh_y: float, dh_m: float, cfg: TrackerConfig, strength: str, n_use: int, lever_arm: bool = True
 ) -> TrackSetup:
     """Measurement selection (:meth:`MeasuredCandidates.pick`), the snapshot re-acquisition fix
-    (:meth:`MeasuredCandidates.snapshot_fix`), the first epoch with measurements k0, the initial state and P0
-    (snapshot LS position at rest; speed and acceleration σ 1 m/s and 1 m/s² [ours]) and the number of epochs:
-    the set-up shared by :func:`track` and the IMM.
+    (:meth:`MeasuredCandidates.snapshot_fix`), the first epoch with measurements k0, the initial state and P0 (snapshot
+    LS position at rest; σ of v_x ``cfg.start_speed_sigma_m_s``, of v_y 1 m/s, of the accelerations 1 m/s² [ours])
+    and the number of epochs: the set-up shared by :func:`track` and the IMM.
 
     Separate head/tail panels (``ds["train_panel_x"]`` nonzero): each measurement is taken at the panel facing
     its RRH at the predicted position (:func:`railradio.nr.antenna.facing_panel`), whose along-track lever arm ℓ
