@@ -78,25 +78,36 @@ def _parents(name: str) -> list[str]:
 
 def _facts(path: Path) -> tuple[tuple[str, ...], frozenset[str]]:
     """(dotted names imported, string literals) of one file, cached while it is unchanged."""
+    names, strings, relative, _ = _python_source(path)
+    if relative:
+        raise ValueError(f"{path}: relative imports are not supported (use railradio.…)")
+    return names, strings
+
+
+def _python_source(path: Path) -> tuple[tuple[str, ...], frozenset[str], bool, bytes]:
+    """One parse of a Python file, cached while it is unchanged: (dotted names imported,
+    string literals, whether it imports relatively, :func:`file_digest`'s form)."""
     st = path.stat()
-    return _facts_cached(path, st.st_mtime_ns, st.st_size)
+    return _python_source_cached(path.resolve(), st.st_mtime_ns, st.st_size)
 
 
 @cache
-def _facts_cached(path: Path, mtime_ns: int, size: int) -> tuple[tuple[str, ...], frozenset[str]]:
+def _python_source_cached(path: Path, mtime_ns: int, size: int) -> tuple[tuple[str, ...], frozenset[str], bool, bytes]:
     names: list[str] = []
     strings: set[str] = set()
-    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"), filename=str(path))):
+    relative = False
+    tree = ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
+    for node in ast.walk(tree):
         if isinstance(node, ast.Import):
             names += [a.name for a in node.names]
         elif isinstance(node, ast.ImportFrom):
-            if node.level:
-                raise ValueError(f"{path}: relative imports are not supported (use railradio.…)")
+            relative |= bool(node.level)
             mod = node.module or ""
             names += [mod] + [f"{mod}.{a.name}" for a in node.names]
         elif isinstance(node, ast.Constant) and isinstance(node.value, str) and len(node.value) < 256:
             strings.add(node.value)
-    return tuple(names), frozenset(strings)
+    digest = f"python{sys.version_info[0]}.{sys.version_info[1]}\0{ast.dump(_without_docstrings(tree))}".encode()
+    return tuple(names), frozenset(strings), relative, digest
 
 
 def _helper(name: str, local_dirs: tuple[Path, ...]) -> Path | None:
@@ -287,15 +298,8 @@ def file_digest(path: str | Path) -> bytes:
         If a ``.py`` file is not valid Python.
     """
     path = Path(path)
-    st = path.stat()
-    return _file_digest_cached(path.resolve(), st.st_mtime_ns, st.st_size)
-
-
-@lru_cache(maxsize=1024)
-def _file_digest_cached(path: Path, mtime_ns: int, size: int) -> bytes:
     if path.suffix == ".py":
-        tree = _without_docstrings(ast.parse(path.read_text(encoding="utf-8"), filename=str(path)))
-        return f"python{sys.version_info[0]}.{sys.version_info[1]}\0{ast.dump(tree)}".encode()
+        return _python_source(path)[3]
     if path.suffix == ".smk" or path.name == "Snakefile":
         return _smk_tokens(path.read_text(encoding="utf-8"))
     return path.read_bytes()
