@@ -344,3 +344,36 @@ def test_at_the_papers_interference_the_production_path_keeps_our_decisions():
     good = np.abs(toa_error_m(b["toa"], d3d)) <= 5.0
     assert good.sum() >= 4
     assert np.all(np.abs(a["toa"][good] - b["toa"][good]) <= 1.0)
+
+
+def _measures(frac: float) -> dict:
+    """One receiver's measures of a comparison with every decision's changed share ``frac``
+    and agreeing error distributions."""
+    m = {k: {"frac": frac, "lo": frac / 2, "hi": 2 * frac, "n": 600} for k in ("detection", "selection", "toa", "aod")}
+    m.update(toa_ks_p=0.5, aod_ks_p=0.5, within5_diff=0.0, within5_diff_lo=-0.01, within5_diff_hi=0.01)
+    return m
+
+
+def test_a_shortcut_the_production_does_not_take_is_measured_but_left_out_of_the_verdict():
+    """With the exact spill configured, the wrapped spill is still compared (what it would
+    change) but marked not taken: its keys exist, say so, and do not decide all_bounded."""
+    import types
+
+    from railradio.nr.fidelity import comparisons
+    from railradio.nr.fidelity_keys import key_numbers
+
+    scn = types.SimpleNamespace(full_channel_range_m=np.inf, exact_spill=True)
+    comps = comparisons(scn)
+    assert comps["spill"].taken is False and all(c.taken for k, c in comps.items() if k != "spill")
+    wrapped = dataclasses.replace(comps["spill"], taken=True)
+    assert comparisons(types.SimpleNamespace(full_channel_range_m=np.inf, exact_spill=False))["spill"] == wrapped
+    rx = ("seed", "robust")
+    summary = {"noise": {r: _measures(0.0) for r in rx}, "spill": {r: _measures(0.02) for r in rx}}
+    sub = {k: comps[k] for k in summary}
+    keys = key_numbers(summary, sub, 200, {"production": 0.1})
+    assert keys["nr.fidelity.spill.bounded"]["value"] == 0.0
+    assert "does not take" in keys["nr.fidelity.spill.robust.selection_change_frac"]["description"]
+    assert keys["nr.fidelity.all_bounded"]["value"] == 1.0
+    # the same measures for a shortcut the production takes decide the verdict
+    keys = key_numbers(summary, {**sub, "spill": wrapped}, 200, {"production": 0.1})
+    assert keys["nr.fidelity.all_bounded"]["value"] == 0.0

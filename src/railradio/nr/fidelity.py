@@ -17,13 +17,15 @@ shortcut       off (the exact computation)
 ``band``       the fast path at the full rate (all 600 subcarriers) instead of its band (the
                central 1024/D_s subcarriers), both through the receiver's front end (ideal
                anti-aliasing filter and sampling at F_s/D, :func:`~railradio.nr.resample.project`)
-``form``       the fast path's per-symbol frequency-domain taps (each delayed tap's copy of a
-               symbol wrapped cyclically within the symbol's extent: its spill into the next
-               symbol omitted) against every tap's own delayed extent, both at the full band
-               with the fast path's held geometry and per-symbol taps (exact synthesis)
+``form``       the fast path's per-symbol frequency-domain taps (without ``exact_spill``, each
+               delayed tap's copy of a symbol wrapped cyclically within the symbol's extent:
+               its spill into the next symbol omitted) against every tap's own delayed extent,
+               both at the full band with the fast path's held geometry and per-symbol taps
+               (exact synthesis); with ``exact_spill`` it checks the exact spill
 ``spill``      the same as ``form`` at the production's own rate: the production path with each
-               delayed tap's spill into the next symbol computed exactly
-               (``nr.channel.exact_spill``; only where the production wraps it)
+               delayed tap's spill into the next symbol wrapped and computed exactly
+               (``nr.channel.exact_spill``); where the production computes it exactly, the
+               wrapped path is the shortcut not taken, measured all the same (``taken`` false)
 ``taps``       Rayleigh taps at every sample instead of held per symbol (against ``form``)
 ``geometry``   the bulk delay, LOS phase and beam gains following the train through the
                burst (:mod:`railradio.nr.motion`) instead of held at the epoch instant
@@ -84,11 +86,14 @@ D_FULL = 1
 @dataclass(frozen=True)
 class Comparison:
     """A shortcut's measurement: the variant with it off against the variant it is
-    compared with; ``stochastic`` when the two cannot share every draw."""
+    compared with; ``stochastic`` when the two cannot share every draw; ``taken`` false when
+    the production path does not use the shortcut (it is measured to show what it would
+    change, and left out of :func:`railradio.nr.fidelity_keys.key_numbers`' overall verdict)."""
 
     off: str
     base: str
     stochastic: bool = False
+    taken: bool = True
 
 
 COMPARISONS = {
@@ -102,7 +107,7 @@ COMPARISONS = {
     "noise": Comparison("own_noise", "production", stochastic=True),
     "all": Comparison("exact", "production"),
 }
-"""Every comparison; ``far_taps`` and ``spill`` only where the production uses that shortcut."""
+"""Every comparison; ``far_taps`` only where the production uses that shortcut."""
 
 
 def comparisons(scn: Scenario) -> dict[str, Comparison]:
@@ -117,12 +122,14 @@ def comparisons(scn: Scenario) -> dict[str, Comparison]:
     -------
     dict of str to Comparison
         The entries of :data:`COMPARISONS` without ``far_taps`` (no far-tap shortcut:
-        ``full_channel_range_m`` infinite) and without ``spill`` (``exact_spill`` set).
+        ``full_channel_range_m`` infinite); ``spill`` not ``taken`` when ``exact_spill`` is set
+        (the production computes the spill exactly; the wrapped path is the alternative).
     """
     skip = set() if np.isfinite(scn.full_channel_range_m) else {"far_taps"}
+    out = {k: c for k, c in COMPARISONS.items() if k not in skip}
     if scn.exact_spill:
-        skip.add("spill")
-    return {k: c for k, c in COMPARISONS.items() if k not in skip}
+        out["spill"] = dataclasses.replace(out["spill"], taken=False)
+    return out
 
 
 DECISIONS = ("detection", "selection", "toa", "aod")
@@ -230,19 +237,15 @@ class FidelityRun:
             if self.far_flat
             else None
         )
-        self.fast_spill = (
-            None
-            if scn.exact_spill
-            else Synthesizer(
-                self.fast.cfg,
-                scn.profile,
-                pool,
-                scn.n_sinusoids,
-                scn.full_channel_range_m,
-                scn.data_beam,
-                scn.load,
-                exact_spill=True,
-            )
+        self.fast_spill = Synthesizer(  # the production's other spill setting
+            self.fast.cfg,
+            scn.profile,
+            pool,
+            scn.n_sinusoids,
+            scn.full_channel_range_m,
+            scn.data_beam,
+            scn.load,
+            exact_spill=not scn.exact_spill,
         )
         d_c = scn.search_decimation or scn.receiver.decimation
         self.rx = Receivers(scn, selection, d_c)
@@ -342,8 +345,7 @@ class FidelityRun:
         z["geometry"] = ep.clock("geometry", lambda: fast(self.fast, motion=motion)) + n8
         if self.far_flat:
             z["far_taps"] = ep.clock("far_taps", lambda: fast(self.fast_fading)) + n8
-        if self.fast_spill is not None:
-            z["spill"] = ep.clock("spill", lambda: fast(self.fast_spill)) + n8
+        z["spill"] = ep.clock("spill", lambda: fast(self.fast_spill)) + n8
         z["form"] = self._exact(ep, "form", symbol_taps=True, flat=ep.flat, **ref) + n8
         z["taps"] = self._exact(ep, "taps", flat=ep.flat, **ref) + n8
         z["exact"] = self._exact(ep, "exact", motion=motion, **ref) + n8
