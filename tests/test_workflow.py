@@ -183,10 +183,10 @@ def test_intermediates_are_self_explaining(ci_run):
     # panels_200m_point): their track only
     assert len(case_paths) == 14 * (2 + 1 + 1) + 7
     map_paths = sorted((ci_run / "results/nr/map").rglob("*.nc"))
-    # the map's 19 cells: 16 with their own segment bursts (2 shards each: 15 M_T x data
-    # cells and the SSS template; the default and the selection-only cells read others'),
-    # 17 calibration runs (one per burst set), 19 tracks
-    assert len(map_paths) == 16 * 2 + 17 + 19
+    # the map's 19 cells: 16 with their own segment bursts (one shard each at CI scale: 15
+    # M_T x data cells and the SSS template; the default and the selection-only cells read
+    # others'), 17 calibration runs (one per burst set), 19 tracks
+    assert len(map_paths) == 16 + 17 + 19
     paths += nr_paths + case_paths + map_paths
     for study, n_min in (("handover", 10), ("tunnel", 10), ("sens/fusion", 5), ("chain", 1)):
         found = sorted((ci_run / "results" / study).rglob("*.nc"))
