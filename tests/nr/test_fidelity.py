@@ -368,12 +368,15 @@ def test_a_shortcut_the_production_does_not_take_is_measured_but_left_out_of_the
     wrapped = dataclasses.replace(comps["spill"], taken=True)
     assert comparisons(types.SimpleNamespace(full_channel_range_m=np.inf, exact_spill=False))["spill"] == wrapped
     rx = ("seed", "robust")
-    summary = {"noise": {r: _measures(0.0) for r in rx}, "spill": {r: _measures(0.02) for r in rx}}
+    summary = {k: {r: _measures(0.0) for r in rx} for k in ("noise", "form")}
+    summary["spill"] = {r: _measures(0.02) for r in rx}
     sub = {k: comps[k] for k in summary}
     keys = key_numbers(summary, sub, 200, {"production": 0.1})
     assert keys["nr.fidelity.spill.bounded"]["value"] == 0.0
     assert "does not take" in keys["nr.fidelity.spill.robust.selection_change_frac"]["description"]
     assert keys["nr.fidelity.all_bounded"]["value"] == 1.0
+    assert "with the exact spill" in keys["nr.fidelity.form.bounded"]["description"]
     # the same measures for a shortcut the production takes decide the verdict
     keys = key_numbers(summary, {**sub, "spill": wrapped}, 200, {"production": 0.1})
     assert keys["nr.fidelity.all_bounded"]["value"] == 0.0
+    assert "wrapped" in keys["nr.fidelity.form.bounded"]["description"]

@@ -27,6 +27,10 @@ COMPARISON_LABEL = {
     "all": "the production path against the exact computation",
 }
 
+FORM_EXACT_SPILL_LABEL = "the fast path's per-symbol taps with the exact spill against every tap's own delayed extent"
+"""The ``form`` comparison's label when the production computes the spill exactly
+(``nr.channel.exact_spill``): it then checks the exact spill at the full band."""
+
 
 def key_numbers(summary: dict, comps: dict[str, Comparison], n_epochs: int, seconds: dict[str, float]) -> dict:
     """Key numbers ``nr.fidelity.*`` from :func:`railradio.nr.fidelity_stats.summarize`'s output.
@@ -64,13 +68,16 @@ def key_numbers(summary: dict, comps: dict[str, Comparison], n_epochs: int, seco
             f"mean time per epoch of the '{v}' path (synthesis and correlation, one core)",
             sec,
         )
+    label = dict(COMPARISON_LABEL)
+    if "spill" in comps and not comps["spill"].taken:  # the production computes the spill exactly
+        label["form"] = FORM_EXACT_SPILL_LABEL
     all_ok = True
     for c, per in summary.items():
         comp = comps[c]
         c_ok = True
         for r, m in per.items():
             taken = "" if comp.taken else " (a shortcut the production does not take)"
-            where = f"{COMPARISON_LABEL[c]}{taken}, receiver {r}"
+            where = f"{label[c]}{taken}, receiver {r}"
             for k in DECISIONS:
                 base = f"nr.fidelity.{c}.{r}.{k}_change_frac"
                 put(base, "1", f"share of changed decisions: {DECISION_LABEL[k]} ({where})", m[k]["frac"])
@@ -106,12 +113,7 @@ def key_numbers(summary: dict, comps: dict[str, Comparison], n_epochs: int, seco
                 float(ok),
             )
             c_ok &= ok
-        put(
-            f"nr.fidelity.{c}.bounded",
-            "1",
-            f"1: {COMPARISON_LABEL[c]}{taken} bounded for every receiver, 0: not",
-            float(c_ok),
-        )
+        put(f"nr.fidelity.{c}.bounded", "1", f"1: {label[c]}{taken} bounded for every receiver, 0: not", float(c_ok))
         all_ok &= c_ok or not comp.taken
     put(
         "nr.fidelity.all_bounded",
