@@ -59,7 +59,8 @@ print(json.dumps({"wall_s": t1 - t0, "user_s": r1.ru_utime - r0.ru_utime,
 def shard_run(config: str, n_epochs: int, tunables: bool, exact_spill: bool = False) -> dict:
     """Time ``n_epochs`` bursts in a fresh process with or without the jobs' malloc
     settings (glibc reads them at process start, hence the subprocess), the taps' spill
-    wrapped (as configured) or exact (``nr.channel.exact_spill``)."""
+    wrapped (the shortcut, ``exact_spill`` false) or exact (``nr.channel.exact_spill``, as
+    configured)."""
     env = {**os.environ, **JOB_ENV}
     if not tunables:
         del env["GLIBC_TUNABLES"]

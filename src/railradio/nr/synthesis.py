@@ -14,7 +14,7 @@ target (:mod:`railradio.nr.fidelity`):
   receiver's front end filters to its own band;
 * the Rayleigh taps are held per symbol and rotate within a symbol with the LOS Doppler;
   each delayed tap's copy of a symbol is wrapped within the symbol's extent (its spill into
-  the next symbol is omitted);
+  the next symbol is omitted) unless ``exact_spill``, as the study configures;
 * the geometry (bulk delay, LOS Doppler, beam gains) is held over the 2 ms burst (the train
   moves ≤ 0.26 m, 0.2 full-rate samples); ``motion`` follows it symbol by symbol.
 """
