@@ -69,6 +69,11 @@ class Scenario:
         QPSK data symbols drawn once per realization for the data resource elements.
     shadowing : bool
         Whether the shadowing map is applied.
+    exact_spill : bool
+        Each delayed tap's copy of a symbol spills into the next symbol's first samples, as in
+        the exact reference, instead of being wrapped within its own symbol (the wrapped path
+        is measured by ``nr.fidelity.spill``). The study's config sets it
+        (``nr.channel.exact_spill``, default true).
     """
 
     trajectory: Trajectory
@@ -90,8 +95,10 @@ class Scenario:
     exact_spill: bool = False
     """Each delayed tap's copy of a symbol spills into the next symbol's first samples, as in
     the exact reference (:meth:`railradio.nr.synthesis.Synthesizer._add_spill`), instead of
-    being wrapped within its own symbol (the shortcut measured by ``nr.fidelity.spill``). The
-    study's config sets it (``nr.channel.exact_spill``, default true)."""
+    being wrapped within its own symbol (the shortcut measured by ``nr.fidelity.form``)."""
+    # The wrapped spill is measured by ``nr.fidelity.spill`` (see ``exact_spill`` in the class
+    # docstring). The attribute note above is part of the code hashes (railradio.codedeps
+    # hashes attribute notes), so its wording changes with the next re-run of the nr records.
     synthesis_decimation: int | None = None
     """The bursts are synthesized at F_s/D_s (the central N_FFT/D_s subcarriers) and brought
     to the receiver's front end F_s/D (``receiver.decimation``) by its ideal anti-aliasing
