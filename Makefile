@@ -35,11 +35,11 @@ lint: $(STAMP)  ## ruff (lint and format, pyproject.toml) and Snakemake's linter
 	$(BIN)/ruff format --check $(RUFF_PATHS)
 	$(BIN)/snakemake --lint
 
+# Snakemake's linter and the paper-scale dry run are pytest's tests (tests/test_workflow.py:
+# test_lint_is_clean, test_paper_scale_dag_resolves), not run a second time before it
 test: $(STAMP)  ## lint, dry runs, unit + integration tests, CI-scale pipeline, key numbers
 	$(BIN)/ruff check $(RUFF_PATHS)
 	$(BIN)/ruff format --check $(RUFF_PATHS)
-	$(BIN)/snakemake --lint
-	$(SNAKE) all -n -q rules
 	$(BIN)/python -m pytest
 
 test-fast: $(STAMP)  ## unit tests only
