@@ -9,10 +9,11 @@ from filterpy.kalman import KalmanFilter
 
 from railradio.constants import SPEED_OF_LIGHT_M_S
 from railradio.nr.dynamics import process_noise, transition
+from railradio.nr.ekf import TrackerConfig, run_ekf
 from railradio.nr.imm import ImmConfig, markov_matrix, position_nees, q_for_jump, run_imm, stationary, track_filters
 from railradio.nr.imm_report import change_windows, key_numbers
 from railradio.nr.smoother import rts_smooth
-from railradio.nr.tracking import TrackerConfig, run_ekf, track
+from railradio.nr.tracking import track
 
 DT = 0.1
 DH = 7.5

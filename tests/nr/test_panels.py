@@ -8,10 +8,11 @@ import yaml
 
 from railradio.constants import SPEED_OF_LIGHT_M_S
 from railradio.nr.antenna import RrhArray, TrainArray, facing_panel
+from railradio.nr.ekf import TrackerConfig
 from railradio.nr.geometry import Deployment
 from railradio.nr.link import RadioParams, ShadowingMap, link_budget
 from railradio.nr.simulate import scenario_from_config, simulate_epochs
-from railradio.nr.tracking import TrackerConfig, track_setup
+from railradio.nr.tracking import track_setup
 from railradio.rng import spawn_key
 
 PANELS = (100.0, -100.0)  # an 8-car set, ~200 m

@@ -6,10 +6,10 @@ import pytest
 from scipy.stats import chi2
 
 from railradio.nr.dynamics import process_noise, transition
+from railradio.nr.ekf import TrackerConfig, run_ekf
 from railradio.nr.geometry import Trajectory
 from railradio.nr.measurement import hx, jacobian
 from railradio.nr.snapshot import snapshot_ls
-from railradio.nr.tracking import TrackerConfig, run_ekf
 
 RRH = np.array([[0.0, 15.0], [500.0, 15.0], [-500.0, 15.0]])
 DH = 7.5
@@ -254,7 +254,7 @@ def test_robust_sigmas_per_distance_bin():
 def test_select_measurements_equals_nearest_by_full_sort():
     """The windowed nearest-RRH search picks the same columns as a stable argsort over
     every RRH: midpoint ties, ends of the track, far-off and NaN predictions included."""
-    from railradio.nr.tracking import select_measurements
+    from railradio.nr.candidates import select_measurements
 
     rrh_x = np.arange(87) * 500.0
     rng = np.random.default_rng(7)
@@ -355,7 +355,7 @@ def test_inlier_sigma_ignores_outliers_a_mad_does_not():
 
 
 def test_nees_position_is_the_quadratic_form():
-    from railradio.nr.tracking import nees_position
+    from railradio.nr.ekf import nees_position
 
     rng = np.random.default_rng(2)
     state = rng.standard_normal((5, 6))

@@ -10,7 +10,8 @@ from scipy.stats import chi2, median_abs_deviation
 
 from railradio.constants import SPEED_OF_LIGHT_M_S
 from railradio.nr.antenna import wrap_rad
-from railradio.nr.tracking import TrackerConfig, nees_position, track
+from railradio.nr.ekf import TrackerConfig, nees_position
+from railradio.nr.tracking import track
 
 
 def selected(ds, strength: str = "peak", n_use: int = 3) -> tuple[NDArray, NDArray]:

@@ -21,7 +21,7 @@ Selection and gate [ours]: the measured RRHs are chosen from the mode-weighted p
 position; a measurement passes the χ² gate if it passes the gate of at least one model
 (the union of the models' validation regions), so that the manoeuvre model can still see
 the measurements the quiet model's gate would reject. With one model every step reduces to
-:func:`railradio.nr.tracking.run_ekf` (a test checks equality).
+:func:`railradio.nr.ekf.run_ekf` (a test checks equality).
 """
 
 from __future__ import annotations
@@ -33,8 +33,9 @@ from numpy.typing import NDArray
 from scipy.stats import chi2
 
 from railradio.nr.dynamics import process_noise, transition
+from railradio.nr.ekf import Reacquire, Select, TrackerConfig, run_ekf
 from railradio.nr.measurement import VARIANTS, distances_m, hx, jacobian, residual_fn
-from railradio.nr.tracking import Reacquire, Select, TrackerConfig, run_ekf, track_setup
+from railradio.nr.tracking import track_setup
 
 
 def markov_matrix(sojourn_s, dt_s: float) -> NDArray[np.float64]:
@@ -224,7 +225,7 @@ def run_imm(
     reacquire_after: int = 10,
 ) -> dict[str, NDArray]:
     """Run the IMM over ``n_epochs`` epochs; ``select(n, x_pred) -> (rrh_xy, aod, toa)`` and
-    ``reacquire`` as in :func:`railradio.nr.tracking.run_ekf` (measurement noise, variant and
+    ``reacquire`` as in :func:`railradio.nr.ekf.run_ekf` (measurement noise, variant and
     gate from ``cfg``; its ``q`` is not used: each model has its own).
 
     Returns ``state`` [n, 6] and ``cov`` [n, 6, 6] (combined posterior), ``mu`` [n, m] (mode

@@ -21,11 +21,12 @@ from railradio.nr.bounds import change_epochs
 from railradio.nr.calibration import calibrate, measurement_errors
 from railradio.nr.clocks import apply_clock_errors
 from railradio.nr.dynamics import process_noise, transition
+from railradio.nr.ekf import TrackerConfig, nees_position
 from railradio.nr.imm import ImmConfig, position_nees, q_for_jump, track_filters
 from railradio.nr.measurement import VARIANTS
 from railradio.nr.simulate import Scenario
 from railradio.nr.smoother import rts_smooth
-from railradio.nr.tracking import TrackerConfig, nees_position, track
+from railradio.nr.tracking import track
 from railradio.rng import spawn_key
 
 GATES = (False, True)  # each tracker runs without and with the χ² innovation gate

@@ -12,8 +12,8 @@ from numpy.typing import NDArray
 from railradio.nr.antenna import wrap_rad
 from railradio.nr.measurement import VARIANTS, h_terms, jac_terms
 
-if TYPE_CHECKING:  # annotations only: railradio.nr.tracking imports this module
-    from railradio.nr.tracking import TrackerConfig
+if TYPE_CHECKING:  # annotations only
+    from railradio.nr.ekf import TrackerConfig
 
 
 def snapshot_ls(
