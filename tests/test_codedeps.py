@@ -3,6 +3,7 @@ changes (railradio.codedeps), checked over every rule and every library module."
 
 from __future__ import annotations
 
+import ast
 import json
 import os
 import re
@@ -13,7 +14,7 @@ from pathlib import Path
 
 import pytest
 
-from railradio.codedeps import file_digest, script_closure, script_code_hash
+from railradio.codedeps import _without_string_statements, file_digest, script_closure, script_code_hash
 
 from .conftest import ROOT, copy_workflow
 
@@ -224,9 +225,9 @@ def test_a_data_file_named_by_the_script_itself_counts(tmp_path):
 
 
 def test_comments_docstrings_and_layout_change_no_hash_and_code_does(tmp_path):
-    """The hashes hold what runs (file_digest): a comment, a docstring or a reformatting of
-    a module or a rule file re-runs nothing; a changed constant, even inside an f-string or a
-    rule's params, does."""
+    """The hashes hold what runs (file_digest): a comment, a docstring, any other string-only
+    statement or a reformatting of a module or a rule file re-runs nothing; a changed
+    constant, even inside an f-string or a rule's params, does."""
     mod = tmp_path / "m.py"
     mod.write_text('"""Module."""\n\ndef f(x):\n    """Doc."""\n    return x + 1  # one\n')
     base = file_digest(mod)
@@ -242,7 +243,9 @@ def test_comments_docstrings_and_layout_change_no_hash_and_code_does(tmp_path):
     mod.write_text("def f(x):\n    y = x\n    return y\n")
     later = file_digest(mod)
     mod.write_text('def f(x):\n    y = x\n    "a string statement"\n    return y\n')
-    assert file_digest(mod) != later  # only the leading string is a docstring
+    assert file_digest(mod) == later  # a string statement anywhere changes nothing that runs
+    mod.write_text('def f(x):\n    y = x\n    f"{y}"\n    return y\n')
+    assert file_digest(mod) != later  # an f-string is evaluated: it stays
     rules = tmp_path / "r.smk"
     rules.write_text('rule a:  # first\n    params:\n        k=f"{1}"\n    shell: "true"\n')
     base = file_digest(rules)
@@ -255,6 +258,43 @@ def test_comments_docstrings_and_layout_change_no_hash_and_code_does(tmp_path):
     first = file_digest(data)
     data.write_text('{"a": 1} ')
     assert file_digest(data) != first  # data: its bytes
+
+
+def test_attribute_notes_change_no_hash_and_assigned_values_do(tmp_path):
+    """An attribute note (a string statement after an assignment), at module level, in a
+    class body or in a nested body, is not hashed: rewording it re-runs nothing; changing an
+    assigned value does. A body left with only strings reads as ``pass`` and stays valid."""
+
+    def source(note: str, limit: int = 1, x: int = 1, last: str = '    """Only a docstring."""') -> str:
+        return (
+            '"""Module."""\n\n'
+            f"LIMIT = {limit}\n"
+            f'"""{note} (module)."""\n\n\n'
+            "class C:\n"
+            '    """Class."""\n\n'
+            f"    x: int = {x}\n"
+            f'    """{note} (class)."""\n'
+            "    if LIMIT:\n"
+            "        y = 2\n"
+            f'        """{note} (nested)."""\n'
+            "    else:\n"
+            f'        """{note} (an else of notes only)."""\n'
+            "    while False:\n"
+            f'        """{note} (a loop body of notes only)."""\n\n\n'
+            f"def f():\n{last}\n"
+        )
+
+    mod = tmp_path / "m.py"
+    mod.write_text(source("The limit"))
+    base = file_digest(mod)
+    for same in (source("Another, longer wording of the note"), source("The limit", last="    pass")):
+        mod.write_text(same)
+        assert file_digest(mod) == base, same
+    for changed in (source("The limit", limit=2), source("The limit", x=2), source("The limit", last="    return")):
+        mod.write_text(changed)
+        assert file_digest(mod) != base, changed
+    tree = _without_string_statements(ast.parse(source("The limit")))
+    compile(ast.fix_missing_locations(tree), str(mod), "exec")  # the emptied bodies hold a pass
 
 
 def test_third_party_versions_enter_exactly_the_hashes_of_the_rules_that_import_them(monkeypatch):

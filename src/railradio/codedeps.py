@@ -22,9 +22,10 @@ version of each distribution the reached files import, so upgrading numpy re-run
 rules that use it and nothing else.
 
 What of a file counts (:func:`file_digest`): of Python source, its syntax tree without
-docstrings, so that a comment, a docstring or a reformatting re-runs nothing; of a
-Snakemake rule file, its tokens without comments; of any other file, its bytes. The tree's
-printed form is the interpreter's, so the hash also holds the Python minor version.
+docstrings and other string-only statements (attribute notes), so that a comment, a
+docstring, an attribute note or a reformatting re-runs nothing; of a Snakemake rule file,
+its tokens without comments; of any other file, its bytes. The tree's printed form is the
+interpreter's, so the hash also holds the Python minor version.
 """
 
 from __future__ import annotations
@@ -106,7 +107,7 @@ def _python_source_cached(path: Path, mtime_ns: int, size: int) -> tuple[tuple[s
             names += [mod] + [f"{mod}.{a.name}" for a in node.names]
         elif isinstance(node, ast.Constant) and isinstance(node.value, str) and len(node.value) < 256:
             strings.add(node.value)
-    digest = f"python{sys.version_info[0]}.{sys.version_info[1]}\0{ast.dump(_without_docstrings(tree))}".encode()
+    digest = f"python{sys.version_info[0]}.{sys.version_info[1]}\0{ast.dump(_without_string_statements(tree))}".encode()
     return tuple(names), frozenset(strings), relative, digest
 
 
@@ -249,18 +250,48 @@ def third_party(script: str | Path, root: Path = SRC_ROOT) -> dict[str, str]:
     return dict(sorted(out.items()))
 
 
-_DOC_OWNERS = (ast.Module, ast.ClassDef, ast.FunctionDef, ast.AsyncFunctionDef)
+_STATEMENT_LISTS = ("body", "orelse", "finalbody")
+"""The fields of a syntax-tree node that hold statements (``handlers`` and ``cases`` hold
+nodes whose own ``body`` does)."""
 
 
-def _without_docstrings(tree: ast.AST) -> ast.AST:
-    """``tree`` with the docstring (a leading string statement) of every module, class and
-    function removed, in place."""
+def _is_string_statement(stmt: ast.stmt) -> bool:
+    """Whether ``stmt`` is only a string constant (a docstring, an attribute note, any other
+    bare string): evaluating it has no effect."""
+    return isinstance(stmt, ast.Expr) and isinstance(stmt.value, ast.Constant) and isinstance(stmt.value.value, str)
+
+
+def _without_string_statements(tree: ast.AST) -> ast.AST:
+    """``tree`` without its string-only statements, in place.
+
+    Every statement that is only a string constant is removed from every statement list
+    (module, class and function bodies, and the bodies of ``if``, ``for``, ``while``,
+    ``with``, ``try``, ``match``): the docstrings, the attribute notes after assignments and
+    any other bare string, none of which changes what runs. A body left empty becomes
+    ``pass`` (so a function whose only statement is its docstring reads as ``pass``); a
+    module may stay empty, and an ``else`` clause left empty is dropped, as if not written.
+
+    Parameters
+    ----------
+    tree : ast.AST
+        A parsed syntax tree; modified in place.
+
+    Returns
+    -------
+    ast.AST
+        ``tree``.
+    """
     for node in ast.walk(tree):
-        if isinstance(node, _DOC_OWNERS) and node.body:
-            first = node.body[0]
-            if isinstance(first, ast.Expr) and isinstance(first.value, ast.Constant):
-                if isinstance(first.value.value, str):
-                    node.body = node.body[1:]
+        for field in _STATEMENT_LISTS:
+            stmts = getattr(node, field, None)
+            if not isinstance(stmts, list) or not stmts:  # an expression body (lambda, x if c else y) or none
+                continue
+            kept = [s for s in stmts if not _is_string_statement(s)]
+            if len(kept) == len(stmts):
+                continue
+            if not kept and field != "orelse" and not isinstance(node, ast.Module):
+                kept = [ast.Pass()]
+            setattr(node, field, kept)
     return tree
 
 
@@ -274,9 +305,10 @@ def _smk_tokens(text: str) -> bytes:
 def file_digest(path: str | Path) -> bytes:
     """What of a file the code hashes hold, as bytes.
 
-    Python source (``.py``): its syntax tree without docstrings, printed by :func:`ast.dump`
-    (no line numbers), after the Python minor version; so a comment, a docstring or a
-    reformatting leaves it unchanged and any change of what runs changes it. A Snakemake rule
+    Python source (``.py``): its syntax tree without docstrings and other string-only
+    statements (attribute notes), printed by :func:`ast.dump` (no line numbers), after the
+    Python minor version; so a comment, a docstring, an attribute note or a reformatting
+    leaves it unchanged and any change of what runs changes it. A Snakemake rule
     file (``.smk``, ``Snakefile``): its tokens without comments and blank lines. Anything else
     (package data): its bytes.
 
