@@ -95,10 +95,8 @@ class Scenario:
     exact_spill: bool = False
     """Each delayed tap's copy of a symbol spills into the next symbol's first samples, as in
     the exact reference (:meth:`railradio.nr.synthesis.Synthesizer._add_spill`), instead of
-    being wrapped within its own symbol (the shortcut measured by ``nr.fidelity.form``)."""
-    # The wrapped spill is measured by ``nr.fidelity.spill`` (see ``exact_spill`` in the class
-    # docstring). The attribute note above is part of the code hashes (railradio.codedeps
-    # hashes attribute notes), so its wording changes with the next re-run of the nr records.
+    being wrapped within its own symbol (the shortcut measured by ``nr.fidelity.spill``). The
+    study's config sets it (``nr.channel.exact_spill``, default true)."""
     synthesis_decimation: int | None = None
     """The bursts are synthesized at F_s/D_s (the central N_FFT/D_s subcarriers) and brought
     to the receiver's front end F_s/D (``receiver.decimation``) by its ideal anti-aliasing
