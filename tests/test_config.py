@@ -156,6 +156,23 @@ def test_schema_rejects_each_kind_of_bad_value(dotted, value, must_mention):
 
 
 @pytest.mark.parametrize(
+    ("dotted", "value", "must_mention"),
+    [  # the values and keys renamed in config/README.md "Migration": the old spelling is refused
+        ("nr.receiver.ssb_pattern", "seed", ["nr.receiver.ssb_pattern", "'source'"]),
+        ("nr.receiver.detector", "seed", ["nr.receiver.detector", "'source'"]),
+        ("nr.cell_search.detector", "seed", ["nr.cell_search.detector", "'source'"]),
+        ("nr.receiver_variants.robust.detector", "seed", ["nr.receiver_variants.robust.detector", "'source'"]),
+        ("tunnel.seed_model", {"reflection_loss_db": 8.0}, ["config key 'tunnel'", "'seed_model' was unexpected"]),
+    ],
+)
+def test_schema_rejects_renamed_values(dotted, value, must_mention):
+    with pytest.raises(ConfigError) as exc:
+        validate_config(_with(_paper(), dotted, value), SCHEMA)
+    for text in must_mention:
+        assert text in str(exc.value), str(exc.value)
+
+
+@pytest.mark.parametrize(
     ("changes", "must_mention"),
     [  # one per kind of rule between keys
         ({"handover.sweep.n_batches": 3}, ["handover.sweep.n_batches", "<= handover.sweep.n_blocks = 2"]),
@@ -170,6 +187,7 @@ def test_schema_rejects_each_kind_of_bad_value(dotted, value, must_mention):
         ({"chain.sigmas_m": [0.0, 20.0, 2.0]}, ["chain.sigmas_m", "ascending"]),
         ({"nr.tracker.w_distance_edges_m": [750.0, 250.0]}, ["nr.tracker.w_distance_edges_m", "ascending"]),
         ({"nr.imm.receiver": "fancy"}, ["nr.imm.receiver", "robust"]),  # a name that does not exist
+        ({"nr.imm.receiver": "seed"}, ["nr.imm.receiver", "'source'"]),  # the source's receiver's old name
         ({"nr.imm.sojourn_s": [100.0, 0.01]}, ["nr.imm.sojourn_s[1]", "dt_s"]),
         ({"handover.sensitivity.speed_kmh": 123}, ["handover.sensitivity.speed_kmh", "speeds_kmh"]),
         ({"chain.speed_kmh": 123}, ["chain.speed_kmh", "speeds_kmh"]),

@@ -79,7 +79,7 @@ def test_reproduction_is_judged_by_the_precision_of_the_path_not_the_monte_carlo
     nr = {"nr.track.x": {"value": 10.0}}
     assert compare({"nr.track.x": {"value": 10.0 + 5e-5}}, nr) == []
     assert compare({"nr.track.x": {"value": 10.0 + 5e-4}}, nr)
-    assert rel_tol("sens.nr.base.seed.x") == rel_tol("chain.nr_ekf.err_m.rms") == REL_TOL_FLOAT32
+    assert rel_tol("sens.nr.base.source.x") == rel_tol("chain.nr_ekf.err_m.rms") == REL_TOL_FLOAT32
     assert rel_tol("chain.joint.success.sigma0") == rel_tol("handover.a3.success.v350") == REL_TOL_FLOAT64
     assert REL_TOL_FLOAT32 > 1e3 * REL_TOL_FLOAT64
     assert tolerance("k", {"value": 0.0}, {"value": 0.0}) > 0  # an absolute floor at zero

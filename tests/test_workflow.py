@@ -220,7 +220,7 @@ def test_intermediates_are_self_explaining(ci_run):
         "tunnel_gdop",
         "tunnel_position_error_cdf",
         "tunnel_ray_engines",
-        "tunnel_seed_vs_physical",
+        "tunnel_source_vs_physical",
         "tunnel_sensitivity",
         "nr_sweeps",
         "fusion_sensitivity",

@@ -168,14 +168,14 @@ def nr_problems(nr: Mapping[str, Any], root: str = "nr", main: bool = True) -> I
         yield f"{root}.channel.synthesis_decimation", d_s, f"a divisor of {root}.receiver.decimation = {d}"
     if d_c > d or d % d_c:
         yield f"{root}.receiver.search_decimation", d_c, f"a divisor of {root}.receiver.decimation = {d}"
-    receivers = {"seed", *nr["receiver_variants"]}
-    if "seed" in nr["receiver_variants"]:
-        yield f"{root}.receiver_variants.seed", "…", "a name other than 'seed' (the source's receiver, nr.receiver)"
+    receivers = {"source", *nr["receiver_variants"]}
+    if "source" in nr["receiver_variants"]:
+        yield f"{root}.receiver_variants.source", "…", "a name other than 'source' (the source's receiver, nr.receiver)"
     if nr["imm"]["receiver"] not in receivers:
         yield (
             f"{root}.imm.receiver",
             nr["imm"]["receiver"],
-            f"one of {sorted(receivers)} (seed or a receiver_variants name)",
+            f"one of {sorted(receivers)} (source or a receiver_variants name)",
         )
     dt = nr["trajectory"]["dt_s"]
     for i, tau in enumerate(nr["imm"]["sojourn_s"]):

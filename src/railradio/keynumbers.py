@@ -4,7 +4,7 @@
 
 ``{"value", "unit", "source_value", "source_relation", "description", "mc_stderr"}``
 
-``value`` is ours; ``source_value``/``source_relation`` state the seed paper's claim
+``value`` is ours; ``source_value``/``source_relation`` state the source paper's claim
 (``=``, ``≈``, ``<``, ``≤``, ``≥``, ``>``; ``null`` where it has none); ``mc_stderr`` is the
 Monte Carlo standard error of ``value`` where one exists (used for tolerances).
 The manuscript uses ``\\kn{name}`` / ``\\knsrc{name}``, defined by :func:`to_latex`.

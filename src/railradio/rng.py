@@ -5,7 +5,7 @@ A job derives its generator from the config seed and *stable integer IDs* (study
 sweep, sweep point, shard, ...) through :class:`numpy.random.SeedSequence`, never from
 job order, so the same config gives identical results whatever ``snakemake -j``.
 
-Study IDs are the seed papers' numbers (000 nr, 002 fusion, 003 tunnel, 004 handover).  IDs of things that
+Study IDs are the source papers' numbers (000 nr, 002 fusion, 003 tunnel, 004 handover).  IDs of things that
 are described by parameter values (a sweep point) come from :func:`stable_id`, a hash of
 their canonical JSON: the same physical point gets the same random numbers wherever it
 appears (common random numbers across a sweep and the reference point).
@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 STUDY_IDS: dict[str, int] = {"nr": 0, "fusion": 2, "tunnel": 3, "handover": 4}
-"""Stable integer ID of each study (the seed paper's number)."""
+"""Stable integer ID of each study (the source paper's number)."""
 
 
 def canonical_json(obj: Any) -> str:

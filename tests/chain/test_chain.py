@@ -148,7 +148,7 @@ def test_nofix_share_counts_epochs_without_any_detection():
             "t": ("epoch", 0.1 * np.arange(n)),
             "x_true": ("epoch", SPEED / 3.6 * 0.1 * np.arange(n)),
         },
-        coords={"receiver": ["seed", "robust"]},
+        coords={"receiver": ["source", "robust"]},
     )
     assert nofix_share([ds], "robust", SPEED, 50.0) == pytest.approx(1 / 4)
     with pytest.raises(ValueError, match="receiver"):

@@ -38,7 +38,7 @@ def test_crlb_rejects_nonpositive_sigma():
 
 
 # Allowance for the nonlinearity gap between the fused estimator and the bound: the
-# estimators are unbiased only to first order; at the seed's operating point the gap is
+# estimators are unbiased only to first order; at the source's operating point the gap is
 # below 1 %, at the largest errors swept (sigma_TDOA 0.6 us, sigma_AOA 0.06 rad) below 5 %.
 NONLINEARITY_ALLOWANCE = {"reference": 0.01, "large": 0.05}
 
@@ -76,7 +76,7 @@ def _sweep(parameter, values, **fixed):
     return sweep_dataset(pts, parameter)
 
 
-def test_seed_claims_fusion_below_both_and_trends():
+def test_source_claims_fusion_below_both_and_trends():
     d = _sweep("d_m", [100.0, 300.0, 1000.0, 2000.0])
     t = _sweep("sigma_tdoa_s", [5e-8, 2e-7, 5e-7])
     a = _sweep("sigma_aoa_rad", [0.005, 0.02, 0.05])

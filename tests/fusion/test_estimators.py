@@ -62,7 +62,7 @@ def test_no_solution_is_flagged_and_clipped_to_the_nearer_end():
     assert tdoa_on_track_rootfind(1.2 * g.baseline_m, g) == -np.inf
 
 
-def test_seed_geometry():
+def test_source_geometry():
     g = CellGeometry(1500.0)
     assert g.baseline_m == pytest.approx(2 * math.sqrt(3) * 1500)
     assert g.train_interval_m == pytest.approx((0.0, math.sqrt(3) * 1500))

@@ -232,7 +232,7 @@ def test_noise_free_joint_handover_completes_at_zero_rsrp_gap(speed, m):
     """Without shadowing, measurement noise or position error (the default geometry, 30 m
     offset, and the k = 4 L3 filter), the joint decision's handover *completes* at the point
     where the true mean RSRP gap is zero, within the one-sample quantization of its command,
-    and its execution starts v·T0 before that (the band is shifted back by v·T0, seed eq. 2)."""
+    and its execution starts v·T0 before that (the band is shifted back by v·T0, source eq. 2)."""
     base = Scenario().with_weights(m, 0.5)
     scn = replace(
         base,

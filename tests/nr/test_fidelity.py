@@ -263,16 +263,16 @@ def test_a_production_path_that_is_not_the_main_runs_is_refused():
         toa_samples = np.array([10.0])
         aod_rad = np.array([0.1])
 
-    res = {"epoch": 3, "decisions": {"own_noise": {"seed": D()}}}
+    res = {"epoch": 3, "decisions": {"own_noise": {"source": D()}}}
     import xarray as xr
 
     row = xr.Dataset(
         {"toa_hat": (("receiver", "cand"), [[10.0 / SAMPLE_RATE_HZ]]), "aod_hat": (("receiver", "cand"), [[0.1]])}
     )
-    check_production(res, row, ["seed"])
+    check_production(res, row, ["source"])
     row["aod_hat"] = (("receiver", "cand"), [[0.2]])
     with pytest.raises(ValueError, match="differs from the main run"):
-        check_production(res, row, ["seed"])
+        check_production(res, row, ["source"])
 
 
 @pytest.mark.skipif(not (ROOT / "paper/fidelity_numbers.json").exists(), reason="fidelity numbers not published")
@@ -332,10 +332,10 @@ def test_at_the_papers_interference_the_production_path_keeps_our_decisions():
         row = main.isel(epoch=i)
         out = run.epoch(int(e), row["rrh"].values.astype(np.int64), int(row["serving_true"]))
         assert out["truth"]["n_links"] >= 15
-        check_production(out, row, ["seed", "robust"])
+        check_production(out, row, ["source", "robust"])
         res.append(out)
     assert scn.radio.noise_psd_w_hz > 0
-    st = stack(res, ["seed", "robust"])
+    st = stack(res, ["source", "robust"])
     a, b = st["production"]["robust"], st["exact"]["robust"]
     assert np.nansum(changed("detection", a, b)) <= 2
     assert np.nansum(changed("toa", a, b)) <= 2
@@ -367,7 +367,7 @@ def test_a_shortcut_the_production_does_not_take_is_measured_but_left_out_of_the
     assert comps["spill"].taken is False and all(c.taken for k, c in comps.items() if k != "spill")
     wrapped = dataclasses.replace(comps["spill"], taken=True)
     assert comparisons(types.SimpleNamespace(full_channel_range_m=np.inf, exact_spill=False))["spill"] == wrapped
-    rx = ("seed", "robust")
+    rx = ("source", "robust")
     summary = {k: {r: _measures(0.0) for r in rx} for k in ("noise", "form")}
     summary["spill"] = {r: _measures(0.02) for r in rx}
     sub = {k: comps[k] for k in summary}

@@ -12,7 +12,7 @@ from railradio.nr.keys import key_numbers, sensitivity_key_numbers
 
 
 def _track(err_value: float | np.ndarray, n: int = 200, spacing_m: float = 500.0) -> xr.Dataset:
-    rx, var = ["seed", "robust"], ["aod", "toa", "aod_toa"]
+    rx, var = ["source", "robust"], ["aod", "toa", "aod_toa"]
     pos = np.broadcast_to(np.asarray(err_value, dtype=float), (2, 3, 2, n)).copy()
     ds = xr.Dataset(
         {
@@ -78,7 +78,7 @@ def test_a_diverged_track_is_reported_as_lost_not_as_an_accuracy():
 def test_sensitivity_cases_report_lost_tracks_with_their_own_spacing():
     err = np.full(200, 300.0)  # lost with 500 m spacing, tracked with 1000 m
     k = sensitivity_key_numbers(_track(err), {"wide": _track(err, spacing_m=1000.0)}, 200)
-    assert k["sens.nr.base.seed.track.aod_toa.lost_frac"]["value"] == 1.0
-    assert k["sens.nr.base.seed.track.aod_toa.err_m.mean"]["value"] is None
-    assert k["sens.nr.wide.seed.track.aod_toa.lost_frac"]["value"] == 0.0
-    assert k["sens.nr.wide.seed.track.aod_toa.err_m.mean"]["value"] == 300.0
+    assert k["sens.nr.base.source.track.aod_toa.lost_frac"]["value"] == 1.0
+    assert k["sens.nr.base.source.track.aod_toa.err_m.mean"]["value"] is None
+    assert k["sens.nr.wide.source.track.aod_toa.lost_frac"]["value"] == 0.0
+    assert k["sens.nr.wide.source.track.aod_toa.err_m.mean"]["value"] == 300.0

@@ -112,11 +112,11 @@ PEAK_REL_ERR = 0.05
 
 def test_detection_on_noise_only_matches_theory():
     """Pure noise: no NaN, no TOA beyond the window; the CFAR rule's false-alarm rate per
-    block is near its design value, the seed's μ + 4σ rule false-alarms far more often."""
+    block is near its design value, the source's μ + 4σ rule false-alarms far more often."""
     rng = np.random.default_rng(4)
     cfg = ReceiverConfig(decimation=4)
     n_blocks_total = 0
-    fa = {"seed": 0, "cfar": 0}
+    fa = {"source": 0, "cfar": 0}
     for _ in range(8):
         z = (rng.standard_normal(140_000) + 1j * rng.standard_normal(140_000)).astype(np.complex64)
         for det in fa:
@@ -127,8 +127,8 @@ def test_detection_on_noise_only_matches_theory():
             assert np.all(ok)
         n_blocks_total += 2 * cfg.n_blocks
     rate_cfar = fa["cfar"] / n_blocks_total
-    rate_seed = fa["seed"] / n_blocks_total
+    rate_source = fa["source"] / n_blocks_total
     # binomial: 1024 blocks at p = 0.05 -> sd 0.007; the effective number of independent
     # lags is approximate, so allow a factor of two around the design value
     assert 0.025 <= rate_cfar <= 0.10, rate_cfar
-    assert rate_seed > 0.2, rate_seed
+    assert rate_source > 0.2, rate_source

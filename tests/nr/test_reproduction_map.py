@@ -40,8 +40,8 @@ def test_cells_and_the_bursts_they_share(nr_and_schema):
     assert rm.burst_owner("tpl_sss_sel_peak", cells, nr) == rm.burst_owner("tpl_sss_sel_ss_rsrp", cells, nr)
     assert rm.calibration_owner("tpl_pss_sss_sel_peak", cells) == "mt32_others_random"
     assert rm.burst_owner("mt16_none", cells, nr) == "mt16_none"
-    assert rm.cell_receivers("tpl_sss_sel_peak", nr) == ["seed"]
-    assert rm.cell_receivers("mt16_none", nr) == ["seed", "robust"]
+    assert rm.cell_receivers("tpl_sss_sel_peak", nr) == ["source"]
+    assert rm.cell_receivers("mt16_none", nr) == ["source", "robust"]
 
 
 def test_calibration_run_spans_the_segment_accelerations(nr_and_schema):
@@ -107,8 +107,8 @@ def _errors(n, rng, scale_toa=0.3, scale_aod=2.0, fused=0.2):
 def test_cell_key_numbers_mark_what_holds_and_what_is_lost():
     rng = np.random.default_rng(3)
     aod, rngm, pos = _errors(600, rng)
-    nums = rm.cell_key_numbers("c", "seed", aod, rngm, pos, 500.0, make_rng(1, (0,)), 50, 400, 0.95, "test")
-    p = "nr.map.c.seed"
+    nums = rm.cell_key_numbers("c", "source", aod, rngm, pos, 500.0, make_rng(1, (0,)), 50, 400, 0.95, "test")
+    p = "nr.map.c.source"
     for metric in rm.METRICS:
         e, lo, hi = (nums[f"{p}.{metric}{s}"]["value"] for s in ("", ".lo", ".hi"))
         assert lo <= e <= hi, metric
@@ -119,7 +119,7 @@ def test_cell_key_numbers_mark_what_holds_and_what_is_lost():
     assert nums[f"{p}.claim.fusion_best"]["value"] == rm.HOLDS
     # the fused tracker lost on 5 % of the epochs: no accuracy, its claims fail
     pos["aod_toa"][::20] = 1e6  # spread along the run: every resample holds about 5 %
-    nums = rm.cell_key_numbers("c", "seed", aod, rngm, pos, 500.0, make_rng(1, (0,)), 50, 400, 0.95, "test")
+    nums = rm.cell_key_numbers("c", "source", aod, rngm, pos, 500.0, make_rng(1, (0,)), 50, 400, 0.95, "test")
     assert nums[f"{p}.track.aod_toa.lost_frac"]["value"] == pytest.approx(0.05)
     assert nums[f"{p}.track.aod_toa.err_m.mean"]["value"] is None
     assert nums[f"{p}.track.aod_toa.err_m.mean"]["lost_frac"] == pytest.approx(0.05)
@@ -139,8 +139,8 @@ def test_summary_counts_cells(nr_and_schema):
         for rx in rm.cell_receivers(c, nr):
             nums |= rm.cell_key_numbers(c, rx, *_errors(300, rng), 500.0, make_rng(1, (0,)), 50, 100, 0.95, "t")
     s = rm.summary_key_numbers(nums, cells, nr)
-    assert s["nr.map.seed.n_cells"]["value"] == 2 and s["nr.map.robust.n_cells"]["value"] == 1
-    for rx in ("seed", "robust"):
+    assert s["nr.map.source.n_cells"]["value"] == 2 and s["nr.map.robust.n_cells"]["value"] == 1
+    for rx in ("source", "robust"):
         for c in rm.CLAIMS:
             assert (
                 sum(s[f"nr.map.{rx}.{c}.n_{w}"]["value"] for w in ("holds", "fails", "unresolved"))
@@ -165,8 +165,8 @@ def test_diagnostics_split_endfire_from_broadside():
     aod_true = np.radians(np.array([[1.0, 90.0, 178.5]] * 4))  # 1 and 1.5 deg from the track
     err = np.radians(np.array([[2.0, 0.1, 3.0]] * 4))
     n_det = np.array([[5, 3, 7]] * 4)
-    d = rm.diagnostic_key_numbers("c", "seed", err, aod_true, n_det, "t")
-    p = "nr.map.c.seed.diag"
+    d = rm.diagnostic_key_numbers("c", "source", err, aod_true, n_det, "t")
+    p = "nr.map.c.source.diag"
     assert d[f"{p}.aod_err_deg.median_endfire"]["value"] == pytest.approx(2.5)
     assert d[f"{p}.aod_err_deg.median_broadside"]["value"] == pytest.approx(0.1)
     assert d[f"{p}.frac_endfire"]["value"] == pytest.approx(2 / 3)

@@ -85,7 +85,7 @@ def test_toa_floor_against_monte_carlo():
 
 
 def _track(n: int, err: float) -> xr.Dataset:
-    rx, var = ["seed", "robust"], ["aod", "toa", "aod_toa"]
+    rx, var = ["source", "robust"], ["aod", "toa", "aod_toa"]
     pos = np.full((2, 3, 2, n), err)
     pos[..., n // 2 :] = 10 * err  # the later half is worse: the epoch cut shows
     return xr.Dataset(
@@ -106,7 +106,7 @@ def test_sensitivity_key_numbers_cut_each_case_to_its_epochs():
     # base: epochs 50..399, half at 1 and half at 10 m; short: epochs 50..199 at 2 m
     assert k["sens.nr.base.robust.track.aod_toa_gated.err_m.mean"]["value"] == pytest.approx((150 * 1 + 200 * 10) / 350)
     assert k["sens.nr.short.robust.track.aod_toa_gated.err_m.mean"]["value"] == pytest.approx(2.0)
-    assert "first 200 epochs" in k["sens.nr.short.seed.meas.toa_err_m.p95"]["description"]
+    assert "first 200 epochs" in k["sens.nr.short.source.meas.toa_err_m.p95"]["description"]
     with pytest.raises(ValueError, match="fewer than n_epochs"):
         sensitivity_key_numbers(base, {"short": _track(100, 2.0)}, {"base": 400, "short": 200})
 
@@ -197,13 +197,13 @@ def test_case_scheduling_reuses_bursts_and_cuts_epochs():
 
 
 def test_fewer_ss_beams_keep_the_burst_pattern_prefix():
-    """n_beams 32/16: the first 32/16 block positions of the seed pattern, beams spread
+    """n_beams 32/16: the first 32/16 block positions of the source pattern, beams spread
     over the same 0..180 deg (the schema allows 2..64)."""
     from railradio.nr.antenna import RrhArray
     from railradio.nr.numerology import ssb_first_symbols
     from railradio.nr.receiver import ReceiverConfig
 
-    full = ssb_first_symbols("seed", 64)
+    full = ssb_first_symbols("source", 64)
     for n in (32, 16):
         assert np.array_equal(ReceiverConfig(n_blocks=n).ssb_first, full[:n])
         ang = np.degrees(RrhArray(n_beams=n).beam_angles_rad)

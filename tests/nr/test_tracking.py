@@ -115,7 +115,7 @@ def test_snapshot_ls_recovers_noiseless_position():
     assert np.all(np.linalg.eigvalsh(cov) > 0)
 
 
-def test_trajectory_seed_profile():
+def test_trajectory_source_profile():
     tr = Trajectory(((200, 0.5), (27.5, 0.0), (150, 0.2), (200, -0.65)))
     x, v, a = tr.state(np.array([0.0, 200.0, 227.5, 377.5, 577.5]))
     np.testing.assert_allclose(x, [0, 10_000, 12_750, 30_000, 43_000])

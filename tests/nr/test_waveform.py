@@ -32,8 +32,8 @@ def test_samples_per_subframe_and_cp_lengths():
 
 
 def test_ss_block_positions():
-    seed = ssb_first_symbols("seed")
-    assert seed.size == 64 and seed[:4].tolist() == [2, 8, 16, 22] and seed[-1] == 14 * 31 + 8
+    source = ssb_first_symbols("source")
+    assert source.size == 64 and source[:4].tolist() == [2, 8, 16, 22] and source[-1] == 14 * 31 + 8
     case_e = ssb_first_symbols("caseE")
     assert case_e[:8].tolist() == [8, 12, 16, 20, 32, 36, 40, 44]
     assert case_e[8] == 56 + 8 and 4 * 56 + 8 not in case_e  # n = 4 is skipped
@@ -73,7 +73,7 @@ def test_grid_layout_and_reference():
     num = Numerology(4)
     rng = np.random.default_rng(0)
     pool = qpsk_pool(rng, 8)
-    first = ssb_first_symbols("seed")
+    first = ssb_first_symbols("source")
     symbols = np.arange(0, 12)
     grid, block_of = burst_grid(num, symbols, first, 17, 2, pool, rng.integers(0, 8, symbols.size))
     assert block_of.tolist() == [-1, -1, 0, 0, 0, 0, -1, -1, 1, 1, 1, 1]

@@ -12,7 +12,7 @@ def test_equal_area_square_and_slot_line():
     t = Tunnel()
     assert equal_area_side_m(8.5) == pytest.approx(7.533, abs=1e-3)  # D sqrt(pi)/2
     assert equal_area_side_m(8.5) ** 2 == pytest.approx(t.area_m2)
-    assert t.slot_x_m.size == 250 and t.slot_x_m[-1] == 4980.0  # x_i = i dx, i < 250 [seed]
+    assert t.slot_x_m.size == 250 and t.slot_x_m[-1] == 4980.0  # x_i = i dx, i < 250 [source]
     assert t.slot_yz == (pytest.approx(0.85), 0.0)
     assert t.with_shape("rect").slot_yz[0] == pytest.approx(0.7533, abs=1e-4)
 

@@ -27,7 +27,7 @@ def test_grazing_limits():
     root = np.sqrt(CONCRETE_900MHZ - 1)
     assert fresnel_te(c) == pytest.approx(-1 + 2 * c / root, abs=1e-7)
     assert fresnel_tm(c) == pytest.approx(-1 + 2 * CONCRETE_900MHZ * c / root, abs=1e-6)
-    # near grazing TE loses far less than the seed's fixed 8 dB: 0.1-1.5 dB at 1-10 degrees
+    # near grazing TE loses far less than the source's fixed 8 dB: 0.1-1.5 dB at 1-10 degrees
     graze = np.deg2rad([1.0, 10.0])
     loss = reflection_loss_db(fresnel_te(np.sin(graze)))
     assert 0.1 < loss[0] < 0.2 and 1.3 < loss[1] < 1.6

@@ -6,7 +6,7 @@ import pytest
 from railradio.constants import SPEED_OF_LIGHT_M_S
 from railradio.tunnel.geometry import Cable, Tunnel
 from railradio.tunnel.measurement import MeasurementModel
-from railradio.tunnel.positioning import cep, gain_to_offset_m, gdop_seed, gdop_tdoa_along, rssi_ls, tdoa_gauss_newton
+from railradio.tunnel.positioning import cep, gain_to_offset_m, gdop_source, gdop_tdoa_along, rssi_ls, tdoa_gauss_newton
 from railradio.tunnel.simulate import Train
 from railradio.tunnel.wideband import wideband_candidates
 
@@ -45,8 +45,8 @@ def test_gain_inversion_and_gdop_and_cep():
     off = np.linspace(0, 100, 101)
     curve = -40 - 20 * np.log10(np.hypot(off, H))
     np.testing.assert_allclose(gain_to_offset_m(curve[[5, 50]], off, curve), [5.0, 50.0], atol=1e-6)
-    # seed's GDOP: four slots symmetric around the receiver at the same depth
-    g = gdop_seed(np.array([0.0]), 4.0, np.array([[-20.0, -10.0, 10.0, 20.0]]), 0.85)
+    # source's GDOP: four slots symmetric around the receiver at the same depth
+    g = gdop_source(np.array([0.0]), 4.0, np.array([[-20.0, -10.0, 10.0, 20.0]]), 0.85)
     t = np.arctan2(0.85 - 4.0, np.array([-20.0, -10.0, 10.0, 20.0]))
     a = np.column_stack([np.cos(t), np.sin(t)])
     assert g[0] == pytest.approx(np.sqrt(np.trace(np.linalg.inv(a.T @ a))))

@@ -194,16 +194,16 @@ def test_the_table_covers_every_slot_and_a_short_table_fails_the_cutoff_check():
     assert med["doubled"] / med["cutoff"] - 1.0 > 0.05
 
 
-def test_the_seed_models_table_leaves_nothing_beyond_its_extent():
+def test_the_source_models_table_leaves_nothing_beyond_its_extent():
     # the source's model attenuates 0.065 dB/m on top of free space and the coupling loss:
-    # the slots beyond seed_model.max_offset_m carry < 1e-6 of one receiver's power
+    # the slots beyond source_model.max_offset_m carry < 1e-6 of one receiver's power
     import yaml
 
-    from railradio.tunnel.channel import SeedModel
+    from railradio.tunnel.channel import SourceModel
 
     cfg = yaml.safe_load(open("config/config.yaml"))["tunnel"]
-    extent = cfg["seed_model"]["max_offset_m"]
-    sm = cfg["seed_model"]
+    extent = cfg["source_model"]["max_offset_m"]
+    sm = cfg["source_model"]
     offs = np.arange(0.0, 2.0 * extent + 1e-9, RECT.slot_spacing_m)  # one receiver at a slot
     tab = tabulate(
         image_families(RECT, 5),
@@ -212,9 +212,9 @@ def test_the_seed_models_table_leaves_nothing_beyond_its_extent():
         offs,
         eps=CONCRETE_900MHZ,
         polarization="paraxial",
-        propagation="seed",
+        propagation="source",
         rng=np.random.default_rng(1),
-        seed_model=SeedModel(sm["reflection_loss_db"], sm["tunnel_att_db_per_m"], sm["multipath_max_db"]),
+        source_model=SourceModel(sm["reflection_loss_db"], sm["tunnel_att_db_per_m"], sm["multipath_max_db"]),
     )
     p = tab["power_mean"].values
     assert p[offs > extent].sum() < 1e-6 * p.sum()

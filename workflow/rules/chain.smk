@@ -1,5 +1,5 @@
 # Study `chain`: one railway, one chain (docs/model/chain.md). The nr study's tracked
-# along-track position error (results/nr/imm/{real}.nc, the seed's EKF on the robust
+# along-track position error (results/nr/imm/{real}.nc, the source's EKF on the robust
 # receiver's gated AOD+TOA) replaces the handover study's assumed GNSS/INS error, beside a
 # Gauss-Markov sweep of the error sigma. Reads the nr IMM/track files and the handover cost
 # grid; simulates crossings with the handover engine's blocks.

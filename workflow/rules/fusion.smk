@@ -1,4 +1,4 @@
-# Study `fusion`: TDOA/AOA fusion with the track constraint (seed 002; docs/model/fusion.md).
+# Study `fusion`: TDOA/AOA fusion with the track constraint (source 002; docs/model/fusion.md).
 # Chain: one Monte Carlo job per sweep point -> one dataset per sweep -> figures;
 # reference point + sweeps -> key numbers.
 
@@ -69,7 +69,7 @@ rule fusion_sweep:
 
 
 rule fusion_figure:
-    """Plot one sweep (seed Fig. 3-5) with the CRLB."""
+    """Plot one sweep (source Fig. 3-5) with the CRLB."""
     input:
         lambda w: f"results/fusion/sweep_{FUSION_FIGURE_SWEEP[w.name]}.nc",
     output:

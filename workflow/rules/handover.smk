@@ -1,5 +1,5 @@
 # Study `handover`: position-power joint handover decision vs A3 and distance triggers
-# (seed 004; docs/model/handover.md, our reconstruction of the lost equations).
+# (source 004; docs/model/handover.md, our reconstruction of the lost equations).
 # Chain: cost grid of (m, alpha) on its own runs -> shards of crossings per (speed, batch)
 # with the selected weights -> summary per policy and speed -> figures + key numbers;
 # one-at-a-time sensitivity variants on the reference speed's runs -> their summary.
@@ -37,7 +37,7 @@ wildcard_constraints:
 
 
 rule handover_cost:
-    """Cost J(m, alpha) of the joint decision on its own runs (seed Fig. 4)."""
+    """Cost J(m, alpha) of the joint decision on its own runs (source Fig. 4)."""
     output:
         "results/handover/cost.nc",
     params:
@@ -159,7 +159,7 @@ rule handover_sensitivity:
 
 
 rule handover_figure:
-    """One figure of the handover study (seed Fig. 4-8, sensitivity)."""
+    """One figure of the handover study (source Fig. 4-8, sensitivity)."""
     input:
         lambda w: HO_FIGURES[w.name],
     output:
@@ -209,7 +209,7 @@ rule handover_correction:
 
 
 rule handover_key_numbers:
-    """Key numbers handover.* (ours beside the seed's claims)."""
+    """Key numbers handover.* (ours beside the source's claims)."""
     input:
         summary="results/handover/summary.nc",
         cost="results/handover/cost.nc",

@@ -1,4 +1,4 @@
-# Study `nr`: 5G NR SS-burst positioning of a high-speed train (seed 000, docs/model/nr.md).
+# Study `nr`: 5G NR SS-burst positioning of a high-speed train (source 000, docs/model/nr.md).
 # Chain: trajectory -> per-shard channel + burst + per-cell estimates (NetCDF) ->
 # calibration run (noise levels, q) -> EKF tracking per realization -> figures + numbers.
 from railradio.nr.workflow import receiver_selection as nr_selection
@@ -19,7 +19,7 @@ NR_EPOCHS = (
 NR_REALS = [f"r{i}" for i in range(NR["realizations"])]
 NR_CAL_SHARDS = 2
 NR_SIM = nr_sim(NR)
-NR_VARIANTS = list(NR_TRACKER_VARIANTS)  # the main run tracks every measurement variant (seed §4)
+NR_VARIANTS = list(NR_TRACKER_VARIANTS)  # the main run tracks every measurement variant (source §4)
 NR_SELECTION = nr_selection(NR)
 
 # Sensitivity cases: the nr config with a case's override merged in
@@ -58,7 +58,7 @@ wildcard_constraints:
 
 
 rule nr_trajectory:
-    """The train's truth: position, speed, acceleration every dt (seed Fig. 3)."""
+    """The train's truth: position, speed, acceleration every dt (source Fig. 3)."""
     output:
         "results/nr/trajectory.nc",
     params:

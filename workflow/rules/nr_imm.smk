@@ -8,7 +8,7 @@ KEY_NUMBER_FRAGMENTS.append("results/nr/imm/key_numbers.json")
 
 
 rule nr_imm:
-    """EKF (the seed's, calibrated), IMM and RTS-smoothed EKF of one realization."""
+    """EKF (the source's, calibrated), IMM and RTS-smoothed EKF of one realization."""
     input:
         shards=expand("results/nr/estimates/{{real}}/s{shard}.nc", shard=range(NR["n_shards"])),
         calibration="results/nr/calibration.json",

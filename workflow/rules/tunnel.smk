@@ -1,4 +1,4 @@
-# Study `tunnel`: long-train positioning with a leaky cable in a tunnel (seed 003; docs/model/tunnel.md).
+# Study `tunnel`: long-train positioning with a leaky cable in a tunnel (source 003; docs/model/tunnel.md).
 # Chain: ray families -> tabulated slot-to-receiver channel per engine (NetCDF) ->
 # RSSI map, delay spread, coverage (NetCDF) -> one run per train type and channel /
 # measurement variant (snapshot fixes, KF, PF; NetCDF) -> figures + key numbers.
@@ -6,12 +6,12 @@ from railradio.tunnel.sensitivity import sensitivity_cases
 from railradio.tunnel.study import SIDE_WALL, TABLES, VARIANTS, channel_config
 
 TUNNEL = config["tunnel"]
-TUNNEL_TABLES = [n for n in TABLES if SIDE_WALL not in n]  # image (square), sbr (circle), seed (the seed's model)
+TUNNEL_TABLES = [n for n in TABLES if SIDE_WALL not in n]  # image (square), sbr (circle), source (the source's model)
 TUNNEL_SIDE_WALL = TUNNEL["engine"] + SIDE_WALL  # the engine's channel with the cable on the side wall
 TUNNEL_TRAINS = list(TUNNEL["trains"])
 TUNNEL_VARIANTS = list(VARIANTS)
 TUNNEL_RUNS = [f"{t}/{v}" for t in TUNNEL_TRAINS for v in TUNNEL_VARIANTS]
-TUNNEL_CHANNEL_KEYS = ["geometry", "cable", "wall", "rays", "seed_model"]
+TUNNEL_CHANNEL_KEYS = ["geometry", "cable", "wall", "rays", "source_model"]
 TUNNEL_CHANNEL = {k: TUNNEL[k] for k in TUNNEL_CHANNEL_KEYS}
 TUNNEL_FIGURE_NAMES = [
     "tunnel_rssi_map",
@@ -19,7 +19,7 @@ TUNNEL_FIGURE_NAMES = [
     "tunnel_gdop",
     "tunnel_position_error_cdf",
     "tunnel_ray_engines",
-    "tunnel_seed_vs_physical",
+    "tunnel_source_vs_physical",
 ]
 
 register_figures("tunnel", TUNNEL_FIGURE_NAMES + ["tunnel_sensitivity"])
@@ -119,7 +119,7 @@ rule tunnel_run:
     """One train type crossing the tunnel: measurements, snapshot fixes, KF, rigid KF, PF."""
     input:
         lambda w: "results/tunnel/table_{}.nc".format(
-            "seed" if VARIANTS[w.variant][0] == "seed" else TUNNEL["engine"]
+            "source" if VARIANTS[w.variant][0] == "source" else TUNNEL["engine"]
         ),
     output:
         "results/tunnel/runs/{train}/{variant}.nc",
@@ -145,7 +145,7 @@ rule tunnel_run:
 
 rule tunnel_sensitivity:
     """One train type through the sensitivity cases (shadowing and delay-error sigma swept
-    over the seed's ranges, delay-error models), R realizations each, KF only."""
+    over the source's ranges, delay-error models), R realizations each, KF only."""
     input:
         table=lambda w: "results/tunnel/table_{}.nc".format(TUNNEL["engine"]),
         side_wall=f"results/tunnel/table_{TUNNEL_SIDE_WALL}.nc",
@@ -245,7 +245,7 @@ rule tunnel_sens_figure:
 
 
 rule tunnel_key_numbers:
-    """Key numbers tunnel.* beside the seed's design targets."""
+    """Key numbers tunnel.* beside the source's design targets."""
     input:
         maps=expand("results/tunnel/map_{name}.nc", name=TUNNEL_TABLES),
         tables=expand("results/tunnel/table_{name}.nc", name=TUNNEL_TABLES),

@@ -1,9 +1,9 @@
 """The nr study's tracked along-track position error as the handover's position input.
 
 Source: ``results/nr/imm/{real}.nc`` (the nr IMM rule), variable ``along_err`` (x̂ − x along
-the track, signed, [m]) of a causal tracker — by default ``ekf``, the seed's EKF on the
+the track, signed, [m]) of a causal tracker — by default ``ekf``, the source's EKF on the
 robust receiver's gated AOD+TOA measurements, the variant the nr IMM section reports (the
-seed receiver's tracks diverge; the track files ``results/nr/track/{real}.nc`` hold only
+source receiver's tracks diverge; the track files ``results/nr/track/{real}.nc`` hold only
 2-D error magnitudes, no sign).  Epochs without a detected RRH are coasted by the EKF's
 prediction, so their error is already in ``along_err``; an epoch with no tracker output
 (NaN) is an *outage*, filled by holding the last fix and letting the error grow by

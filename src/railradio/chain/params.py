@@ -27,7 +27,7 @@ class ChainParams:
     Parameters
     ----------
     speed_kmh : float, default 350.0
-        train speed of the chained handover run [km/h] (the seed's headline 350 km/h), in (0, 600].
+        train speed of the chained handover run [km/h] (the source's headline 350 km/h), in (0, 600].
     sigmas_m : tuple of float, default (0.0, 0.5, 1.0, 2.0, 3.0, 5.0, 7.5, 10.0, 15.0, 20.0)
         Gauss–Markov position-error σ grid [m], ascending, starting at 0.  At least 2 values,
         each in [0, 1000], strictly ascending.
@@ -35,7 +35,7 @@ class ChainParams:
         correlation time of the swept Gauss–Markov error [s] (the handover default, 1 s), in
         (0, 1e4].
     nr_filters : tuple of str, default ("ekf",)
-        nr trackers whose along-track error is chained (``ekf``: the seed's EKF on the robust
+        nr trackers whose along-track error is chained (``ekf``: the source's EKF on the robust
         receiver's gated AOD+TOA; ``imm``), a subset of :data:`NR_FILTERS`.
     speed_halfwidth_kmh : float, default 50.0
         nr epochs used: true speed within ±this of ``speed_kmh`` [km/h], in (0, 1000].

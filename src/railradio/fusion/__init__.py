@@ -1,4 +1,4 @@
-"""Study ``fusion``: TDOA/AOA fusion with the track as a constraint (seed 002)."""
+"""Study ``fusion``: TDOA/AOA fusion with the track as a constraint (source 002)."""
 
 from railradio.fusion.crlb import crlb_rmse_m, fisher_information
 from railradio.fusion.estimators import (

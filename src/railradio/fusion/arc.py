@@ -1,6 +1,6 @@
 """A curved track: the fusion study's cell layout on a circular arc (sensitivity, docs/model/fusion.md §5).
 
-The source (seed 002) uses the straight line y = 0 as the constraint.  Here the track is a
+Source 002 uses the straight line y = 0 as the constraint.  Here the track is a
 circular arc of radius R, tangent to y = 0 at the foot of the serving base station and
 curving toward the base stations (the centre of curvature (0, R) lies on their side: the
 BSs are *inside* the curve).  The cell layout is kept in along-track coordinates: the
@@ -61,7 +61,7 @@ class ArcGeometry:
         exceed ``d_m`` (the BSs lie inside the curve) and the baseline D must subtend less
         than π (R > D/π), so that the range difference decreases along [0, D].
     cell_radius_factor : float, default 2.0
-        R_c / d (seed: 2), > 1 [1].
+        R_c / d (source: 2), > 1 [1].
 
     Raises
     ------

@@ -1,6 +1,6 @@
 """Correlated TDOA errors: two range differences that share the serving BS (docs/model/fusion.md §5).
 
-The source (seed 002) has one TDOA, t_{2,1}, and one AOA, with independent errors.  A
+Source 002 has one TDOA, t_{2,1}, and one AOA, with independent errors.  A
 receiver usually has more than one neighbour: here BS0 at (-D, d) joins BS1 (0, d) and
 BS2 (D, d), both TDOAs referenced to the serving BS1,
 

@@ -1,6 +1,6 @@
 """Position on the track from a TDOA or an AOA, and their inverse-variance fusion.
 
-Seed 002, §2: TDOA ∩ track (eq. 3–5), AOA ∩ track (eq. 7), linear fusion (eq. 9–10).
+Source 002, §2: TDOA ∩ track (eq. 3–5), AOA ∩ track (eq. 7), linear fusion (eq. 9–10).
 All functions are vectorized over arbitrary array shapes.
 """
 
@@ -87,7 +87,7 @@ def tdoa_on_track_rootfind(delta_m: float, geom: CellGeometry, span_m: float = 1
 
 
 def aoa_on_track(theta_rad: ArrayLike, geom: CellGeometry) -> NDArray[np.float64]:
-    """Intersection of the bearing line from BS1 with the track (seed eq. 7, y = 0).
+    """Intersection of the bearing line from BS1 with the track (source eq. 7, y = 0).
 
     y - d = tan(θ)·(x - 0) at y = 0 gives x = -d / tan θ [m].  θ = 0 or π (a bearing
     parallel to the track) gives ±inf, to be clipped by :func:`clip_to_segment`.
@@ -181,7 +181,7 @@ def aoa_variance_propagated(x_m: ArrayLike, sigma_theta_rad: float, geom: CellGe
 
 
 def fuse(x_a: ArrayLike, var_a: ArrayLike, x_b: ArrayLike, var_b: ArrayLike) -> NDArray[np.float64]:
-    """Inverse-variance weighted mean of two estimates (seed eq. 9–10).
+    """Inverse-variance weighted mean of two estimates (source eq. 9–10).
 
     x_F = (x_a/σ_a² + x_b/σ_b²) / (1/σ_a² + 1/σ_b²).  Variances must be > 0.
 

@@ -1,4 +1,4 @@
-"""Figures of the fusion study (seed 002, Fig. 3–5): RMSE against the swept parameter,
+"""Figures of the fusion study (source 002, Fig. 3–5): RMSE against the swept parameter,
 TDOA, AOA, both fusions and the CRLB."""
 
 from __future__ import annotations

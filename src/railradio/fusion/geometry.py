@@ -1,10 +1,10 @@
-"""Railway cell geometry of the fusion study (seed 002, Fig. 2).
+"""Railway cell geometry of the fusion study (source 002, Fig. 2).
 
 The track is the line y = 0.  The serving base station BS1 stands at (0, d) and the
 neighbour BS2 at (D, d), both a distance d from the track on the same side.  The cell
-radius is R = k·d (the seed: k = 2), so the serving cell covers the track segment
+radius is R = k·d (the source: k = 2), so the serving cell covers the track segment
 |x| <= sqrt(R² - d²) and adjacent cells meet at half the baseline: D = 2·sqrt(R² - d²)
-(= 2√3·d for k = 2).  The train is placed on [0, sqrt(R² - d²)] (seed §3.1).
+(= 2√3·d for k = 2).  The train is placed on [0, sqrt(R² - d²)] (source §3.1).
 """
 
 from __future__ import annotations
@@ -25,7 +25,7 @@ class CellGeometry:
     d_m : float
         Perpendicular distance of both base stations from the track [m], > 0.
     cell_radius_factor : float, default 2.0
-        R / d, the cell radius in units of d (seed: 2), > 1 [1].
+        R / d, the cell radius in units of d (source: 2), > 1 [1].
 
     Raises
     ------
@@ -64,11 +64,11 @@ class CellGeometry:
 
     @property
     def train_interval_m(self) -> tuple[float, float]:
-        """Where the seed places the train: [0, sqrt(R² - d²)] [m]."""
+        """Where the source places the train: [0, sqrt(R² - d²)] [m]."""
         return (0.0, self.half_segment_m)
 
     def ranges_m(self, x_m: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """Distances r1, r2 [m] from a train at (x, 0) to BS1 and BS2 (seed eq. 3).
+        """Distances r1, r2 [m] from a train at (x, 0) to BS1 and BS2 (source eq. 3).
 
         Parameters
         ----------
@@ -86,7 +86,7 @@ class CellGeometry:
         return np.hypot(x, self.d_m), np.hypot(self.baseline_m - x, self.d_m)
 
     def range_difference_m(self, x_m: ArrayLike) -> NDArray[np.float64]:
-        """Range difference r2 - r1 [m] (seed eq. 4), c times the TDOA t_{2,1}.
+        """Range difference r2 - r1 [m] (source eq. 4), c times the TDOA t_{2,1}.
 
         Parameters
         ----------

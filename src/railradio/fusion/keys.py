@@ -1,4 +1,4 @@
-"""Key numbers of the fusion study (docs/model/fusion.md; the seed states none numerically)."""
+"""Key numbers of the fusion study (docs/model/fusion.md; the source states none numerically)."""
 
 from __future__ import annotations
 
@@ -14,7 +14,7 @@ SPECS = {
     "fusion.d1500.rmse_tdoa_m": KeySpec("fusion.d1500.rmse_tdoa_m", "m", "TDOA-on-track RMSE, d = 1500 m"),
     "fusion.d1500.rmse_aoa_m": KeySpec("fusion.d1500.rmse_aoa_m", "m", "AOA-on-track RMSE, d = 1500 m"),
     "fusion.d1500.rmse_fused_m": KeySpec(
-        "fusion.d1500.rmse_fused_m", "m", "fused RMSE (MC variances, the seed's reading), d = 1500 m"
+        "fusion.d1500.rmse_fused_m", "m", "fused RMSE (MC variances, the source's reading), d = 1500 m"
     ),
     "fusion.d1500.rmse_fused_propagated_m": KeySpec(
         "fusion.d1500.rmse_fused_propagated_m", "m", "fused RMSE (propagated variances), d = 1500 m"

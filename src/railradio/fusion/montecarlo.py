@@ -2,8 +2,8 @@
 
 One call of :func:`simulate_point` is one sweep point (one d, σ_TDOA, σ_AOA): n_positions
 train positions on [0, sqrt(R² - d²)], n_trials independent (TDOA, AOA) measurement pairs
-at each (seed §3.1: 1000 × 10 000).  Reading of the seed [ours, stated in the paper]: the
-seed "takes the mean of several position measurements" per algorithm; we read it as
+at each (source §3.1: 1000 × 10 000).  Reading of the source [ours, stated in the paper]: the
+source "takes the mean of several position measurements" per algorithm; we read it as
 per-trial estimates whose mean and variance per position feed the fusion weights, and
 the RMSE (eq. 11) over all trials and positions.
 
@@ -35,7 +35,7 @@ from railradio.rng import make_rng
 
 ESTIMATORS = ("tdoa", "aoa", "fused_genie", "fused_propagated")
 """Estimators compared: TDOA ∩ track, AOA ∩ track, and the inverse-variance fusion with
-per-position Monte Carlo variances (``fused_genie``: the seed's reading, which needs the
+per-position Monte Carlo variances (``fused_genie``: the source's reading, which needs the
 true position) or first-order variances propagated at the estimates (``fused_propagated``:
 what a receiver can do)."""
 
@@ -59,13 +59,13 @@ class PointParams:
     d_m : float
         Base-station distance from the track [m], > 0 (checked when :attr:`geometry` is built).
     sigma_tdoa_s : float
-        Standard deviation of the TDOA t_{2,1} [s] (seed eq. 2; 0.1 µs ↔ 29.98 m), finite, > 0.
+        Standard deviation of the TDOA t_{2,1} [s] (source eq. 2; 0.1 µs ↔ 29.98 m), finite, > 0.
     sigma_aoa_rad : float
         Standard deviation of the AOA at the serving BS [rad], finite, > 0.
     n_positions, n_trials : int
         Train positions (>= 1) and trials per position (>= 2) [1].
     cell_radius_factor : float, default 2.0
-        R / d (seed: 2) [1], > 1 (checked when :attr:`geometry` is built).
+        R / d (source: 2) [1], > 1 (checked when :attr:`geometry` is built).
     position_sampling : {"grid", "random"}, default "grid"
         ``"grid"``: midpoints of n_positions equal cells of [0, sqrt(R² - d²)]
         (stratified, lower Monte Carlo error); ``"random"``: uniform draws.
@@ -478,7 +478,7 @@ def summarize(ds: xr.Dataset) -> dict[str, float]:
     -------
     dict of str to float
         For each estimator e of ``ds`` (:data:`ESTIMATORS`): ``rmse_<e>_m`` [m], the RMSE
-        over trials and positions (seed eq. 11), and ``rmse_<e>_se_m`` [m], its Monte Carlo
+        over trials and positions (source eq. 11), and ``rmse_<e>_se_m`` [m], its Monte Carlo
         standard error (from that of the mean squared error, to first order; 0 where the
         RMSE is 0); ``crlb_m`` [m], the square root of the mean over positions of
         ``crlb_var``; ``frac_tdoa_no_solution``, ``frac_tdoa_clipped``, ``frac_aoa_clipped``
@@ -525,7 +525,7 @@ def sweep_dataset(points: list[xr.Dataset], parameter: str) -> xr.Dataset:
     xarray.Dataset
         Dimensions ``estimator`` × ``parameter``, sorted by ``parameter`` (units of its
         attrs: m, s or rad): ``rmse`` and ``rmse_se`` [m] (position RMSE over trials and
-        positions, seed eq. 11, and its Monte Carlo standard error) over (estimator,
+        positions, source eq. 11, and its Monte Carlo standard error) over (estimator,
         parameter); ``crlb_m`` [m] (sqrt of the mean of 1/J over positions) and
         ``frac_tdoa_no_solution``, ``frac_tdoa_clipped``, ``frac_aoa_clipped`` [1] (shares of
         trials) over (parameter); and the other two of ``d_m`` [m], ``sigma_tdoa_s`` [s],
@@ -542,7 +542,7 @@ def sweep_dataset(points: list[xr.Dataset], parameter: str) -> xr.Dataset:
     ds["rmse"] = (
         ("estimator", parameter),
         np.array([[s[f"rmse_{e}_m"] for s in summaries] for e in ESTIMATORS]),
-        {"units": "m", "long_name": "position RMSE over trials and positions (seed eq. 11)"},
+        {"units": "m", "long_name": "position RMSE over trials and positions (source eq. 11)"},
     )
     ds["rmse_se"] = (
         ("estimator", parameter),

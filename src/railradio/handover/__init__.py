@@ -1,5 +1,5 @@
 """Study `handover`: position-power joint handover decision against A3 and distance
-triggers (seed 004).  The model is OUR reconstruction of the seed's lost equations,
+triggers (source 004).  The model is OUR reconstruction of the source's lost equations,
 stated in docs/model/handover.md; every uncertain choice is a config switch."""
 
 from railradio.handover.params import A3, Execution, Joint, Radio, Scenario, Train, scenario_from_config

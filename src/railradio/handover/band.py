@@ -1,5 +1,5 @@
 """The handover band of the joint decision and the WSLR compensation (reconstruction
-eq. 4–7, 10–15; our reconstruction of the seed's lost equations).
+eq. 4–7, 10–15; our reconstruction of the source's lost equations).
 
 Model gap (completion coordinates, h ≪ L): Ĝ(x) = â + 10 n̂ log10((x_t − x)/(x − x_s)).
 """
@@ -16,7 +16,7 @@ from railradio.handover.params import Joint, Radio
 def gap_threshold_db(sigma0_db: float, joint: Joint) -> float:
     """GapH(v, σ0) [dB] (reconstruction eq. 5).
 
-    ``widen`` (default): Γ + κσ0 — the band widens as noise grows, as the seed says;
+    ``widen`` (default): Γ + κσ0 — the band widens as noise grows, as the source says;
     ``narrow``: max(Γ − κσ0, floor).  Its speed dependence is the band shift v·T0 (eq. 6).
     """
     if sigma0_db < 0:

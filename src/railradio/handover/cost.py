@@ -1,10 +1,10 @@
 """Parameter selection of the joint decision: the cost of (m, α) (reconstruction eq. 13–15,
-seed Fig. 4).
+source Fig. 4).
 
 J(m, A) = E[C/N] + E[F(A)], C the convergence price (index of the first node whose measured
 gap at its trigger is below the convergence threshold; N + 1 if none), F the fluctuation
 level std(X_1…X_N)/(PR − PL) clipped to 1.  Weights: the one-parameter geometric family
-α_k ∝ α(1 − α)^(k−1) over m ∈ 1…6, α ∈ 0.01…0.99 [ours: the seed's literal per-element
+α_k ∝ α(1 − α)^(k−1) over m ∈ 1…6, α ∈ 0.01…0.99 [ours: the source's literal per-element
 grid is 99^m points]; as a check a full per-element grid (step 0.05) for 2 ≤ m ≤ 3 (for
 m = 1 every weight vector normalises to [1], so the check cannot fail there).
 

@@ -1,4 +1,4 @@
-"""Figures of the handover study (seed Fig. 4–8) and the sensitivity figure.
+"""Figures of the handover study (source Fig. 4–8) and the sensitivity figure.
 
 Rates carry 95 % Wilson intervals with the clustered effective sample size; means carry
 ±2 cluster-robust standard errors.
@@ -14,14 +14,14 @@ from railradio import plotting
 LABELS = {"joint": "joint decision (ours, reconstructed)", "a3": "A3 event", "distance": "distance trigger"}
 MARKERS = {"joint": "o", "a3": "s", "distance": "^"}
 DELAY_REQUIREMENT_MS = 45.0
-"""Handover delay requirement of the Chinese railway radio standard quoted by the seed."""
+"""Handover delay requirement of the Chinese railway radio standard quoted by the source."""
 SUCCESS_REQUIREMENT = 0.995
-"""Success-rate requirement quoted by the seed (interruption ≤ 0.5 %)."""
-SEED_BEST_M = 3
+"""Success-rate requirement quoted by the source (interruption ≤ 0.5 %)."""
+SOURCE_BEST_M = 3
 
 
 def plot_cost_vs_m(cost: xr.Dataset, pdf_path, png_path=None) -> None:
-    """Minimum cost over α per m for both WSLR readings (seed Fig. 4).
+    """Minimum cost over α per m for both WSLR readings (source Fig. 4).
 
     Parameters
     ----------
@@ -63,7 +63,7 @@ def plot_cost_vs_m(cost: xr.Dataset, pdf_path, png_path=None) -> None:
             linewidth=1,
             label=f"minimum + 1 SE ({cfg}): settings below are not separable",
         )
-    ax.axvline(SEED_BEST_M, **plotting.BOUND_STYLE, label=f"source: m = {SEED_BEST_M}")
+    ax.axvline(SOURCE_BEST_M, **plotting.BOUND_STYLE, label=f"source: m = {SOURCE_BEST_M}")
     ax.set_xlabel("number of joint nodes $m$")
     ax.set_ylabel(r"min$_\alpha$ cost $J = E[C/N] + E[F]$")
     ax.set_title(f"{float(cost['speed_kmh']):g} km/h, {int(cost['n_runs'])} crossings", fontsize="small")
@@ -96,7 +96,7 @@ def _rate_plot(ax, summary, name, transform=None, log=False):
 
 
 def plot_pingpong_vs_speed(summary: xr.Dataset, pdf_path, png_path=None) -> None:
-    """Ping-pong rate against speed (seed Fig. 5); ▽ = upper 95 % bound where none was seen.
+    """Ping-pong rate against speed (source Fig. 5); ▽ = upper 95 % bound where none was seen.
 
     Parameters
     ----------
@@ -119,7 +119,7 @@ def plot_pingpong_vs_speed(summary: xr.Dataset, pdf_path, png_path=None) -> None
 
 
 def plot_interruption_vs_speed(summary: xr.Dataset, pdf_path, png_path=None) -> None:
-    """Interruption rate 1 − success against speed with the 99.5 % success line (seed Fig. 8).
+    """Interruption rate 1 − success against speed with the 99.5 % success line (source Fig. 8).
 
     Parameters
     ----------
@@ -166,8 +166,8 @@ def _mean_plot(summary, name, ylabel, pdf_path, png_path, hline=None, hlabel=Non
 
 
 def plot_delay_vs_speed(summary: xr.Dataset, pdf_path, png_path=None) -> None:
-    """Mean handover delay against speed with the 45 ms requirement (seed Fig. 7): command to
-    completion over all handovers (successful only, the seed's reading, dotted) and trigger to
+    """Mean handover delay against speed with the 45 ms requirement (source Fig. 7): command to
+    completion over all handovers (successful only, the source's reading, dotted) and trigger to
     completion.
 
     Parameters
@@ -217,7 +217,7 @@ def plot_delay_vs_speed(summary: xr.Dataset, pdf_path, png_path=None) -> None:
 
 
 def plot_rsrp_gap_vs_speed(summary: xr.Dataset, pdf_path, png_path=None) -> None:
-    """Mean |RSRP-GAP| at completion against speed (seed Fig. 6).
+    """Mean |RSRP-GAP| at completion against speed (source Fig. 6).
 
     Parameters
     ----------

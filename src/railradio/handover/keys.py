@@ -1,4 +1,4 @@
-"""Key numbers of the handover study (docs/model/handover.md §7), ours beside the seed's claims."""
+"""Key numbers of the handover study (docs/model/handover.md §7), ours beside the source's claims."""
 
 from __future__ import annotations
 

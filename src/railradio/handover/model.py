@@ -311,7 +311,7 @@ def execute(ctx: BlockContext, run: np.ndarray, hb_m: np.ndarray, retry_allowed)
     """Execute handovers commanded at true positions ``hb_m`` (flat arrays, one per crossing).
 
     Attempt a succeeds iff the serving link holds at Hb_a (:func:`serving_ok`) and access
-    to the target succeeds (:func:`target_ok`), with He_a = Hb_a + v·T0 [seed eq. 2]; a
+    to the target succeeds (:func:`target_ok`), with He_a = Hb_a + v·T0 [source eq. 2]; a
     failed attempt is followed by another at Hb_{a+1} = He_a + v·TZ when
     ``retry_allowed(a, serving_ok, hb_next_m)`` (bool array) says so.  Delay of a success
     at attempt a: a·T0 + (a−1)·TZ.  A handover whose last attempt fails is recovered by

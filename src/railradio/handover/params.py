@@ -1,9 +1,9 @@
 """Parameters of the handover study (docs/model/handover.md).
 
-The seed (Zhang, Li, Xie 2022) lost every equation and its Table 1; the model is OUR
+The source (Zhang, Li, Xie 2022) lost every equation and its Table 1; the model is OUR
 reconstruction.  Every value lives in the ``handover`` section of the config; this module
 turns that section into frozen dataclasses with SI units and checks every value, raising
-:class:`ValueError` naming the parameter.  Tags in the docstrings: [seed], [3GPP], [ours].
+:class:`ValueError` naming the parameter.  Tags in the docstrings: [source], [3GPP], [ours].
 """
 
 from __future__ import annotations
@@ -44,7 +44,7 @@ class Radio:
     """Two cells along a straight track and their radio links (reconstruction eq. 1–2).
 
     spacing_m
-        eNB/RRH spacing L_BS [m] [seed: 1.5–2.0 km]; serving at x_s = 0, target at L_BS.
+        eNB/RRH spacing L_BS [m] [source: 1.5–2.0 km]; serving at x_s = 0, target at L_BS.
     offset_m
         RRH distance from the track h [m] [ours].
     carrier_hz, tx_power_dbm, bandwidth_hz, noise_figure_db
@@ -52,7 +52,7 @@ class Radio:
     ref_distance_m
         d0 of the log-distance law; L(d0) is the free-space loss at d0 [ours].
     pathloss_exponent
-        n [seed: 2–6, mountain scenario; 3.5 ours].
+        n [source: 2–6, mountain scenario; 3.5 ours].
     shadow_sigma_db, shadow_corr_m
         σ of the shadowing ζ and its decorrelation distance (AR(1) in distance) [ours].
     shadow_cross_corr
@@ -138,10 +138,10 @@ class Train:
         N roof relay-AP nodes, node 1 at the head [ours: 8 × 25 m].
     gnss_sigma_m, gnss_bound_m, gnss_corr_s
         GNSS/INS along-track error: first-order Gauss–Markov with correlation time
-        gnss_corr_s, std gnss_sigma_m, truncated (clipped) at ±gnss_bound_m [seed: < 5 m;
+        gnss_corr_s, std gnss_sigma_m, truncated (clipped) at ±gnss_bound_m [source: < 5 m;
         σ 2 m and 1 s ours].
     prep_zone_m
-        preparation starts within this distance of the overlap centre [seed: 500 m].
+        preparation starts within this distance of the overlap centre [source: 500 m].
     """
 
     n_nodes: int = 8
@@ -166,13 +166,13 @@ class Execution:
     """Handover execution (reconstruction eq. 3 and 8).
 
     t0_s
-        fixed execution delay T0: He = Hb + v·T0 [seed eq. 2]; 30 ms = RRC processing
+        fixed execution delay T0: He = Hb + v·T0 [source eq. 2]; 30 ms = RRC processing
         15 ms (TS 36.331 §11.2) + random access 10 ms + path switch 5 ms [ours].
     tz_s
-        interval before a second attempt TZ [seed: 50 ms].
+        interval before a second attempt TZ [source: 50 ms].
     max_attempts
         attempts of every policy: a failed attempt is followed by another after TZ while
-        the serving link holds, up to this many [seed eq. 9: one second attempt, so 2].
+        the serving link holds, up to this many [source eq. 9: one second attempt, so 2].
     retry
         ``common`` (the default): that rule for every policy; ``joint_band``: the earlier
         joint-only rule as a case — the joint policy makes one second attempt whenever its
@@ -267,23 +267,23 @@ class Joint:
     band_fit
         ``offset_exponent``: fit â and n̂ to the measured gaps; ``offset``: fit â with n known.
     exponent_bounds
-        n̂ is clipped to this range [seed: n in 2–6].
+        n̂ is clipped to this range [source: n in 2–6].
     min_fit_samples
         gap measurements in the zone before the band is defined [ours].
     measurements
         ``l3``: the policy uses L3-filtered RSRP (as σ0 assumes); ``raw``: single samples.
     wslr
         ``regression``: weighted linear regression over the m predecessors; ``mean``:
-        their weighted mean [ours, both readings of the seed's WSLR].
+        their weighted mean [ours, both readings of the source's WSLR].
     m, alpha
         number of joint nodes and the geometric weight parameter; ``None`` = the cost
-        grid's argmin (the seed's procedure).
+        grid's argmin (the source's procedure).
     dead_zone_db
         ε: |ĉ| ≤ ε gives no position correction [ours].
     retry_rule
-        the second attempt must be ``executed`` (seed eq. 9) or ``completed`` before PR.
+        the second attempt must be ``executed`` (source eq. 9) or ``completed`` before PR.
     convergence_db
-        a node has converged if its measured gap at the trigger is below this [seed: 3 dB].
+        a node has converged if its measured gap at the trigger is below this [source: 3 dB].
     """
 
     gaph_gamma_db: float = 6.0

@@ -7,7 +7,7 @@ commands with the shared execution model and collects the outcomes.  All work is
 arrays over runs (and nodes, and weight settings); the only Python loops are over the N
 nodes (the joint decision is sequential by construction) and over attempts.
 
-- ``joint``: the position-power joint decision (our reconstruction of seed §2).
+- ``joint``: the position-power joint decision (our reconstruction of source §2).
 - ``a3``: the A3 event with hysteresis, time-to-trigger and L3 filter [3GPP TS 36.331].
 - ``distance``: the nearest RRH by the estimated position, re-evaluated every sample.
 """
@@ -319,7 +319,7 @@ def joint_nodes(ctx: BlockContext, band: Band, weights: np.ndarray, method: str)
 
 @register
 class JointPolicy(Policy):
-    """The position-power joint decision (our reconstruction of seed §2)."""
+    """The position-power joint decision (our reconstruction of source §2)."""
 
     name = "joint"
     label = "joint decision"
@@ -341,7 +341,7 @@ class JointPolicy(Policy):
 
         def band_retry(a, serving_ok, hb_next_m, sel):
             # execution.retry = joint_band (the earlier joint-only rule, a case): one second
-            # attempt, which must be executed (or completed) before PR (seed eq. 9), judged
+            # attempt, which must be executed (or completed) before PR (source eq. 9), judged
             # from the estimated position at the command plus v(T0 + TZ), serving link or not
             est = xhat_cmd[sel] + v * (ex.t0_s + ex.tz_s) * a + back
             return (a < 2) & (est <= pr_flat[sel])

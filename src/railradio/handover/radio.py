@@ -26,7 +26,7 @@ def free_space_loss_db(d_m: float, carrier_hz: float) -> float:
 
 
 def path_loss_db(d_m, radio: Radio) -> np.ndarray:
-    """Mean log-distance path loss L(d0) + 10 n log10(d/d0) [dB] (seed eq. 3, ζ excluded).
+    """Mean log-distance path loss L(d0) + 10 n log10(d/d0) [dB] (source eq. 3, ζ excluded).
 
     L(d0) is the free-space loss at d0 [ours]; distances below d0 keep the same law.
     """

@@ -1,6 +1,6 @@
 """The train's motion, its nodes and its position input (docs/model/handover.md §1, §6).
 
-The head starts at the serving RRH (x = 0) at t = 0 [seed: "the train starts at the
+The head starts at the serving RRH (x = 0) at t = 0 [source: "the train starts at the
 serving eNB and moves to the target eNB"] and moves at constant speed v; node i
 (0-based, node 0 = head) is i·s behind it.  Samples every T_m until the last node reaches
 the target RRH.  The GNSS/INS error is one process for the whole train (one receiver; the
@@ -89,7 +89,7 @@ def gnss_error_m(white: np.ndarray, scn: Scenario) -> np.ndarray:
     """Along-track GNSS/INS error [m] from standard normals [..., K].
 
     First-order Gauss–Markov (AR(1) at the sample period with φ = exp(−T_m/τ), stationary
-    std σ), clipped at ±bound (the seed's "error within 5 m").
+    std σ), clipped at ±bound (the source's "error within 5 m").
     """
     tr = scn.train
     if tr.gnss_sigma_m == 0.0:

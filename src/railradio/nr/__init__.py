@@ -1,4 +1,4 @@
-"""Study ``nr``: positioning a high-speed train from 5G NR SS bursts (seed 000)."""
+"""Study ``nr``: positioning a high-speed train from 5G NR SS bursts (source 000)."""
 
 from railradio.nr.sequences import pss, sss
 

@@ -1,4 +1,4 @@
-"""Antenna element and ULA beam patterns (seed eq. 1; TR 38.901 Table 7.3-1).
+"""Antenna element and ULA beam patterns (source eq. 1; TR 38.901 Table 7.3-1).
 
 Azimuth-only (horizontal cut, θ = 90°): the elevation of every link is below 30° at
 d2D ≥ 15 m and the vertical pattern is not modelled [ours, stated].
@@ -94,7 +94,7 @@ def ula_gain(phi_rel_rad: NDArray, steer_rel_rad: NDArray, n_elements: int) -> N
 
 @dataclass(frozen=True)
 class RrhArray:
-    """An RRH's two panels and its SS-burst beams (seed §4; docs/model/nr.md §1).
+    """An RRH's two panels and its SS-burst beams (source §4; docs/model/nr.md §1).
 
     Beam k points at -(k + 0.5)·180/n_beams degrees; beams of the first half on the
     -45° panel, the rest on the -135° panel [ours].
@@ -152,12 +152,12 @@ class RrhArray:
 @dataclass(frozen=True)
 class TrainArray:
     """The train's two panels (head: boresight 0°, forward; tail: 180°, backward), beams
-    fixed along the track [seed]; their chains are summed (power gains add, noise of both
+    fixed along the track [source]; their chains are summed (power gains add, noise of both
     chains) [ours].
 
     ``panel_x_m`` = (head, tail): the panels' along-track positions relative to the train's
     reference point [m], head >= 0 >= tail (the train runs toward +x). (0, 0), the default,
-    co-locates them at the reference point, as the seed's eq. 14 treats the train as a
+    co-locates them at the reference point, as the source's eq. 14 treats the train as a
     point; otherwise every RRH reaches each panel over its own path (:func:`link_budget`)
     and the tracker's measurement model carries the lever arm [ours, docs/model/nr.md §1].
     """

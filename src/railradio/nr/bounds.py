@@ -55,7 +55,7 @@ def toa_crb_s(e_over_n0: NDArray) -> NDArray[np.float64]:
 
 
 DETECT_K_SIGMA = 4.0
-"""The source's detection threshold μ + 4σ (seed eq. 6) on a Rayleigh floor of parameter σ_R:
+"""The source's detection threshold μ + 4σ (source eq. 6) on a Rayleigh floor of parameter σ_R:
 μ = σ_R √(π/2), σ = σ_R √(2 - π/2)."""
 DETECT_E_OVER_N0 = (np.sqrt(np.pi / 2) + DETECT_K_SIGMA * np.sqrt(2 - np.pi / 2)) ** 2 / 2
 """E_b/N0 at which a block's matched-filter peak √(2E_b/N0) σ_R reaches that threshold (7.50,

@@ -58,7 +58,7 @@ def select_measurements(
 ) -> NDArray[np.int64]:
     """Candidate columns to use at one epoch: among the measured candidates that are also
     among the ``n_nearest`` RRHs to the predicted position, the ``n_use`` strongest
-    (seed §4: the 3 strongest of the audible RRHs) [ours: the nearest-to-prediction rule].
+    (source §4: the 3 strongest of the audible RRHs) [ours: the nearest-to-prediction rule].
 
     Parameters
     ----------

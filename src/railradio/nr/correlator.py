@@ -1,9 +1,9 @@
-"""The seed's correlation receiver (seed eq. 4–9).
+"""The source's correlation receiver (source eq. 4–9).
 
 Correlation (:class:`Correlator`): one FFT window per SS block (lags 0..K-1 plus the
 reference length), R = IFFT(Z·conj(B)) on the receiver's lag grid for the detection
 statistics (μ_i, σ_i over the window), and band-limited evaluation at full-rate integer lags
-around the peaks for η_i and the TOA (seed eq. 9 is an argmax over full-rate samples). The
+around the peaks for η_i and the TOA (source eq. 9 is an argmax over full-rate samples). The
 lag grid may be finer than the front end's samples (``template_decimation``): the samples
 band-limited-interpolated, the template zero-stuffed.
 """
@@ -41,7 +41,7 @@ class BlockCorrelation:
     corr: NDArray[np.float32] | None = None
 
 
-DETECTORS = ("seed", "cfar", "cacfar")
+DETECTORS = ("source", "cfar", "cacfar")
 CA_WINDOW_FULL = 512
 """The CA-CFAR's reference lags on each side [full-rate lags, 2.08 µs]: the two sides span
 4.2 µs, just under one OFDM symbol (4.46 µs), over which the level of the data interference
@@ -91,10 +91,10 @@ def cfar_threshold(window_s: float, pfa: float, n_sc: int = 127) -> float:
 
 
 class Correlator:
-    """The seed's correlation receiver for a set of candidate cells (seed eq. 4–9).
+    """The source's correlation receiver for a set of candidate cells (source eq. 4–9).
 
-    Detection rule ``detector``: ``"seed"`` η_i > μ_i + kσ_i (seed eq. 6, k = 4);
-    ``"cacfar"`` [ours] the seed's test and a cell-averaging CFAR test (the peak against the
+    Detection rule ``detector``: ``"source"`` η_i > μ_i + kσ_i (source eq. 6, k = 4);
+    ``"cacfar"`` [ours] the source's test and a cell-averaging CFAR test (the peak against the
     mean of the ``ca_window`` lags on each side, beyond ``ca_guard``, scaled like ``cfar``):
     robust to the data interference whose level varies across the window; or
     ``"cfar"`` [ours] η_i > t · μ_i / sqrt(π/2): on noise the correlation magnitude is a
@@ -107,7 +107,7 @@ class Correlator:
     def __init__(
         self,
         cfg: ReceiverConfig,
-        detector: str = "seed",
+        detector: str = "source",
         pfa: float = 1e-3,
         ca_window: int | None = None,
         ca_guard: int | None = None,
@@ -125,7 +125,7 @@ class Correlator:
         cfg : ReceiverConfig
             The receiver configuration; its decimation D sets the correlation rate F_s/D (lags).
         detector : str
-            ``"seed"``, ``"cfar"`` or ``"cacfar"``.
+            ``"source"``, ``"cfar"`` or ``"cacfar"``.
         pfa : float
             False-alarm probability per block of the CFAR tests, in (0, 1).
         ca_window : int or None
@@ -246,7 +246,7 @@ class Correlator:
         keep_corr: bool = False,
         zf: NDArray[np.complex64] | None = None,
     ) -> BlockCorrelation:
-        """Per-block correlation, detection, AOD and TOA of the candidate cells (seed eq. 4–9).
+        """Per-block correlation, detection, AOD and TOA of the candidate cells (source eq. 4–9).
 
         ``zf``: the burst's :meth:`window_spectra`, when already computed for ``z``.
 
@@ -298,7 +298,7 @@ class Correlator:
                 continue
             toa[c], peak[c] = self._toa(p2, c, det, r, eta, mu, sigma, k_lo, pre_row, pre_vals)
             det = np.flatnonzero(detected[c])
-            top = det[np.argsort(eta[c, det])[::-1][: cfg.n_aod_blocks]]  # seed eq. 7
+            top = det[np.argsort(eta[c, det])[::-1][: cfg.n_aod_blocks]]  # source eq. 7
             w = eta[c, top] / eta[c, top].sum()
             aod[c] = float(np.sum(w * self.beam_angles[top]))
         return BlockCorrelation(eta, mu, sigma, detected, toa, aod, peak, r.astype(np.float32) if keep_corr else None)
@@ -322,7 +322,7 @@ class Correlator:
                 a.reshape(n_c, n_b)
                 for a in kernels.local_mean_argmax(r.reshape(n_c * n_b, cfg.lags), self.ca_window, self.ca_guard)
             )
-            # both tests: the seed's μ + kσ over the window and the local CFAR test
+            # both tests: the source's μ + kσ over the window and the local CFAR test
             threshold = np.maximum(floor_at * self.cfar_factor, mu + cfg.detect_k_sigma * sigma)
             pre = threshold * self.ca_prescreen
         elif self.detector == "cfar":
@@ -364,14 +364,14 @@ class Correlator:
         pre_vals: NDArray[np.float64],
     ) -> tuple[float, float]:
         """Candidate ``c``'s TOA δ̂ [full-rate lags] and peak from its detected blocks ``det``
-        (seed eq. 8–9). Returns ``(delta, peak)``."""
+        (source eq. 8–9). Returns ``(delta, peak)``."""
         cfg = self.cfg
         d = cfg.decimation
         n_b = eta.shape[1]
         if cfg.toa_blocks is not None:  # [ours] the most significant detected blocks
             score = (eta[c, det] - mu[c, det]) / sigma[c, det]
             det = det[np.argsort(score)[::-1][: cfg.toa_blocks]]
-        comb = r[c, det].sum(axis=0)  # seed eq. 8 (decimated lags)
+        comb = r[c, det].sum(axis=0)  # source eq. 8 (decimated lags)
         kc = int(comb.argmax())
         if d > 1:  # eq. 9 at full-rate lags d·kc - d ... d·kc + d
             # blocks whose own peak lag is kc were evaluated there already
@@ -399,7 +399,7 @@ class Correlator:
 
     @cached_property
     def beam_angles(self) -> NDArray[np.float64]:
-        """Direction of each SS block's beam, the AOD it stands for (seed eq. 7) [rad]:
+        """Direction of each SS block's beam, the AOD it stands for (source eq. 7) [rad]:
         -(k + 1/2) · 180°/n_blocks, [n_blocks].
         """
         k = np.arange(self.cfg.n_blocks)

@@ -1,7 +1,7 @@
-"""Motion model of the train tracker (seed eq. 10–12).
+"""Motion model of the train tracker (source eq. 10–12).
 
-State s = [x, y, v_x, v_y, a_x, a_y] (seed eq. 10), constant-acceleration transition
-(seed eq. 11–12) with white-jerk process noise of intensity q [m² s⁻⁵] [ours].
+State s = [x, y, v_x, v_y, a_x, a_y] (source eq. 10), constant-acceleration transition
+(source eq. 11–12) with white-jerk process noise of intensity q [m² s⁻⁵] [ours].
 """
 
 from __future__ import annotations
@@ -21,7 +21,7 @@ def transition(dt_s: float) -> NDArray[np.float64]:
     Returns
     -------
     numpy.ndarray
-        [6, 6] transition matrix F (seed eq. 11–12): entries 1, T [s] and T²/2 [s²].
+        [6, 6] transition matrix F (source eq. 11–12): entries 1, T [s] and T²/2 [s²].
     """
     f1 = np.array([[1.0, dt_s, 0.5 * dt_s**2], [0.0, 1.0, dt_s], [0.0, 0.0, 1.0]])
     return _interleave(f1)

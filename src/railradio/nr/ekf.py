@@ -1,7 +1,7 @@
-"""The extended Kalman filter of the train tracker (seed eq. 10–14; docs/model/nr.md §6, EKF).
+"""The extended Kalman filter of the train tracker (source eq. 10–14; docs/model/nr.md §6, EKF).
 
-The motion model (:mod:`railradio.nr.dynamics`, seed eq. 10–12) and the measurement model
-(:mod:`railradio.nr.measurement`, seed eq. 13–14) in an extended Kalman filter:
+The motion model (:mod:`railradio.nr.dynamics`, source eq. 10–12) and the measurement model
+(:mod:`railradio.nr.measurement`, source eq. 13–14) in an extended Kalman filter:
 filterpy's ExtendedKalmanFilter does the algebra; a χ² gate per RRH is an option. Here are
 the filter's settings (:class:`TrackerConfig`: variant, q, W, gate), its run over the epochs
 (:func:`run_ekf`, measurements chosen by a caller-given ``select``, re-acquisition by a
@@ -35,7 +35,7 @@ Reacquire = Callable[[int], tuple[NDArray, NDArray] | None]
 class TrackerConfig:
     """Tracker settings [ours unless noted].
 
-    variant: ``aod``, ``toa`` or ``aod_toa`` [seed]; q: white-jerk intensity [m² s⁻⁵];
+    variant: ``aod``, ``toa`` or ``aod_toa`` [source]; q: white-jerk intensity [m² s⁻⁵];
     sigma_aod_rad, sigma_toa_s: measurement noise standard deviations; gate: χ² innovation
     gate per RRH at ``gate_prob``. Distance-dependent W [ours, an option]: with
     ``distance_edges_m`` (increasing 2-D train–RRH distances [m]) the standard deviations of
@@ -80,7 +80,7 @@ class TrackerConfig:
     sigma_aod_bins_rad: tuple[float, ...] = ()
     sigma_toa_bins_s: tuple[float, ...] = ()
     start_speed_sigma_m_s: float = 1.0
-    """σ of the initial speed [m/s] about 0: 1 for a start from rest (the seed's
+    """σ of the initial speed [m/s] about 0: 1 for a start from rest (the source's
     trajectory); large for a start at an unknown speed (the reproduction map's segment)."""
 
     def __post_init__(self) -> None:

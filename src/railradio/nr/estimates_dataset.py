@@ -249,12 +249,12 @@ def _estimate_vars(rec: EpochRecord) -> dict:
         "aod_hat": (
             _RD,
             rec.meas["aod_rad"],
-            {"units": "rad", "long_name": "AOD estimate (seed eq. 7), NaN if nothing detected"},
+            {"units": "rad", "long_name": "AOD estimate (source eq. 7), NaN if nothing detected"},
         ),
         "toa_hat": (
             _RD,
             rec.meas["toa_s"],
-            {"units": "s", "long_name": "TOA estimate (seed eq. 9), NaN if nothing detected"},
+            {"units": "s", "long_name": "TOA estimate (source eq. 9), NaN if nothing detected"},
         ),
         "peak": (
             _RD,
@@ -266,5 +266,5 @@ def _estimate_vars(rec: EpochRecord) -> dict:
             rec.meas["best_score"],
             {"units": "1", "long_name": "largest (eta - mu)/sigma over detected blocks"},
         ),
-        "n_detected": (_RD, rec.meas["n_detected"], {"units": "1", "long_name": "SS blocks detected (seed eq. 6)"}),
+        "n_detected": (_RD, rec.meas["n_detected"], {"units": "1", "long_name": "SS blocks detected (source eq. 6)"}),
     }

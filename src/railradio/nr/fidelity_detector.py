@@ -100,7 +100,7 @@ def noise_false_alarms(
     """
     rx = Receivers(
         scn,
-        {n: "peak" for n, _, _ in [("seed", None, None)] + list(scn.variants)},
+        {n: "peak" for n, _, _ in [("source", None, None)] + list(scn.variants)},
         scn.search_decimation or scn.receiver.decimation,
     )
     d = scn.receiver.decimation

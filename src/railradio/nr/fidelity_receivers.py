@@ -55,7 +55,7 @@ class Receivers:
         """
         base = scn.receiver.decimation
         self.decimation = decimation
-        rx = [("seed", scn.receiver, scn.detector)] + list(scn.variants)
+        rx = [("source", scn.receiver, scn.detector)] + list(scn.variants)
         self.names = [name for name, _, _ in rx]
         self.selection = selection
         self.n_use = n_use

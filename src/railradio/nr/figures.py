@@ -1,4 +1,4 @@
-"""Figures of the nr study (seed Fig. 3–5 and the error-vs-time view)."""
+"""Figures of the nr study (source Fig. 3–5 and the error-vs-time view)."""
 
 from __future__ import annotations
 
@@ -215,7 +215,9 @@ def plot_sensitivity(numbers: dict, cases: list[str], pdf: str, png: str) -> Non
     png : str
         Path of the PNG copy.
     """
-    rxs = sorted({k.split(".")[3] for k in numbers if k.startswith("sens.nr.")} - {"bound"}, key=lambda r: r != "seed")
+    rxs = sorted(
+        {k.split(".")[3] for k in numbers if k.startswith("sens.nr.")} - {"bound"}, key=lambda r: r != "source"
+    )
     panels = (
         ("meas.toa_err_m.p95", "TOA range error p95 [m]"),
         ("track.aod_toa_gated.err_m.mean", "gated EKF AOD+TOA\nmean error [m]"),
@@ -271,7 +273,9 @@ def plot_sweeps(numbers: dict, sweeps: dict, sync_sigma_s: dict, pdf: str, png: 
     png : str
         Path of the PNG copy.
     """
-    rxs = sorted({k.split(".")[3] for k in numbers if k.startswith("sens.nr.")} - {"bound"}, key=lambda r: r != "seed")
+    rxs = sorted(
+        {k.split(".")[3] for k in numbers if k.startswith("sens.nr.")} - {"bound"}, key=lambda r: r != "source"
+    )
     rows = (
         ("meas.toa_err_m.median_abs", "median |TOA error| [m]", True),
         ("meas.toa_err_m.frac_lt_5m", "TOAs within 5 m", False),
@@ -376,7 +380,7 @@ def plot_reproduction_map(numbers: dict, receivers: dict[str, list[str]], pdf: s
         ax.set_yticklabels(rows, fontsize=7)
         ax.tick_params(length=0)
         ax.grid(False)
-        ax.set_title("source's receiver (no gate)" if rx == "seed" else f"our receiver ({rx}, gated)", fontsize=9)
+        ax.set_title("source's receiver (no gate)" if rx == "source" else f"our receiver ({rx}, gated)", fontsize=9)
     fig.legend(
         handles=[Patch(facecolor=colours[s], label=STATUS_NAMES[s]) for s in (HOLDS, UNRESOLVED, FAILS)],
         loc="lower center",

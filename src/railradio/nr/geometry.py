@@ -1,4 +1,4 @@
-"""Trajectory and deployment of the nr study (seed 000 §4, docs/model/nr.md §1).
+"""Trajectory and deployment of the nr study (source 000 §4, docs/model/nr.md §1).
 
 Straight track on y = 0; RRHs every 500 m at y = +15 m, height 10 m; train antennas at
 2.5 m. Every delay, path loss and the tracker's range model use the same 3-D distance.
@@ -22,14 +22,14 @@ class Trajectory:
     Parameters
     ----------
     phases
-        ((duration [s], acceleration [m/s²]), ...); the seed's Fig. 3 default is
+        ((duration [s], acceleration [m/s²]), ...); the source's Fig. 3 default is
         (200, +0.5), (27.5, 0), (150, +0.2), (200, -0.65): 43.000 km in 577.5 s.
     dt_s
-        Measurement interval [s] (seed: 0.1 s).
+        Measurement interval [s] (source: 0.1 s).
     x0_m
         Start position [m].
     v0_m_s
-        Start speed [m/s] (0: from rest, as the seed's trajectory; a short run at speed
+        Start speed [m/s] (0: from rest, as the source's trajectory; a short run at speed
         otherwise).
     """
 
@@ -122,9 +122,9 @@ class Deployment:
     Parameters
     ----------
     track_length_m
-        Track length [m] (seed: 43 km); RRHs at 0, spacing, 2·spacing, ... ≤ length.
+        Track length [m] (source: 43 km); RRHs at 0, spacing, 2·spacing, ... ≤ length.
     spacing_m, offset_m
-        RRH spacing along and distance from the track [m] (seed: 500 m, 15 m).
+        RRH spacing along and distance from the track [m] (source: 500 m, 15 m).
     h_bs_m, h_ut_m
         RRH and train antenna heights [m] [ours: 10 m, 2.5 m].
     """
@@ -164,7 +164,7 @@ class Deployment:
 
     def n_id(self) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
         """(N_ID1, N_ID2) per RRH: N_ID2 = k mod 3 (adjacent RRHs always differ),
-        N_ID1 = (k div 3) mod 336, so PCI = k: unique up to 1008 RRHs [seed rules].
+        N_ID1 = (k div 3) mod 336, so PCI = k: unique up to 1008 RRHs [source rules].
 
         Returns
         -------

@@ -1,5 +1,5 @@
 """Key numbers ``nr.track.{ekf,imm,rts}.*`` and the figure ``nr_imm_lag`` of the
-tracking-that-does-not-lag study (docs/model/nr.md §6): the seed's EKF, the IMM and the RTS
+tracking-that-does-not-lag study (docs/model/nr.md §6): the source's EKF, the IMM and the RTS
 smoother around the trajectory's acceleration changes.
 
 The lag is measured two ways over the ``window_s`` after each change (all changes and
@@ -27,7 +27,7 @@ from railradio.nr.keys import SKIP_S
 
 FILTERS = ("ekf", "imm", "rts")
 LABEL = {
-    "ekf": "EKF (seed, calibrated q)",
+    "ekf": "EKF (source, calibrated q)",
     "imm": "IMM (quiet + manoeuvre)",
     "rts": "RTS smoother (offline, over the EKF)",
 }
@@ -176,7 +176,7 @@ def _filter_keys(out: dict[str, Any], runs: list[xr.Dataset], f: str, window_s: 
     (``window_s``) and NEES."""
     w = f"{window_s:g} s"
     who = {
-        "ekf": "the seed's EKF (robust receiver, AOD+TOA, gated)",
+        "ekf": "the source's EKF (robust receiver, AOD+TOA, gated)",
         "imm": "the IMM (same measurements and gate)",
         "rts": "the RTS-smoothed EKF (offline)",
     }[f]

@@ -208,7 +208,7 @@ def key_numbers(tracks: list[xr.Dataset], bounds: list[xr.Dataset] | None = None
     """Key numbers of the nr tracks pooled over the realizations (docs/model/nr.md §10), each with
     the standard error of its per-realization values: the PCRB/PEB predictions (``nr.bound.*``,
     with ``bounds``), the median SIR of the strongest RRH, the loss thresholds, and per receiver
-    (prefix ``nr.`` for the seed, ``nr.<receiver>.`` for a variant) the track-loss, consistency,
+    (prefix ``nr.`` for the source's receiver, ``nr.<receiver>.`` for a variant) the track-loss, consistency,
     measurement and accuracy metrics of every tracker (an all-epoch accuracy is null where the
     track is lost too often, :func:`railradio.nr.loss.accuracy`); errors are counted after
     :data:`SKIP_S`.
@@ -256,8 +256,8 @@ def key_numbers(tracks: list[xr.Dataset], bounds: list[xr.Dataset] | None = None
         out[name] = KeySpec(name, unit, desc).entry(value)
     variants = [str(v) for v in tracks[0]["variant"].values]
     for rx in [str(r) for r in tracks[0]["receiver"].values]:
-        prefix = "nr." if rx == "seed" else f"nr.{rx}."
-        who = "" if rx == "seed" else f" ({rx} receiver)"
+        prefix = "nr." if rx == "source" else f"nr.{rx}."
+        who = "" if rx == "source" else f" ({rx} receiver)"
         fns = _metric_fns(rx)
         lost = {}
         for variant in variants:
@@ -282,7 +282,7 @@ def key_numbers(tracks: list[xr.Dataset], bounds: list[xr.Dataset] | None = None
                     )
         for key, (unit, desc, src, rel) in SPECS.items():
             name = prefix + key
-            if rx != "seed":
+            if rx != "source":
                 src, rel, desc = None, None, f"{desc}{who}"
             value, se = _per_real(tracks, rx, fns[key])
             m = _ACCURACY.match(key)
@@ -338,7 +338,7 @@ def calibration_key_numbers(cal: dict[str, dict]) -> dict[str, Any]:
     out: dict[str, Any] = {}
     for name, rec in cal.items():
         rx, variant, gate = name.split("/")
-        prefix = "nr." if rx == "seed" else f"nr.{rx}."
+        prefix = "nr." if rx == "source" else f"nr.{rx}."
         track = f"cal.{variant}{'_gated' if gate == 'gate' else ''}"
         search = rec.get("q_search", {})
         i = search["q"].index(rec["q"]) if rec["q"] in search.get("q", []) else None
@@ -350,7 +350,7 @@ def calibration_key_numbers(cal: dict[str, dict]) -> dict[str, Any]:
             "sigma_aod_deg": float(np.degrees(rec["sigma_aod_rad"])),
             "sigma_range_m": rec["sigma_toa_s"] * SPEED_OF_LIGHT_M_S,
         }
-        who = "" if rx == "seed" else f" ({rx} receiver)"
+        who = "" if rx == "source" else f" ({rx} receiver)"
         for metric, (unit, desc) in CALIBRATION_SPECS.items():
             key = f"{prefix}{track}.{metric}"
             out[key] = KeySpec(key, unit, f"{desc}, EKF {variant}{', gated' if gate == 'gate' else ''}{who}").entry(
@@ -457,7 +457,7 @@ def sensitivity_key_numbers(
 
 def toa_floor_m(sync_sigma_s: float = 0.0, q: float = 0.5) -> float:
     """``q``-quantile of |e| for e = u + c·δ: the integer-sample TOA error u ~ U(±c/(2F_s))
-    plus a Gaussian clock offset δ ~ N(0, σ²) [m] — the floor of the seed's TOA estimator
+    plus a Gaussian clock offset δ ~ N(0, σ²) [m] — the floor of the source's TOA estimator
     when the RRH clocks are off by σ (exact: CDF by quadrature, quantile by root finding).
 
     Parameters

@@ -1,4 +1,4 @@
-"""Large-scale link budget of every RRH in range at one epoch (seed eq. 1; docs/model/nr.md §1, §3).
+"""Large-scale link budget of every RRH in range at one epoch (source eq. 1; docs/model/nr.md §1, §3).
 
 P_R = P_T - PL(d3D) + S + G_T(θ_T) + G_R(θ_R): the transmit power is spread evenly over the
 600 active subcarriers (equal EPRE); beam gains from :mod:`railradio.nr.antenna`.
@@ -25,7 +25,7 @@ BOLTZMANN_DBM_HZ = -174.0
 
 @dataclass(frozen=True)
 class RadioParams:
-    """Radio parameters [seed unless noted].
+    """Radio parameters [source unless noted].
 
     carrier_hz 30 GHz; tx_power_dbm 33 (whole carrier); noise_figure_db 5;
     shadow_sigma_db 4 and shadow_corr_m 10 [3GPP UMi-LOS]; range_m: RRHs within this 2-D

@@ -1,7 +1,7 @@
-"""Measurement model of the train tracker (seed eq. 13–14).
+"""Measurement model of the train tracker (source eq. 13–14).
 
-Per measured RRH k, h_k(s) = [atan2(y - y_k, x - x_k), ‖p - p_k‖/c] (seed eq. 14) with the
-3-D range (known height difference). The innovation is y - h(ŝ⁻) (the seed's eq. 13
+Per measured RRH k, h_k(s) = [atan2(y - y_k, x - x_k), ‖p - p_k‖/c] (source eq. 14) with the
+3-D range (known height difference). The innovation is y - h(ŝ⁻) (the source's eq. 13
 misprints a plus); angle innovations are wrapped to (-π, π].
 """
 
@@ -14,12 +14,12 @@ from railradio.constants import SPEED_OF_LIGHT_M_S
 from railradio.nr.antenna import wrap_rad
 
 VARIANTS = {"aod": (True, False), "toa": (False, True), "aod_toa": (True, True)}
-"""Measurement variants: which of (AOD, TOA) each RRH contributes (seed §4)."""
+"""Measurement variants: which of (AOD, TOA) each RRH contributes (source §4)."""
 
 
 def h_terms(dx: NDArray, dy: NDArray, dh_m: float, variant: str) -> NDArray[np.float64]:
     """h per RRH, [..., per] (AOD [rad] then TOA [s]), from the train-minus-RRH offsets
-    dx, dy [...] [m] (seed eq. 14, 3-D range with the known height difference).
+    dx, dy [...] [m] (source eq. 14, 3-D range with the known height difference).
 
     Parameters
     ----------
@@ -86,7 +86,7 @@ def jac_terms(dx: NDArray, dy: NDArray, dh_m: float, variant: str) -> NDArray[np
 
 
 def hx(s: NDArray, rrh_xy: NDArray, dh_m: float, variant: str) -> NDArray[np.float64]:
-    """Stacked measurement function (seed eq. 14) for RRHs at ``rrh_xy`` [n, 2].
+    """Stacked measurement function (source eq. 14) for RRHs at ``rrh_xy`` [n, 2].
 
     Parameters
     ----------

@@ -1,4 +1,4 @@
-"""CP-OFDM numerology of the nr study (seed 000 §1.3; TS 38.211 §5.3, µ = 4).
+"""CP-OFDM numerology of the nr study (source 000 §1.3; TS 38.211 §5.3, µ = 4).
 
 Δf = 240 kHz, N_FFT = 1024, F_s = 245.76 MHz, 600 active subcarriers (50 PRB); a 1 ms
 subframe holds 16 slots × 14 symbols; symbols 0 and 112 of a subframe (every 0.5 ms) have
@@ -140,17 +140,17 @@ class Numerology:
         return self.cp_length(symbol) + self.n_fft
 
 
-def ssb_first_symbols(pattern: str = "seed", n_blocks: int = 64) -> NDArray[np.int64]:
+def ssb_first_symbols(pattern: str = "source", n_blocks: int = 64) -> NDArray[np.int64]:
     """First OFDM symbol (from the burst's first subframe start) of each SS block.
 
-    ``"seed"``: two blocks per slot from the first slot at symbols {2, 8} + 14 n [ours,
-    following the seed's "two per slot"]; ``"caseE"``: TS 38.213 §4.1 case E,
+    ``"source"``: two blocks per slot from the first slot at symbols {2, 8} + 14 n [ours,
+    following the source's "two per slot"]; ``"caseE"``: TS 38.213 §4.1 case E,
     {8, 12, 16, 20, 32, 36, 40, 44} + 56 n, n ∈ {0, 1, 2, 3, 5, 6, 7, 8}.
 
     Parameters
     ----------
     pattern : str
-        ``"seed"`` or ``"caseE"``.
+        ``"source"`` or ``"caseE"``.
     n_blocks : int
         Number of SS blocks, 1..64 (the first ones of the pattern).
 
@@ -164,13 +164,13 @@ def ssb_first_symbols(pattern: str = "seed", n_blocks: int = 64) -> NDArray[np.i
     ValueError
         When ``pattern`` is unknown or ``n_blocks`` is not in 1..64.
     """
-    if pattern == "seed":
+    if pattern == "source":
         first = (np.array([2, 8])[None, :] + 14 * np.arange(32)[:, None]).ravel()
     elif pattern == "caseE":
         n = np.array([0, 1, 2, 3, 5, 6, 7, 8])
         first = (np.array([8, 12, 16, 20, 32, 36, 40, 44])[None, :] + 56 * n[:, None]).ravel()
     else:
-        raise ValueError(f"ssb pattern must be 'seed' or 'caseE', got {pattern!r}")
+        raise ValueError(f"ssb pattern must be 'source' or 'caseE', got {pattern!r}")
     if not 1 <= n_blocks <= 64:
         raise ValueError(f"n_blocks must be in 1..64, got {n_blocks!r}")
     return np.sort(first)[:n_blocks].astype(np.int64)

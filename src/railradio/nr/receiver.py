@@ -53,14 +53,14 @@ class ReceiverConfig:
     decimation
         D: synthesize and correlate at F_s/D (1, 2, 4 or 8).
     ssb_pattern, n_blocks
-        SS-block positions (``seed`` or ``caseE``) and blocks per burst (seed: 64).
+        SS-block positions (``source`` or ``caseE``) and blocks per burst (source: 64).
     search_lags
         K, correlation lags per block at the full rate; ``None``: the minimum spacing of
-        SS blocks (seed eq. 5).
+        SS blocks (source eq. 5).
     detect_k_sigma
-        Detection threshold η > μ + kσ (seed eq. 6: 4).
+        Detection threshold η > μ + kσ (source eq. 6: 4).
     n_aod_blocks
-        Blocks averaged for the AOD (seed eq. 7: 3).
+        Blocks averaged for the AOD (source eq. 7: 3).
     subsample
         Parabolic sub-sample TOA interpolation [ours; off for the reproduction].
 
@@ -72,7 +72,7 @@ class ReceiverConfig:
     """
 
     decimation: int = 4
-    ssb_pattern: str = "seed"
+    ssb_pattern: str = "source"
     n_blocks: int = 64
     search_lags: int | None = None
     detect_k_sigma: float = 4.0
@@ -80,9 +80,9 @@ class ReceiverConfig:
     subsample: bool = False
     prescreen_k_sigma: float = 3.0
     template: str = "pss_sss"
-    """Correlation reference: PSS + SSS (seed) or SSS only [ours]."""
+    """Correlation reference: PSS + SSS (source) or SSS only [ours]."""
     toa_blocks: int | None = None
-    """TOA combining (eq. 8) over all detected blocks (``None``, the seed) or over the
+    """TOA combining (eq. 8) over all detected blocks (``None``, the source) or over the
     ``toa_blocks`` detected blocks with the largest (η - μ)/σ [ours]."""
 
     def __post_init__(self) -> None:

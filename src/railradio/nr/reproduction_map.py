@@ -1,6 +1,6 @@
 """The reproduction map of the nr study: where the source's claims hold (config/README.md, `nr.map`).
 
-The source (seed 000) reports, for its receiver, AOD p95 < 1.3°, TOA p95 < 1.6 m, an EKF
+Source 000 reports, for its receiver, AOD p95 < 1.3°, TOA p95 < 1.6 m, an EKF
 (AOD+TOA) mean error of 0.66 m with p95 1.7 m and p99 2.3 m, about 75 % of epochs below
 1 m, the TOA-only EKF better than the AOD-only one, and AOD+TOA the best. It leaves open
 what these depend on: the number of Tx elements per RRH panel M_T, where the data traffic
@@ -91,7 +91,7 @@ VARIANTS = ("aod", "toa", "aod_toa")
 
 
 def receivers(nr: dict) -> dict[str, bool]:
-    """The map's receivers -> whether their trackers are gated: the source's (``seed``,
+    """The map's receivers -> whether their trackers are gated: the source's (``source``,
     no gate, as the source) and ours (every ``receiver_variants`` entry, gated).
 
     Parameters
@@ -102,9 +102,9 @@ def receivers(nr: dict) -> dict[str, bool]:
     Returns
     -------
     dict of str to bool
-        Receiver name -> gated (``seed`` first, then the variants in config order).
+        Receiver name -> gated (``source`` first, then the variants in config order).
     """
-    return {"seed": False} | {name: True for name in nr.get("receiver_variants", {})}
+    return {"source": False} | {name: True for name in nr.get("receiver_variants", {})}
 
 
 def cells(nr: dict, nr_schema: dict) -> dict[str, dict[str, Any]]:
@@ -177,7 +177,7 @@ def cell_receivers(name: str, nr: dict) -> list[str]:
         The receiver names.
     """
     rx = list(receivers(nr))
-    return ["seed"] if name.startswith("tpl_") else rx
+    return ["source"] if name.startswith("tpl_") else rx
 
 
 def burst_config(cfg: dict) -> dict:

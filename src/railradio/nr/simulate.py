@@ -52,13 +52,13 @@ class Scenario:
     rrh_array, train_array : RrhArray, TrainArray
         The RRH and train antenna arrays.
     receiver : ReceiverConfig
-        The "seed" receiver (front-end decimation, SS-block pattern, TOA settings).
+        The "source" receiver (front-end decimation, SS-block pattern, TOA settings).
     tdl : str
         3GPP TDL profile name (e.g. ``"TDL-D"``).
     delay_spread_s : float
         RMS delay spread of the TDL profile, s.
     detector : str
-        Detector of the seed receiver.
+        Detector of the source receiver.
     pfa : float
         False-alarm probability per block of the detectors (1).
     cell_search : CellSearchConfig
@@ -84,7 +84,7 @@ class Scenario:
     receiver: ReceiverConfig = field(default_factory=ReceiverConfig)
     tdl: str = "TDL-D"
     delay_spread_s: float = 20e-9
-    detector: str = "seed"
+    detector: str = "source"
     pfa: float = 1e-3
     variants: tuple = ()
     """Extra receivers run on the same bursts: ((name, ReceiverConfig, detector), ...);
@@ -272,7 +272,7 @@ class Estimator:
             pattern, or ``scn.search_decimation`` does not divide the front end's decimation.
         """
         self.scn = scn
-        self.receivers = [("seed", scn.receiver, scn.detector)] + list(scn.variants)
+        self.receivers = [("source", scn.receiver, scn.detector)] + list(scn.variants)
         for _, rc, _ in self.receivers:
             if rc.decimation != scn.receiver.decimation or rc.ssb_pattern != scn.receiver.ssb_pattern:
                 raise ValueError("receiver variants must share decimation and ssb_pattern")
@@ -337,7 +337,7 @@ class Estimator:
         report : bool
             Correlate every receiver and return the estimates.
         keep_corr : bool
-            Keep the seed receiver's per-block correlation (``corr``).
+            Keep the source receiver's per-block correlation (``corr``).
 
         Returns
         -------

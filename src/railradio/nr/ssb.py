@@ -1,10 +1,10 @@
-"""SS-block resource grid and the correlator's reference (TS 38.211 §7.4.3; seed §1.3).
+"""SS-block resource grid and the correlator's reference (TS 38.211 §7.4.3; source §1.3).
 
 An SS block is 4 OFDM symbols × 240 subcarriers at the carrier centre (block subcarrier
 0 = carrier subcarrier -120). Symbol 0: PSS on 56..182, zeros elsewhere; symbol 1: PBCH
 on 0..239; symbol 2: SSS on 56..182, PBCH on 0..47 and 192..239, zeros on 48..55 and
 183..191; symbol 3: PBCH on 0..239. PBCH and the full-buffer data elsewhere are random
-QPSK (seed: "full buffer traffic on the whole band"); all at equal EPRE.
+QPSK (source: "full buffer traffic on the whole band"); all at equal EPRE.
 """
 
 from __future__ import annotations
@@ -170,7 +170,7 @@ def burst_grid(
 def reference_waveform(
     num: Numerology, n_id1: int, n_id2: int, first_symbol: int, template: str = "pss_sss"
 ) -> NDArray[np.complex64]:
-    """The correlator's reference b of one SS block (seed eq. 4): PSS in the block's symbol 0
+    """The correlator's reference b of one SS block (source eq. 4): PSS in the block's symbol 0
     and SSS in its symbol 2 (with their CPs), every other subcarrier and symbol empty;
     time samples from the CP start of symbol 0 to the end of symbol 2, unit EPRE.
     ``template="sss"`` [ours] keeps only the SSS (unique per cell: the PSS repeats every

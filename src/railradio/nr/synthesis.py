@@ -1,4 +1,4 @@
-"""Received SS bursts (seed eq. 2–3): the transmitter and channel synthesizer.
+"""Received SS bursts (source eq. 2–3): the transmitter and channel synthesizer.
 
 Synthesis (per epoch, :class:`Synthesizer`): every RRH in range sends its burst grid (PSS,
 SSS, PBCH, full-buffer data; SS-block symbols on that block's beam, other symbols on their

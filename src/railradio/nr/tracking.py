@@ -130,7 +130,7 @@ def track_setup(
     Separate head/tail panels (``ds["train_panel_x"]`` nonzero): each measurement is taken at the panel facing
     its RRH at the predicted position (:func:`railradio.nr.antenna.facing_panel`), whose along-track lever arm ℓ
     enters h(x) as an RRH shifted by -ℓ (on the straight track, x + ℓ - x_k = x - (x_k - ℓ); the Jacobian is
-    unchanged). ``lever_arm=False`` ignores it: the seed's point model [ours].
+    unchanged). ``lever_arm=False`` ignores it: the source's point model [ours].
 
     Parameters
     ----------
@@ -150,7 +150,7 @@ def track_setup(
     n_use : int
         Strongest measured candidates used per epoch.
     lever_arm : bool
-        Model the head/tail panels' along-track lever arm (False: the seed's point model).
+        Model the head/tail panels' along-track lever arm (False: the source's point model).
 
     Returns
     -------
@@ -198,7 +198,7 @@ def track(
     """Track one realization from a :func:`railradio.nr.simulate.simulate_epochs` dataset.
 
     The first epoch with measurements gives the initial state (snapshot LS position, at
-    rest: the seed's trajectory starts from standstill) and P0 (its covariance; speed and
+    rest: the source's trajectory starts from standstill) and P0 (its covariance; speed and
     acceleration standard deviations 1 m/s and 1 m/s² [ours]). Also returns (``snapshot``) the snapshot
     LS fix of every epoch (no tracking) as a baseline.
 
@@ -227,7 +227,7 @@ def track(
     snapshot : bool
         Also compute the per-epoch snapshot LS fix.
     lever_arm : bool
-        Model the head/tail panels' along-track lever arm (False: the seed's point model).
+        Model the head/tail panels' along-track lever arm (False: the source's point model).
 
     Returns
     -------

@@ -34,10 +34,10 @@ def receiver_selection(c: dict) -> dict[str, str]:
     Returns
     -------
     dict of str to str
-        ``"seed"`` -> ``c["receiver"]["selection"]``, then each ``receiver_variants`` name -> its
+        ``"source"`` -> ``c["receiver"]["selection"]``, then each ``receiver_variants`` name -> its
         ``selection`` (config order).
     """
-    return {"seed": c["receiver"]["selection"]} | {
+    return {"source": c["receiver"]["selection"]} | {
         name: v["selection"] for name, v in c.get("receiver_variants", {}).items()
     }
 

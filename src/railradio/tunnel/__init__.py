@@ -1,4 +1,4 @@
-"""Study `tunnel`: long-train positioning with a leaky coaxial cable (seed 003; the model: docs/model/tunnel.md).
+"""Study `tunnel`: long-train positioning with a leaky coaxial cable (source 003; the model: docs/model/tunnel.md).
 
 Modules: :mod:`geometry` (tunnel, LCX slot chain, cable), :mod:`materials` (Fresnel),
 :mod:`rays` (image method and shooting-and-bouncing rays behind one interface),

@@ -8,14 +8,14 @@ of a receiver on the grid falls exactly on it) and stores, per offset, the band-
 channel as complex taps on a fine excess-delay grid (relative to the line-of-sight delay),
 their coherent sum being the narrowband gain, plus the local-mean power and the delay
 moments.  Gains are relative to the cable power at the slot: the physical model includes
-the slot EIRP of the slot-chain calibration (geometry eq. 1); the seed's model applies its
-own losses (seed 2.2-2.4): coupling loss at the slot-receiver distance, free space, tunnel
+the slot EIRP of the slot-chain calibration (geometry eq. 1); the source's model applies its
+own losses (source 2.2-2.4): coupling loss at the slot-receiver distance, free space, tunnel
 attenuation, a fixed loss per reflection and a random 0-10 dB multipath loss per
 reflected ray.
 
 :func:`received` assembles, for receivers anywhere on the grid, the sum over all slots
-with the cable's loss and phase: RSSI coherent and local mean [seed 2.4.3], RMS delay
-spread [seed 2.5.2], per-slot powers and delays.
+with the cable's loss and phase: RSSI coherent and local mean [source 2.4.3], RMS delay
+spread [source 2.5.2], per-slot powers and delays.
 """
 
 from __future__ import annotations
@@ -32,12 +32,12 @@ from railradio.tunnel.geometry import Cable, Tunnel
 from railradio.tunnel.lifting import reflection_product
 from railradio.tunnel.rays import Families
 
-PROPAGATIONS = ("physical", "seed")
+PROPAGATIONS = ("physical", "source")
 
 
 @dataclass(frozen=True)
-class SeedModel:
-    """The seed's simplified propagation model (seed 2.3.2-2.4.2)."""
+class SourceModel:
+    """The source's simplified propagation model (source 2.3.2-2.4.2)."""
 
     reflection_loss_db: float = 8.0
     tunnel_att_db_per_m: float = 0.065
@@ -201,7 +201,7 @@ def tabulate(
     eps: complex,
     polarization: str,
     propagation: str = "physical",
-    seed_model: SeedModel | None = None,
+    source_model: SourceModel | None = None,
     rng: np.random.Generator | None = None,
     delay_bin_s: float = 10e-9,
     n_delay_bins: int = 64,
@@ -217,11 +217,11 @@ def tabulate(
     moments come from the taps' powers averaged over the same window (the local-mean power
     delay profile: rays in one delay bin add coherently, different bins' cross terms
     average out).  The incoherent sum over rays is kept as ``power_incoherent`` for
-    comparison; the seed's model keeps it as its local mean (seed 2.4.3).
+    comparison; the source's model keeps it as its local mean (source 2.4.3).
 
     The reflection product of each family is evaluated on ``n_sin_grid`` elevations
     (uniform in sin b, in which the Fresnel coefficients are smooth) and interpolated;
-    spreading and phase are exact at every offset.  ``rng`` draws the seed model's
+    spreading and phase are exact at every offset.  ``rng`` draws the source model's
     multipath losses (one per reflected ray and offset: every slot-receiver pair its own).
 
     Parameters
@@ -233,7 +233,7 @@ def tabulate(
         The tunnel of ``fam``: its slot-receiver distance in the cross-section (the
         line-of-sight delay) and slot spacing (the slot EIRP).
     cable : Cable
-        The cable: wavelength, slot EIRP (physical), coupling loss (seed's model).
+        The cable: wavelength, slot EIRP (physical), coupling loss (source's model).
     offsets_m : numpy.ndarray
         Along-axis offsets |x_rx - x_slot| [m], a uniform grid from 0 (:func:`offset_grid_m`).
     eps : complex or None
@@ -242,12 +242,12 @@ def tabulate(
     polarization : {'paraxial', 'vector'}
         Polarization rule of the reflection product (:mod:`railradio.tunnel.lifting`).
         Physical propagation only.
-    propagation : {'physical', 'seed'}
-        The physical ray channel, or the seed's simplified model (seed 2.2-2.4).
-    seed_model : SeedModel or None
-        Losses of the seed's model (None: the defaults of :class:`SeedModel`).
+    propagation : {'physical', 'source'}
+        The physical ray channel, or the source's simplified model (source 2.2-2.4).
+    source_model : SourceModel or None
+        Losses of the source's model (None: the defaults of :class:`SourceModel`).
     rng : numpy.random.Generator or None
-        Source of the seed model's random multipath losses; required for ``propagation='seed'``.
+        Source of the source model's random multipath losses; required for ``propagation='source'``.
     delay_bin_s : float
         Width of the excess-delay bins of the taps [s]; positive.
     n_delay_bins : int
@@ -255,10 +255,10 @@ def tabulate(
     n_sin_grid : int
         Elevations (uniform in sin b on [0, 1]) on which the reflection product is evaluated.
     chunk : int
-        Offsets evaluated at a time by the seed's model (memory only).
+        Offsets evaluated at a time by the source's model (memory only).
     local_mean_window_m : float or None
         Length of the local-mean window [m]; required (> 0) for physical propagation,
-        ignored by the seed's model.
+        ignored by the source's model.
 
     Returns
     -------
@@ -271,13 +271,13 @@ def tabulate(
         [s]), ``delay_rms_s`` (RMS delay spread of one slot [s]), ``los_delay_s``
         (line-of-sight delay [s]), each [offset_m].  Attributes: ``engine``,
         ``propagation``, ``polarization``, ``n_families``, ``max_reflections``,
-        ``local_mean_window_m`` (0 for the seed's model), ``shape``.
+        ``local_mean_window_m`` (0 for the source's model), ``shape``.
 
     Raises
     ------
     ValueError
         When ``propagation`` is unknown; when ``n_delay_bins`` < 2 or ``delay_bin_s`` <= 0;
-        when ``rng`` is None for the seed's model; when ``local_mean_window_m`` is missing or
+        when ``rng`` is None for the source's model; when ``local_mean_window_m`` is missing or
         not positive, or ``polarization`` is unknown, for physical propagation.
     """
     if propagation not in PROPAGATIONS:
@@ -308,10 +308,10 @@ def tabulate(
             p_mean,
         )
     else:
-        _seed_model_taps(fam, cable, offsets, h, k, seed_model, rng, delay_bin_s, chunk, taps, p_mean, m1, m2)
+        _source_model_taps(fam, cable, offsets, h, k, source_model, rng, delay_bin_s, chunk, taps, p_mean, m1, m2)
     los = np.sqrt(h * h + offsets**2) / SPEED_OF_LIGHT_M_S
     p_incoherent = p_mean
-    lm_desc = "local-mean power gain (incoherent sum over rays, the seed's model) "
+    lm_desc = "local-mean power gain (incoherent sum over rays, the source's model) "
     if propagation == "physical":
         p_mean, m1, m2, lm_desc = _physical_local_mean(offsets, taps, los, delay_bin_s, local_mean_window_m)
     attrs = {
@@ -326,13 +326,13 @@ def tabulate(
     return _table_dataset(taps, p_mean, p_incoherent, m1, m2, los, offsets, delay_bin_s, lm_desc, attrs)
 
 
-def _seed_model_taps(
+def _source_model_taps(
     fam: Families,
     cable: Cable,
     offsets: np.ndarray,
     h: float,
     k: float,
-    seed_model: SeedModel | None,
+    source_model: SourceModel | None,
     rng: np.random.Generator | None,
     delay_bin_s: float,
     chunk: int,
@@ -341,11 +341,11 @@ def _seed_model_taps(
     m1: np.ndarray,
     m2: np.ndarray,
 ) -> None:
-    """The seed's model (seed 2.2-2.4) into ``taps`` [offset, bin], its incoherent local mean
+    """The source's model (source 2.2-2.4) into ``taps`` [offset, bin], its incoherent local mean
     ``p_mean`` and the delay moments ``m1``, ``m2`` [offset], ``chunk`` offsets at a time."""
-    sm = seed_model or SeedModel()
+    sm = source_model or SourceModel()
     if rng is None:
-        raise ValueError("rng is required for propagation='seed' (random multipath loss)")
+        raise ValueError("rng is required for propagation='source' (random multipath loss)")
     fixed_db = -sm.reflection_loss_db * fam.n_refl
     lam = cable.wavelength_m
     n_d, n_delay_bins = taps.shape
@@ -354,8 +354,8 @@ def _seed_model_taps(
         dx = offsets[a : a + chunk][None, :]
         d = np.sqrt(ell**2 + dx**2)
         d_direct = np.sqrt(h * h + dx**2)
-        # the seed's random 0-10 dB multipath loss, drawn per reflected ray and per offset,
-        # i.e. independently for every slot-receiver pair (seed 2.4.2)
+        # the source's random 0-10 dB multipath loss, drawn per reflected ray and per offset,
+        # i.e. independently for every slot-receiver pair (source 2.4.2)
         mp_db = np.where(fam.n_refl[:, None] > 0, rng.uniform(0.0, sm.multipath_max_db, d.shape), 0.0)
         loss_db = (
             (

@@ -35,7 +35,7 @@ def rssi_map(maps: dict[str, xr.Dataset], coverage_dbm: float, blind_dbm: float,
         The figure is written to ``pdf`` and ``png``.
     """
     fig, (ax, az) = figure(nrows=2, figsize=(7.0, 5.6))
-    labels = {"image": "physical, image method (square)", "sbr": "physical, SBR (circle)", "seed": "seed's model"}
+    labels = {"image": "physical, image method (square)", "sbr": "physical, SBR (circle)", "source": "source's model"}
     for name, ds in maps.items():
         ax.plot(ds["x_m"], ds["rssi_mean_dbm"], lw=0.8, label=labels.get(name, name))
     for a in (ax, az):
@@ -94,14 +94,14 @@ def delay_spread(maps: dict[str, xr.Dataset], pdf, png) -> None:
 
 def gdop(run: xr.Dataset, pdf, png, span_m: float = 200.0) -> None:
     """Figure ``tunnel_gdop``: the head receiver's dilution of precision over ``span_m`` from
-    x = 2000 m, the seed's 2-D GDOP (seed 4.1.1) against the along-track TDOA dilution
+    x = 2000 m, the source's 2-D GDOP (source 4.1.1) against the along-track TDOA dilution
     sigma_x / (c sigma_tau) (logarithmic axis).
 
     Parameters
     ----------
     run : xarray.Dataset
         A run of :func:`railradio.tunnel.simulate.run_train` (the workflow passes the HST,
-        physical, separable run) with ``x_rx_true`` [m], ``gdop_seed`` and ``gdop_tdoa`` [1].
+        physical, separable run) with ``x_rx_true`` [m], ``gdop_source`` and ``gdop_tdoa`` [1].
     pdf : str or os.PathLike
         Output PDF path.
     png : str or os.PathLike
@@ -117,7 +117,7 @@ def gdop(run: xr.Dataset, pdf, png, span_m: float = 200.0) -> None:
     fig, ax = figure(figsize=(6.4, 3.4))
     x = run["x_rx_true"].values[:, 0]
     sel = (x >= 2000) & (x <= 2000 + span_m)
-    ax.plot(x[sel], run["gdop_seed"].values[sel, 0], ".", ms=2, label="seed's 2-D GDOP (4.1.1)")
+    ax.plot(x[sel], run["gdop_source"].values[sel, 0], ".", ms=2, label="source's 2-D GDOP (4.1.1)")
     ax.plot(x[sel], run["gdop_tdoa"].values[sel, 0], ".", ms=2, label=r"along-track TDOA: $\sigma_x / c\sigma_\tau$")
     ax.set_yscale("log")
     ax.set_xlabel("head receiver position x [m] (HST run)")
@@ -135,7 +135,7 @@ def position_error_cdf(runs: dict[tuple[str, str], xr.Dataset], pdf, png) -> Non
     """Figure ``tunnel_position_error_cdf``: one panel per train type, the CDFs of the
     position errors [m] (logarithmic axis, 2 m and 5 m marked): head and tail KF, rigid-train
     KF, particle filter and head snapshot of the physical separable run, and the train-error
-    KF of the correlated delay-error, wideband and seed-channel runs where present.
+    KF of the correlated delay-error, wideband and source-channel runs where present.
 
     Parameters
     ----------
@@ -174,8 +174,8 @@ def position_error_cdf(runs: dict[tuple[str, str], xr.Dataset], pdf, png) -> Non
                 label="train, KF, wideband (errors from the channel)",
                 ls="-.",
             )
-        if (tr, "seed_separable") in runs:
-            _cdf(ax, runs[(tr, "seed_separable")]["kf_err"], label="train, KF, seed's channel", ls=(0, (1, 3)))
+        if (tr, "source_separable") in runs:
+            _cdf(ax, runs[(tr, "source_separable")]["kf_err"], label="train, KF, source's channel", ls=(0, (1, 3)))
         ax.set_xscale("log")
         ax.set_xlim(1e-2, 1e3)
         ax.set_xlabel("error [m]")
@@ -230,7 +230,7 @@ def ray_engines(eng: xr.Dataset, pdf, png) -> None:
     save(fig, pdf, png)
 
 
-def seed_vs_physical(
+def source_vs_physical(
     tables: dict[str, xr.Dataset],
     maps: dict[str, xr.Dataset],
     h_m: float,
@@ -239,7 +239,7 @@ def seed_vs_physical(
     pdf,
     png,
 ) -> None:
-    """Figure ``tunnel_seed_vs_physical``: one slot's local-mean gain relative to the cable
+    """Figure ``tunnel_source_vs_physical``: one slot's local-mean gain relative to the cable
     power over the offset for every table, beside the coupling loss alone (left), and the
     distribution of the local-mean RSSI over the tunnel for every map with the coverage
     threshold (right).
@@ -269,7 +269,7 @@ def seed_vs_physical(
         The figure is written to ``pdf`` and ``png``.
     """
     fig, (ax, ac) = figure(ncols=2, figsize=(8.0, 3.4))
-    labels = {"image": "physical (image, square)", "sbr": "physical (SBR, circle)", "seed": "seed's model"}
+    labels = {"image": "physical (image, square)", "sbr": "physical (SBR, circle)", "source": "source's model"}
     for name, t in tables.items():
         off = t["offset_m"].values
         sel = off >= 0.5

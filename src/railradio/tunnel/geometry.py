@@ -1,15 +1,15 @@
-"""Tunnel and leaky-cable geometry (seed 003 §1, §2.1-2.2; docs/model/tunnel.md §1).
+"""Tunnel and leaky-cable geometry (source 003 §1, §2.1-2.2; docs/model/tunnel.md §1).
 
-Coordinates [seed 2.1]: x along the tunnel from the portal, y vertical from the tunnel
+Coordinates [source 2.1]: x along the tunnel from the portal, y vertical from the tunnel
 floor (the lowest point of the lining), z transverse from the centreline.  The circular
 cross-section of diameter D has its centre at (y, z) = (D/2, 0); the rectangle of equal
 area (the image method's tunnel) is a square of side D sqrt(pi)/2 with its floor at y = 0.
 
 The leaky coaxial cable (LCX) radiates through slots every ``slot_spacing_m`` at
-(x_i, 0.1 H, z_slot) [seed 2.2.1].  Slot-chain model (docs/model/tunnel.md §1): every slot is an
+(x_i, 0.1 H, z_slot) [source 2.2.1].  Slot-chain model (docs/model/tunnel.md §1): every slot is an
 isotropic radiator whose EIRP is set so that the along-cable mean of the incoherent
 free-space sum of all slots, at distance d_ref from the cable, equals the cable's
-specified coupling loss L_c(d_ref) = 85 + 10 log10(d_ref / 1 m) dB [seed 2.2.2]:
+specified coupling loss L_c(d_ref) = 85 + 10 log10(d_ref / 1 m) dB [source 2.2.2]:
 
     P_s = P_c - L_c(d_ref) + 10 log10(d_ref s / pi) + 20 log10(4 pi / lambda) - G_ref   (1)
 
@@ -20,7 +20,7 @@ P_c - L_c includes that gain, so the slot EIRP is G_ref below the isotropic-rece
 and the train antenna (0 dBi in this study) then reads P_c - L_c - G_ref at d_ref.  The
 coupling loss is thereby used once, to
 set the slot power; every ray then carries free-space spreading and wall reflections only,
-never coupling loss *and* free-space loss (the seed's eq. 2.4.1 applies both).
+never coupling loss *and* free-space loss (the source's eq. 2.4.1 applies both).
 """
 
 from __future__ import annotations
@@ -67,7 +67,7 @@ def equal_area_side_m(diameter_m: float) -> float:
 class Tunnel:
     """A straight tunnel, its LCX slot line and the train antenna's cross-section position.
 
-    ``shape`` 'circle' is the true cross-section [seed]; 'rect' the square of equal area
+    ``shape`` 'circle' is the true cross-section [source]; 'rect' the square of equal area
     [ours], in which the image method is exact.
 
     Parameters
@@ -140,7 +140,7 @@ class Tunnel:
 
     @property
     def slot_yz(self) -> tuple[float, float]:
-        """(y, z) of the slot line: 10 % of the height [seed 2.2.1]."""
+        """(y, z) of the slot line: 10 % of the height [source 2.2.1]."""
         return (self.slot_height_frac * self.height_m, self.slot_z_m)
 
     @property
@@ -199,7 +199,7 @@ class Tunnel:
 
     @property
     def slot_x_m(self) -> np.ndarray:
-        """Slot positions x_i = i dx, i = 0 .. N-1 [seed 2.2.1] [m]."""
+        """Slot positions x_i = i dx, i = 0 .. N-1 [source 2.2.1] [m]."""
         n = int(round(self.length_m / self.slot_spacing_m))
         return np.arange(n) * self.slot_spacing_m
 
@@ -289,7 +289,7 @@ class Cable:
         return SPEED_OF_LIGHT_M_S / self.frequency_hz
 
     def coupling_loss_at_db(self, d_m) -> np.ndarray:
-        """L_c(d) = L_c + 10 log10(d / 1 m) [seed 2.2.2] [dB].
+        """L_c(d) = L_c + 10 log10(d / 1 m) [source 2.2.2] [dB].
 
         Parameters
         ----------

@@ -1,5 +1,5 @@
 """The tunnel study's key numbers named and described: every key's unit, description and the
-source's value (seed 003 §8) where it gives one (docs/model/tunnel.md).
+source's value (source 003 §8) where it gives one (docs/model/tunnel.md).
 """
 
 from __future__ import annotations
@@ -11,7 +11,7 @@ ENGINE_TOL_MEAN_DB = 0.05
 ENGINE_TOL_COHERENT_DB = 0.3
 """|SBR - image| bounds of the cross-validation test in the square tunnel (local mean, coherent) [dB]."""
 SOURCE_P95 = {"metro": (1.5, 1.2, 1.8), "hst": (2.0, 1.5, 2.5), "freight": (3.5, 2.0, 5.0)}
-"""seed 003 §8.1: 95 % accuracy of the train, its head and its tail [m] (stated as ±)."""
+"""source 003 §8.1: 95 % accuracy of the train, its head and its tail [m] (stated as ±)."""
 
 
 def _add(s: dict[str, KeySpec], name, unit, desc, src=None, rel=None, digits=3) -> None:
@@ -19,7 +19,7 @@ def _add(s: dict[str, KeySpec], name, unit, desc, src=None, rel=None, digits=3) 
 
 
 def _train_specs(s: dict[str, KeySpec]) -> None:
-    """Per train type: the accuracy of every estimator and receiver (seed 8.1)."""
+    """Per train type: the accuracy of every estimator and receiver (source 8.1)."""
     for tr in TRAINS:
         tot, head, tail = SOURCE_P95[tr]
         _add(
@@ -52,14 +52,17 @@ def _train_specs(s: dict[str, KeySpec]) -> None:
         _add(s, f"tunnel.{tr}.rssi.err_m.p95", "m", f"{tr}: 95th pct of the head receiver's RSSI-ranging LS error")
         _add(s, f"tunnel.{tr}.wideband.err_m.p95", "m", f"{tr}: 95th pct of the train error, KF, wideband receiver")
         _add(
-            s, f"tunnel.{tr}.seed_channel.err_m.p95", "m", f"{tr}: 95th pct of the train error, KF, the seed's channel"
+            s,
+            f"tunnel.{tr}.source_channel.err_m.p95",
+            "m",
+            f"{tr}: 95th pct of the train error, KF, the source's channel",
         )
         _add(
             s,
             f"tunnel.{tr}.length_err_m.p95",
             "m",
             f"{tr}: 95th pct of |estimated head-tail distance - train length|, KF (the observable "
-            "part of the attitude: with collinear slots the lateral offset, hence the seed's "
+            "part of the attitude: with collinear slots the lateral offset, hence the source's "
             "attitude angle, is not observable)",
         )
 
@@ -76,9 +79,9 @@ def _coverage_specs(s: dict[str, KeySpec]) -> None:
     )
     _add(s, "tunnel.coverage_frac.coherent", "1", "same with the coherent RSSI (fading included)")
     _add(s, "tunnel.coverage_frac.sbr_circle", "1", "same, SBR in the circular cross-section")
-    _add(s, "tunnel.coverage_frac.seed_model", "1", "same, the seed's propagation model")
-    _add(s, "tunnel.blind_spot_frac", "1", "share of the tunnel in a blind spot (seed 5.1.2), physical")
-    _add(s, "tunnel.blind_spot_frac.seed_model", "1", "share in a blind spot, the seed's model")
+    _add(s, "tunnel.coverage_frac.source_model", "1", "same, the source's propagation model")
+    _add(s, "tunnel.blind_spot_frac", "1", "share of the tunnel in a blind spot (source 5.1.2), physical")
+    _add(s, "tunnel.blind_spot_frac.source_model", "1", "share in a blind spot, the source's model")
     _add(s, "tunnel.availability.err_lt_5m", "1", "share of epochs with train error < 5 m (KF, all trains)", 0.95, "≥")
     _add(s, "tunnel.availability.err_lt_2m", "1", "share of epochs with train error < 2 m (KF, all trains)", 0.85, "≥")
     _add(s, "tunnel.availability.wideband.err_lt_5m", "1", "same, < 5 m, wideband receiver")
@@ -108,9 +111,9 @@ def _coverage_specs(s: dict[str, KeySpec]) -> None:
 def _channel_specs(s: dict[str, KeySpec]) -> None:
     """The channel along the tunnel, the ray engines, the HST snapshot geometry."""
     _add(s, "tunnel.delay_spread_ns.median", "ns", "median RMS delay spread along the tunnel (physical, image)")
-    _add(s, "tunnel.delay_spread_ns.median.seed_model", "ns", "median RMS delay spread, the seed's model")
+    _add(s, "tunnel.delay_spread_ns.median.source_model", "ns", "median RMS delay spread, the source's model")
     _add(s, "tunnel.rssi_dbm.median", "dBm", "median local-mean RSSI (physical, image)")
-    _add(s, "tunnel.rssi_dbm.median.seed_model", "dBm", "median local-mean RSSI, the seed's model")
+    _add(s, "tunnel.rssi_dbm.median.source_model", "dBm", "median local-mean RSSI, the source's model")
     _add(s, "tunnel.rays.order", "1", "reflection order chosen by the convergence criterion")
     _add(s, "tunnel.rays.families_image", "1", "image-method rays (families) per slot")
     _add(s, "tunnel.rays.families_sbr_circle", "1", "SBR ray families per slot, circular cross-section")
@@ -135,9 +138,9 @@ def _channel_specs(s: dict[str, KeySpec]) -> None:
         "tolerance of the engine cross-validation test, coherent gain",
         digits=2,
     )
-    _add(s, "tunnel.hst.cep_m", "m", "HST: CEP = 0.59 sigma_x (seed 4.3.2) of the TDOA snapshot, sigma_y = 0")
+    _add(s, "tunnel.hst.cep_m", "m", "HST: CEP = 0.59 sigma_x (source 4.3.2) of the TDOA snapshot, sigma_y = 0")
     _add(s, "tunnel.hst.snapshot.err_m.p50", "m", "HST: median TDOA snapshot error (the CEP's empirical counterpart)")
-    _add(s, "tunnel.hst.gdop_seed.median", "1", "HST head receiver: median of the seed's 2-D GDOP")
+    _add(s, "tunnel.hst.gdop_source.median", "1", "HST head receiver: median of the source's 2-D GDOP")
     _add(s, "tunnel.hst.gdop_tdoa.median", "1", "HST head receiver: median along-track TDOA dilution")
 
 

@@ -1,4 +1,4 @@
-"""Key numbers of the tunnel study (docs/model/tunnel.md; source values from seed 003 §8)."""
+"""Key numbers of the tunnel study (docs/model/tunnel.md; source values from source 003 §8)."""
 
 from __future__ import annotations
 
@@ -12,8 +12,8 @@ from railradio.tunnel.key_specs import ENGINE_TOL_COHERENT_DB, ENGINE_TOL_MEAN_D
 
 def length_error_m(ds: xr.Dataset) -> np.ndarray:
     """|x̂_head - x̂_tail - L| per epoch [m] of a run's KF (realization 0): the train's
-    along-track extent, all that remains of the seed's attitude θ = arctan(Δy/Δx)
-    (seed 3.3.2) when the slots are collinear and only along-track positions are solved.
+    along-track extent, all that remains of the source's attitude θ = arctan(Δy/Δx)
+    (source 3.3.2) when the slots are collinear and only along-track positions are solved.
 
     Parameters
     ----------
@@ -108,10 +108,10 @@ def _run_keys(out: dict[str, Any], runs: dict[tuple[str, str], xr.Dataset]) -> l
         _put(out, f"tunnel.{tr}.wideband.err_m.p95", None if wb is None else _p95(wb["kf_err"]))
         if wb is not None:
             pooled_wb.append(wb)
-        sd = runs.get((tr, "seed_separable"))
+        sd = runs.get((tr, "source_separable"))
         _put(
             out,
-            f"tunnel.{tr}.seed_channel.err_m.p95",
+            f"tunnel.{tr}.source_channel.err_m.p95",
             *((None, None) if sd is None else pooled_p95(sd["rep_err"].values)),
         )
     _put(out, "tunnel.availability.err_lt_5m", *pooled_share(pooled, 5.0))
@@ -157,19 +157,19 @@ def _map_keys(
 ) -> None:
     """Coverage, blind spots, delay spread and RSSI along the tunnel; the rays; the engines."""
 
-    def blind(m):  # seed 5.1.2: RSSI_max < -100 dBm or fewer than 3 usable rays
+    def blind(m):  # source 5.1.2: RSSI_max < -100 dBm or fewer than 3 usable rays
         return np.mean((m["rssi_mean_dbm"].values < blind_dbm) | (m["n_strong_rays"].values < min_rays))
 
     _put(out, "tunnel.coverage_frac", np.mean(maps["image"]["rssi_mean_dbm"].values >= coverage_dbm))
     _put(out, "tunnel.coverage_frac.coherent", np.mean(maps["image"]["rssi_coherent_dbm"].values >= coverage_dbm))
     _put(out, "tunnel.coverage_frac.sbr_circle", np.mean(maps["sbr"]["rssi_mean_dbm"].values >= coverage_dbm))
-    _put(out, "tunnel.coverage_frac.seed_model", np.mean(maps["seed"]["rssi_mean_dbm"].values >= coverage_dbm))
+    _put(out, "tunnel.coverage_frac.source_model", np.mean(maps["source"]["rssi_mean_dbm"].values >= coverage_dbm))
     _put(out, "tunnel.blind_spot_frac", blind(maps["image"]))
-    _put(out, "tunnel.blind_spot_frac.seed_model", blind(maps["seed"]))
+    _put(out, "tunnel.blind_spot_frac.source_model", blind(maps["source"]))
     _put(out, "tunnel.delay_spread_ns.median", np.median(maps["image"]["delay_rms_s"].values) * 1e9)
-    _put(out, "tunnel.delay_spread_ns.median.seed_model", np.median(maps["seed"]["delay_rms_s"].values) * 1e9)
+    _put(out, "tunnel.delay_spread_ns.median.source_model", np.median(maps["source"]["delay_rms_s"].values) * 1e9)
     _put(out, "tunnel.rssi_dbm.median", np.median(maps["image"]["rssi_mean_dbm"].values))
-    _put(out, "tunnel.rssi_dbm.median.seed_model", np.median(maps["seed"]["rssi_mean_dbm"].values))
+    _put(out, "tunnel.rssi_dbm.median.source_model", np.median(maps["source"]["rssi_mean_dbm"].values))
     _put(out, "tunnel.rays.order", tables["image"].attrs["reflection_order"])
     _put(out, "tunnel.rays.families_image", tables["image"].attrs["n_families"])
     _put(out, "tunnel.rays.families_sbr_circle", tables["sbr"].attrs["n_families"])
@@ -189,7 +189,7 @@ def _hst_and_lining_keys(
     e = hst["snapshot"].values[:, 0] - hst["x_rx_true"].values[:, 0]
     _put(out, "tunnel.hst.cep_m", 0.59 * np.std(e))
     _put(out, "tunnel.hst.snapshot.err_m.p50", np.median(np.abs(e)))
-    _put(out, "tunnel.hst.gdop_seed.median", np.median(hst["gdop_seed"].values[:, 0]))
+    _put(out, "tunnel.hst.gdop_source.median", np.median(hst["gdop_source"].values[:, 0]))
     _put(out, "tunnel.hst.gdop_tdoa.median", np.median(hst["gdop_tdoa"].values[:, 0]))
     _put(out, "tunnel.fresnel.normal_loss_db", reflection_loss_db(fresnel_te(1.0, eps)))
     _put(out, "tunnel.fresnel.te_loss_db.graze1deg", reflection_loss_db(fresnel_te(np.sin(np.deg2rad(1.0)), eps)))
@@ -269,7 +269,7 @@ def key_numbers(
     side_wall_map: xr.Dataset | None = None,
 ) -> dict[str, Any]:
     """The key numbers ``tunnel.*`` (:data:`SPECS`, with the sensitivity cases' keys of
-    :func:`sens_spec`) from the study's intermediates, beside the seed's design targets.
+    :func:`sens_spec`) from the study's intermediates, beside the source's design targets.
 
     Parameters
     ----------
@@ -280,7 +280,7 @@ def key_numbers(
         optional (their keys null when missing).
     maps : dict
         Table name -> map of :func:`railradio.tunnel.study.make_map`; needs ``image``,
-        ``sbr`` and ``seed``.
+        ``sbr`` and ``source``.
     tables : dict
         Table name -> table of :func:`railradio.tunnel.study.make_table`; needs ``image``
         and ``sbr``.

@@ -1,16 +1,16 @@
-"""Positioning along the track from LCX slot measurements (seed 003 §3-4).
+"""Positioning along the track from LCX slot measurements (source 003 §3-4).
 
 The slots are collinear (one line along the tunnel at a known height and transverse
 position), so the position is solved along the track only; the receiver's cross-section
 position is known and enters as the cross distance h: d_i^2 = (x - x_i)^2 + h^2.
 
-* :func:`rssi_ls` - RSSI ranging [seed 3.1.1] by inverting the model's mean path gain,
-  then the seed's linearized least squares [seed 3.1.2] reduced to the one unknown x.
-* :func:`tdoa_gauss_newton` - TDOA range differences [seed 3.2.2] solved by weighted
+* :func:`rssi_ls` - RSSI ranging [source 3.1.1] by inverting the model's mean path gain,
+  then the source's linearized least squares [source 3.1.2] reduced to the one unknown x.
+* :func:`tdoa_gauss_newton` - TDOA range differences [source 3.2.2] solved by weighted
   Gauss-Newton with the correlated TDOA covariance sigma^2 (I + 1 1^T).
-* :func:`gdop_seed` [seed 4.1.1, 2-D in the x-y plane] and :func:`gdop_tdoa_along`
+* :func:`gdop_source` [source 4.1.1, 2-D in the x-y plane] and :func:`gdop_tdoa_along`
   (the along-track error per unit delay error of the TDOA solution).
-* :func:`cep` [seed 4.3.2] = 0.59 (sigma_x + sigma_y).
+* :func:`cep` [source 4.3.2] = 0.59 (sigma_x + sigma_y).
 """
 
 from __future__ import annotations
@@ -69,7 +69,7 @@ def gain_to_offset_m(gain_db, offsets_m: np.ndarray, curve_db: np.ndarray) -> np
 
 
 def rssi_ls(x_slot_m: np.ndarray, range_m: np.ndarray, h_m: float) -> np.ndarray:
-    """Linearized least squares [seed 3.1.2] along the track, vectorized over epochs.
+    """Linearized least squares [source 3.1.2] along the track, vectorized over epochs.
 
     Rows i = 1..n-1 against the reference (column 0, the strongest slot):
     (x - x_i)^2 - (x - x_0)^2 = d_i^2 - d_0^2  ->  2 (x_0 - x_i) x = d_i^2 - d_0^2 - x_i^2 + x_0^2;
@@ -117,7 +117,7 @@ def tdoa_gauss_newton(
     n_iter: int = 20,
     max_step_m: float = 25.0,
 ):
-    """Weighted Gauss-Newton on the TDOA equations [seed 3.2.2] along the track.
+    """Weighted Gauss-Newton on the TDOA equations [source 3.2.2] along the track.
 
     ``range_diff_m[:, i-1]`` = c (tau_i - tau_0) for slots i = 1..n-1 against column 0.
     Returns (x [epoch], variance [epoch] from (J^T C^-1 J)^-1).  The TDOA covariance is
@@ -179,8 +179,8 @@ def tdoa_gauss_newton(
     return x, 1.0 / np.maximum(info, 1e-300)
 
 
-def gdop_seed(x_m: np.ndarray, y_m: float, x_slot_m: np.ndarray, y_slot_m: float) -> np.ndarray:
-    """GDOP = sqrt(trace((A^T A)^-1)), A = [cos t_i, sin t_i] [seed 4.1.1] in the x-y plane.
+def gdop_source(x_m: np.ndarray, y_m: float, x_slot_m: np.ndarray, y_slot_m: float) -> np.ndarray:
+    """GDOP = sqrt(trace((A^T A)^-1)), A = [cos t_i, sin t_i] [source 4.1.1] in the x-y plane.
 
     t_i is the azimuth from the position to slot i.  With all slots on one line below the
     receiver the matrix is near-singular whenever the slots lie on one side.
@@ -238,7 +238,7 @@ def gdop_tdoa_along(x_m: np.ndarray, x_slot_m: np.ndarray, h_m: float) -> np.nda
 
 
 def cep(sigma_x: np.ndarray, sigma_y: np.ndarray) -> np.ndarray:
-    """Circular error probable CEP = 0.59 (sigma_x + sigma_y) [seed 4.3.2].
+    """Circular error probable CEP = 0.59 (sigma_x + sigma_y) [source 4.3.2].
 
     Parameters
     ----------

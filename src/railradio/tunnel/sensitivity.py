@@ -36,7 +36,7 @@ def case_label(v: float) -> str:
 
 
 def sensitivity_cases(cfg: dict[str, Any]) -> dict[str, dict[str, Any]]:
-    """Sensitivity cases (shadowing and delay-error sigma swept over the seed's
+    """Sensitivity cases (shadowing and delay-error sigma swept over the source's
     ranges; the delay-error model): label -> overrides of the measurement section, each
     case changing one thing from the defaults, and the delay-sigma sweep repeated with each
     correlated delay-error model (``delay_sigma_ns_<v>_<model>``).
@@ -86,7 +86,7 @@ def make_sensitivity(
     ----------
     cfg : dict
         The ``tunnel`` section of the configuration (``geometry``, ``cable``, ``wall``,
-        ``rays``, ``seed_model``, ``measurement``, ``trains``, ``positioning``,
+        ``rays``, ``source_model``, ``measurement``, ``trains``, ``positioning``,
         ``tracking``, ``realizations``, ``sensitivity``).
     table : xarray.Dataset
         The physical channel table of the configured engine

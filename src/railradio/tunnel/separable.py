@@ -1,5 +1,5 @@
 """The separable receiver: every slot's RSSI and delay measured on their own, and the snapshot
-fix from them (RSSI ranging + linearized LS, then TDOA Gauss-Newton) [seed 4.2, 6.2]."""
+fix from them (RSSI ranging + linearized LS, then TDOA Gauss-Newton) [source 4.2, 6.2]."""
 
 from __future__ import annotations
 
@@ -12,7 +12,7 @@ from railradio.tunnel.geometry import Cable, Tunnel
 from railradio.tunnel.measurement import MeasurementModel
 from railradio.tunnel.positioning import (
     gain_to_offset_m,
-    gdop_seed,
+    gdop_source,
     gdop_tdoa_along,
     monotone_gain_db,
     range_diff_from_delays,
@@ -47,7 +47,7 @@ def separable_measurements(
     ----------
     table : xarray.Dataset
         Tabulated slot-to-receiver channel (:func:`railradio.tunnel.channel.tabulate`):
-        ``taps`` (physical) or ``power_mean`` (seed) over ``offset_m`` [m].
+        ``taps`` (physical) or ``power_mean`` (source) over ``offset_m`` [m].
     tunnel : Tunnel
         Slot positions and the cross distance h between slot line and receiver.
     cable : Cable
@@ -61,7 +61,7 @@ def separable_measurements(
         Source of the white delay error (not used with ``delay_field``).
     mm : MeasurementModel
         ``n_slots``, ``window_m`` [m] and ``delay_sigma_s`` [s].
-    propagation : {'physical', 'seed'}
+    propagation : {'physical', 'source'}
         'physical': a slot's gain is the power of its coherent tap sum; otherwise its
         local-mean power.
     delay_field : numpy.ndarray or None
@@ -122,10 +122,10 @@ def separable_fix(meas: dict, table: xr.Dataset, tunnel: Tunnel, mm: Measurement
     Returns
     -------
     tuple of numpy.ndarray
-        ``(x_rssi, x_tdoa, sigma_tdoa, gdop_seed, gdop_tdoa)``, each [epoch]: the RSSI-LS fix
+        ``(x_rssi, x_tdoa, sigma_tdoa, gdop_source, gdop_tdoa)``, each [epoch]: the RSSI-LS fix
         clipped to the tunnel [m], the TDOA Gauss-Newton fix started from it [m], the TDOA
         fix's standard deviation from its geometry (the square root of its variance) [m],
-        the seed's 2-D GDOP [1] and the along-track TDOA dilution [1].
+        the source's 2-D GDOP [1] and the along-track TDOA dilution [1].
     """
     h = tunnel.cross_distance_m
     off, curve = monotone_gain_db(table)
@@ -134,6 +134,6 @@ def separable_fix(meas: dict, table: xr.Dataset, tunnel: Tunnel, mm: Measurement
     x_rssi = np.clip(x_rssi, 0.0, tunnel.length_m)
     sig = SPEED_OF_LIGHT_M_S * mm.delay_sigma_s
     x_tdoa, var = tdoa_gauss_newton(x_rssi, meas["slot_x_m"], range_diff_from_delays(meas["delay_s"]), h, sig)
-    gd_seed = gdop_seed(x_tdoa, tunnel.rx_y_m, meas["slot_x_m"], tunnel.slot_yz[0])
+    gd_source = gdop_source(x_tdoa, tunnel.rx_y_m, meas["slot_x_m"], tunnel.slot_yz[0])
     gd_tdoa = gdop_tdoa_along(x_tdoa, meas["slot_x_m"], h)
-    return x_rssi, x_tdoa, np.sqrt(var), gd_seed, gd_tdoa
+    return x_rssi, x_tdoa, np.sqrt(var), gd_source, gd_tdoa

@@ -1,15 +1,15 @@
-"""A train crossing the tunnel: measurements, snapshot fixes, tracks (seed 003 §3.3, §7.2).
+"""A train crossing the tunnel: measurements, snapshot fixes, tracks (source 003 §3.3, §7.2).
 
 Measurement models (docs/model/tunnel.md §3, both reported):
 
-* ``separable`` - the seed's assumption that every slot's RSSI and delay are measured on
-  their own [seed 4.2, 6.2]: per slot the coherent one-slot power of the channel table
+* ``separable`` - the source's assumption that every slot's RSSI and delay are measured on
+  their own [source 4.2, 6.2]: per slot the coherent one-slot power of the channel table
   (its own multipath fading) plus log-normal shadowing (a spatial field per slot along the
   tunnel, correlated over ``shadow_corr_m``, the same for every train: it belongs to the
   place), and the line-of-sight delay plus Gaussian error; the ``n_slots`` strongest
   measured slots within ``window_m`` are used.  Fix: RSSI ranging + linearized LS, then
   TDOA Gauss-Newton from it.  The delay error is ``white`` (independent per epoch and
-  slot, the seed's assumption, which a 20 Hz filter averages away), ``ar1`` (per slot an
+  slot, the source's assumption, which a 20 Hz filter averages away), ``ar1`` (per slot an
   AR(1) field along the track, correlated over ``delay_corr_m``: a multipath bias that
   changes with position) or ``slot_bias`` (per slot one constant bias: a calibration error
   of the slot's delay); same sigma in all three.
@@ -28,7 +28,7 @@ Measurement models (docs/model/tunnel.md §3, both reported):
 Every filter starts from the first snapshot fix with its variance (speed 0 +- the maximum
 speed), not from the true position.
 
-The train: K receivers evenly along its length [seed 3.3.1], constant speed, whole train
+The train: K receivers evenly along its length [source 3.3.1], constant speed, whole train
 inside the tunnel; epochs at ``rate_hz``.
 """
 
@@ -63,8 +63,8 @@ MEASUREMENTS = ("separable", "wideband")
 VARIANT_IDS = {
     ("physical", "separable"): 1,
     ("physical", "wideband"): 2,
-    ("seed", "separable"): 3,
-    ("seed", "wideband"): 4,
+    ("source", "separable"): 3,
+    ("source", "wideband"): 4,
 }
 """(propagation, measurement) -> its number in the random-stream keys (``spawn_key('tunnel', ...)``)."""
 SHADOW_KEY = {"evaluation": 100, "calibration": 101}
@@ -106,7 +106,7 @@ class Train:
 
     @property
     def receiver_offsets_m(self) -> np.ndarray:
-        """Receiver k at x_head - k L / (K - 1) [seed 3.3.1]."""
+        """Receiver k at x_head - k L / (K - 1) [source 3.3.1]."""
         return np.arange(self.n_receivers) * self.length_m / (self.n_receivers - 1)
 
 
@@ -149,7 +149,7 @@ def snapshot_fixes(
     n_e, k = x_rx.shape
     res = {
         n: np.full((n_e, k), np.nan)
-        for n in ("fix", "fix_rssi", "sigma_tdoa", "gdop_seed", "gdop_tdoa", "tau", "scale")
+        for n in ("fix", "fix_rssi", "sigma_tdoa", "gdop_source", "gdop_tdoa", "tau", "scale")
     }
     res["candidates"] = None
     cands = []
@@ -161,7 +161,7 @@ def snapshot_fixes(
             )
             xr_, xt, st, gs, gt = separable_fix(meas, table, tunnel, mm)
             res["fix"][:, j], res["fix_rssi"][:, j], res["sigma_tdoa"][:, j] = xt, xr_, st
-            res["gdop_seed"][:, j], res["gdop_tdoa"][:, j] = gs, gt
+            res["gdop_source"][:, j], res["gdop_tdoa"][:, j] = gs, gt
             res["scale"][:, j] = gt
         elif measurement == "wideband":
             tau = wideband_delays(table, tunnel, cable, x_rx[:, j], rngs[j], wideband_view(table, mm), tones=tones)
@@ -234,7 +234,7 @@ def kf_realizations(
         The train type crossing the tunnel.
     mm : MeasurementModel
         The receivers' measurement model.
-    propagation : {'physical', 'seed'}
+    propagation : {'physical', 'source'}
         The table's propagation model (selects the random streams).
     tracking : dict
         The ``tracking`` section: ``rate_hz`` [Hz], ``accel_sigma_m_s2`` [m/s^2], ``max_speed_m_s`` [m/s].
@@ -329,7 +329,7 @@ def run_train(
         The train type crossing the tunnel.
     mm : MeasurementModel
         The receivers' measurement model (:mod:`railradio.tunnel.measurement`).
-    propagation : {'physical', 'seed'}
+    propagation : {'physical', 'source'}
         The table's propagation model (selects the random streams).
     measurement : {'separable', 'wideband'}
         The receiver's measurement model (module docstring).
@@ -350,7 +350,7 @@ def run_train(
         Dims ``time_s`` (time since the tail entered [s]), ``receiver`` (index from the
         head, with ``receiver_offset_m`` behind the head [m]) and ``realization``.  Main
         variables [m] unless stated: ``x_head_true`` [time_s], ``x_rx_true``, ``snapshot``,
-        ``snapshot_rssi``, ``sigma_tdoa``, ``gdop_seed`` [1], ``gdop_tdoa`` [1],
+        ``snapshot_rssi``, ``sigma_tdoa``, ``gdop_source`` [1], ``gdop_tdoa`` [1],
         ``wideband_delay`` [s], ``wideband_delay_error`` [s], ``snapshot_err``,
         ``snapshot_rssi_err`` [time_s, receiver]; the tracks ``kf_head``, ``kf_tail``,
         ``kf_head_var`` [m^2], ``kf_head_nis`` [1], ``rigid_head``, ``rigid_tail``,
@@ -503,10 +503,10 @@ def _run_dataset(
             "snapshot": (tr, res["fix"], {**m, "long_name": f"snapshot fix ({measurement})"}),
             "snapshot_rssi": (tr, res["fix_rssi"], {**m, "long_name": "RSSI-ranging LS fix (separable only)"}),
             "sigma_tdoa": (tr, res["sigma_tdoa"], {**m, "long_name": "TDOA fix standard deviation from its geometry"}),
-            "gdop_seed": (
+            "gdop_source": (
                 tr,
-                res["gdop_seed"],
-                {"units": "1", "long_name": "GDOP, the seed's 2-D formula (seed 4.1.1)"},
+                res["gdop_source"],
+                {"units": "1", "long_name": "GDOP, the source's 2-D formula (source 4.1.1)"},
             ),
             "gdop_tdoa": (
                 tr,
@@ -550,7 +550,7 @@ def _run_dataset(
 
 
 def _add_errors(ds: xr.Dataset, x_head: np.ndarray, length_m: float) -> None:
-    """Head, tail and train errors of every estimator [epoch] [m] (seed 4.4.3)."""
+    """Head, tail and train errors of every estimator [epoch] [m] (source 4.4.3)."""
     head, tail = x_head, x_head - length_m
     m = {"units": "m"}
     for est in ("kf", "rigid", "pf"):
@@ -561,7 +561,7 @@ def _add_errors(ds: xr.Dataset, x_head: np.ndarray, length_m: float) -> None:
         ds[f"{est}_err"] = (
             "time_s",
             np.sqrt((eh**2 + et**2) / 2.0),
-            {**m, "long_name": f"{est} train error sqrt((e_head^2 + e_tail^2)/2) (seed 4.4.3)"},
+            {**m, "long_name": f"{est} train error sqrt((e_head^2 + e_tail^2)/2) (source 4.4.3)"},
         )
 
 

@@ -10,7 +10,7 @@ import xarray as xr
 
 from railradio.rng import make_rng, spawn_key
 from railradio.tunnel.channel import (
-    SeedModel,
+    SourceModel,
     coherent_gain_by_order,
     lee_window_m,
     moving_mean,
@@ -27,7 +27,7 @@ from railradio.tunnel.simulate import Train
 TABLES = {
     "image": ("rect", "image", "physical"),
     "sbr": ("circle", "sbr", "physical"),
-    "seed": ("rect", "image", "seed"),
+    "source": ("rect", "image", "source"),
     "image_side_wall": ("rect", "image", "physical"),
     "sbr_side_wall": ("circle", "sbr", "physical"),
 }
@@ -84,13 +84,13 @@ VARIANTS = {
     "physical_separable_ar1": ("physical", "separable"),
     "physical_separable_slot_bias": ("physical", "separable"),
     "physical_wideband": ("physical", "wideband"),
-    "seed_separable": ("seed", "separable"),
+    "source_separable": ("source", "separable"),
 }
 """Run variant -> (propagation of the channel table, measurement model of the receiver)."""
 VARIANT_DELAY_ERROR = {"physical_separable_ar1": "ar1", "physical_separable_slot_bias": "slot_bias"}
 """Runs of the separable receiver with a correlated delay error instead of the configured
 one (white, the source's reading [ours]); the same draws otherwise."""
-TABLE_OF_PROPAGATION = {"physical": None, "seed": "seed"}  # physical: the configured engine
+TABLE_OF_PROPAGATION = {"physical": None, "source": "source"}  # physical: the configured engine
 
 
 def tunnel_from_config(cfg: dict[str, Any], shape: str = "circle") -> Tunnel:
@@ -300,16 +300,16 @@ def local_mean_window(cfg: dict[str, Any]) -> float:
 
 def table_extent_m(cfg: dict[str, Any], propagation: str = "physical") -> float:
     """The largest slot-receiver offset the table holds [m]: ``rays.max_offset_m``, or with
-    it null the whole tunnel (every slot a receiver in the tunnel can see); the seed's model
-    ``seed_model.max_offset_m`` (its own attenuation leaves nothing beyond it).
+    it null the whole tunnel (every slot a receiver in the tunnel can see); the source's model
+    ``source_model.max_offset_m`` (its own attenuation leaves nothing beyond it).
 
     Parameters
     ----------
     cfg : dict
         The ``tunnel`` section of the configuration; ``geometry.length_m``,
-        ``rays.max_offset_m`` and ``seed_model.max_offset_m`` [m] (null: the tunnel length).
-    propagation : {'physical', 'seed'}
-        'seed': the seed model's table; any other value: the ray tables.
+        ``rays.max_offset_m`` and ``source_model.max_offset_m`` [m] (null: the tunnel length).
+    propagation : {'physical', 'source'}
+        'source': the source model's table; any other value: the ray tables.
 
     Returns
     -------
@@ -317,7 +317,7 @@ def table_extent_m(cfg: dict[str, Any], propagation: str = "physical") -> float:
         The table's extent [m], at most the tunnel length.
     """
     length = float(cfg["geometry"]["length_m"])
-    m = cfg["seed_model"]["max_offset_m"] if propagation == "seed" else cfg["rays"]["max_offset_m"]
+    m = cfg["source_model"]["max_offset_m"] if propagation == "source" else cfg["rays"]["max_offset_m"]
     return length if m is None else min(float(m), length)
 
 
@@ -427,11 +427,11 @@ def make_table(cfg: dict[str, Any], name: str, seed: int, order: xr.Dataset) -> 
     ----------
     cfg : dict
         The ``tunnel`` section of the configuration (``geometry``, ``cable``, ``wall``,
-        ``rays``, ``seed_model``); side-wall tables: the config of :func:`channel_config`.
+        ``rays``, ``source_model``); side-wall tables: the config of :func:`channel_config`.
     name : str
         Table name, a key of :data:`TABLES` (cross-section, engine, propagation).
     seed : int
-        Root seed of the workflow (draws the seed model's multipath losses only).
+        Root seed of the workflow (draws the source model's multipath losses only).
     order : xarray.Dataset
         The reflection order of :func:`make_order` (``reflection_order`` attribute,
         ``omitted_field_db``).
@@ -457,10 +457,10 @@ def make_table(cfg: dict[str, Any], name: str, seed: int, order: xr.Dataset) -> 
     tun = tunnel_from_config(cfg, shape)
     cab = cable_from_config(cfg)
     r = cfg["rays"]
-    sm = cfg["seed_model"]
+    sm = cfg["source_model"]
     grid = offset_grid_m(r["offset_step_m"], table_extent_m(cfg, prop), tun.slot_spacing_m)
     pol = "paraxial" if engine == "image" else cfg["rays"]["sbr_polarization"]
-    rng = make_rng(seed, spawn_key("tunnel", 10)) if prop == "seed" else None
+    rng = make_rng(seed, spawn_key("tunnel", 10)) if prop == "source" else None
     ds = tabulate(
         fam,
         tun,
@@ -469,7 +469,7 @@ def make_table(cfg: dict[str, Any], name: str, seed: int, order: xr.Dataset) -> 
         eps=eps_from_config(cfg),
         polarization=pol,
         propagation=prop,
-        seed_model=SeedModel(sm["reflection_loss_db"], sm["tunnel_att_db_per_m"], sm["multipath_max_db"]),
+        source_model=SourceModel(sm["reflection_loss_db"], sm["tunnel_att_db_per_m"], sm["multipath_max_db"]),
         rng=rng,
         delay_bin_s=r["delay_bin_ns"] * 1e-9,
         n_delay_bins=r["n_delay_bins"],
@@ -513,7 +513,7 @@ def make_map(cfg: dict[str, Any], table: xr.Dataset, name: str) -> xr.Dataset:
     step = cfg["coverage"]["map_step_m"]
     x = np.arange(int(round(tun.length_m / step)) + 1) * step
     rec = received(table, tun, cab, x, strong_dbm=cfg["coverage"]["blind_spot_dbm"])
-    lm_name = "RSSI, local mean (power sum over rays, seed 2.4.3)"
+    lm_name = "RSSI, local mean (power sum over rays, source 2.4.3)"
     if table.attrs["propagation"] == "physical":  # what a receiver measures: the coherent field's power averaged
         w = table.attrs["local_mean_window_m"]
         rec.rssi_mean_dbm = 10.0 * np.log10(
@@ -534,7 +534,7 @@ def make_map(cfg: dict[str, Any], table: xr.Dataset, name: str) -> xr.Dataset:
                 rec.delay_rms_s,
                 {
                     "units": "s",
-                    "long_name": "RMS delay spread of the local-mean power delay profile of all slots (seed 2.5.2)",
+                    "long_name": "RMS delay spread of the local-mean power delay profile of all slots (source 2.5.2)",
                 },
             ),
             "n_strong_rays": (dims, rec.n_strong_rays, {"units": "1", "long_name": "rays above the blind-spot level"}),

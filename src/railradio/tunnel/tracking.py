@@ -1,6 +1,6 @@
-"""Tracking along the track: Kalman filter and particle filter (filterpy) [seed 7.2].
+"""Tracking along the track: Kalman filter and particle filter (filterpy) [source 7.2].
 
-State [x, v] along the track (the seed's eq. 7.2.1 state [x, vx, y, vy] reduced to the
+State [x, v] along the track (the source's eq. 7.2.1 state [x, vx, y, vy] reduced to the
 track: the cross-section position is known), constant velocity with white acceleration
 noise of standard deviation ``accel_sigma``: Q = sigma_a^2 [[dt^4/4, dt^3/2], [dt^3/2, dt^2]].
 Measurements are snapshot positions (one per receiver) with variance R from a separate

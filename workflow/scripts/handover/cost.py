@@ -1,4 +1,4 @@
-"""Adapter: the cost grid of (m, alpha) -> results/handover/cost.nc (seed Fig. 4)."""
+"""Adapter: the cost grid of (m, alpha) -> results/handover/cost.nc (source Fig. 4)."""
 
 import numpy as np
 

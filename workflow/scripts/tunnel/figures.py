@@ -18,11 +18,11 @@ f.delay_spread(maps, *out["tunnel_delay_spread"])
 f.gdop(runs[("hst", "physical_separable")], *out["tunnel_gdop"])
 f.position_error_cdf(runs, *out["tunnel_position_error_cdf"])
 f.ray_engines(read_dataset(smk.input.engines), *out["tunnel_ray_engines"])
-f.seed_vs_physical(
+f.source_vs_physical(
     tables,
     maps,
     tunnel_from_config(cfg, "rect").cross_distance_m,
     cable_from_config(cfg).coupling_loss_db,
     cov["threshold_dbm"],
-    *out["tunnel_seed_vs_physical"],
+    *out["tunnel_source_vs_physical"],
 )

@@ -13,6 +13,6 @@ write_dataset(
     ds,
     smk.output[0],
     cfg,
-    None if smk.wildcards.name != "seed" else (3, 10),
+    None if smk.wildcards.name != "source" else (3, 10),
     title=f"tunnel: slot-to-receiver channel by along-axis offset ({smk.wildcards.name})",
 )
