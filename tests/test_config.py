@@ -100,7 +100,7 @@ def test_defaults_filled():
         (("fusion", "n_trials"), "many", ["fusion.n_trials", "integer", ">= 2"]),
         (("fusion", "clip"), "sometimes", ["fusion.clip", "no_solution"]),
         (("seed",), -3, ["seed", ">= 0"]),
-        (("nr", "sensitivity", "tracker_variants"), ["aod", "toa"], ["nr.sensitivity.tracker_variants", "aod_toa"]),
+        (("nr", "sensitivity", "measurement_sets"), ["aod", "toa"], ["nr.sensitivity.measurement_sets", "aod_toa"]),
     ],
 )
 def test_bad_values_name_key_and_range(path, value, must_mention):
@@ -161,8 +161,20 @@ def test_schema_rejects_each_kind_of_bad_value(dotted, value, must_mention):
         ("nr.receiver.ssb_pattern", "seed", ["nr.receiver.ssb_pattern", "'source'"]),
         ("nr.receiver.detector", "seed", ["nr.receiver.detector", "'source'"]),
         ("nr.cell_search.detector", "seed", ["nr.cell_search.detector", "'source'"]),
-        ("nr.receiver_variants.robust.detector", "seed", ["nr.receiver_variants.robust.detector", "'source'"]),
+        ("nr.extra_receivers.robust.detector", "seed", ["nr.extra_receivers.robust.detector", "'source'"]),
         ("tunnel.seed_model", {"reflection_loss_db": 8.0}, ["config key 'tunnel'", "'seed_model' was unexpected"]),
+        ("nr.receiver_variants", {}, ["config key 'nr'", "'receiver_variants' was unexpected"]),
+        (
+            "nr.sensitivity.tracker_variants",
+            ["aod_toa"],
+            ["config key 'nr.sensitivity'", "'tracker_variants' was unexpected"],
+        ),
+        ("handover.joint.gaph_variant", "narrow", ["config key 'handover.joint'", "'gaph_variant' was unexpected"]),
+        (
+            ("handover", "sensitivity", "switches", "joint.gaph_variant"),
+            ["narrow"],
+            ["config key 'handover.sensitivity.switches'", "'joint.gaph_variant' was unexpected"],
+        ),
     ],
 )
 def test_schema_rejects_renamed_values(dotted, value, must_mention):

@@ -168,14 +168,14 @@ def nr_problems(nr: Mapping[str, Any], root: str = "nr", main: bool = True) -> I
         yield f"{root}.channel.synthesis_decimation", d_s, f"a divisor of {root}.receiver.decimation = {d}"
     if d_c > d or d % d_c:
         yield f"{root}.receiver.search_decimation", d_c, f"a divisor of {root}.receiver.decimation = {d}"
-    receivers = {"source", *nr["receiver_variants"]}
-    if "source" in nr["receiver_variants"]:
-        yield f"{root}.receiver_variants.source", "…", "a name other than 'source' (the source's receiver, nr.receiver)"
+    receivers = {"source", *nr["extra_receivers"]}
+    if "source" in nr["extra_receivers"]:
+        yield f"{root}.extra_receivers.source", "…", "a name other than 'source' (the source's receiver, nr.receiver)"
     if nr["imm"]["receiver"] not in receivers:
         yield (
             f"{root}.imm.receiver",
             nr["imm"]["receiver"],
-            f"one of {sorted(receivers)} (source or a receiver_variants name)",
+            f"one of {sorted(receivers)} (source or a extra_receivers name)",
         )
     dt = nr["trajectory"]["dt_s"]
     for i, tau in enumerate(nr["imm"]["sojourn_s"]):
@@ -272,7 +272,7 @@ def _nr_map(nr: Mapping[str, Any], schema: Mapping[str, Any], n_main: int | None
 def _handover(cfg: Mapping[str, Any], schema: Mapping[str, Any]) -> Iterator[Problem]:
     from railradio.config import describe_allowed
     from railradio.handover.params import scenario_from_config
-    from railradio.handover.sensitivity import apply_variant, variants
+    from railradio.handover.sensitivity import apply_case, cases
 
     ho = cfg["handover"]
     sections = schema["properties"]["handover"]["properties"]
@@ -291,10 +291,9 @@ def _handover(cfg: Mapping[str, Any], schema: Mapping[str, Any]) -> Iterator[Pro
     except (ValueError, KeyError):
         base = None
     if base is not None:
-        for vid, variant in variants(ho["sensitivity"]).items():
+        for cid, case in cases(ho["sensitivity"]).items():
             yield from _probe(
-                f"handover.sensitivity.switches.{variant.get('switch', vid)}",
-                lambda variant=variant: apply_variant(base, variant),
+                f"handover.sensitivity.switches.{case.get('switch', cid)}", lambda case=case: apply_case(base, case)
             )
     yield from _at_most(cfg, "handover.sweep.n_batches", "handover.sweep.n_blocks")
     yield from _at_most(cfg, "handover.sensitivity.n_blocks", "handover.sweep.n_blocks")
@@ -303,7 +302,7 @@ def _handover(cfg: Mapping[str, Any], schema: Mapping[str, Any]) -> Iterator[Pro
         yield (
             "handover.sensitivity.speed_kmh",
             ho["sensitivity"]["speed_kmh"],
-            f"one of handover.sweep.speeds_kmh = {speeds} (the variants reuse its draws)",
+            f"one of handover.sweep.speeds_kmh = {speeds} (the cases reuse its draws)",
         )
     yield from _at_most(cfg, "handover.cost.alpha_min", "handover.cost.alpha_max")
     yield from _at_most(

@@ -55,10 +55,10 @@ def test_inverse_gap_map_inverts_the_model(g_db):
     assert float(model_gap_db(x, 1.3, 3.2, RADIO)) == pytest.approx(g_db, abs=1e-9)
 
 
-def test_gap_threshold_variants():
+def test_gap_threshold_rules():
     assert gap_threshold_db(0.5, Joint()) == pytest.approx(6.5)
-    assert gap_threshold_db(0.5, Joint(gaph_variant="narrow")) == pytest.approx(5.5)
-    assert gap_threshold_db(9.0, Joint(gaph_variant="narrow")) == pytest.approx(1.0)
+    assert gap_threshold_db(0.5, Joint(gaph_rule="narrow")) == pytest.approx(5.5)
+    assert gap_threshold_db(9.0, Joint(gaph_rule="narrow")) == pytest.approx(1.0)
 
 
 def test_fit_recovers_exact_model_from_noise_free_gaps():

@@ -49,7 +49,7 @@ def _scn(**joint):
             ),
         ),
         (380.0, replace(_scn(), execution=replace(EX, retry="joint_band"))),
-        (460.0, _scn(band_fit="offset", measurements="raw", gaph_variant="narrow")),
+        (460.0, _scn(band_fit="offset", measurements="raw", gaph_rule="narrow")),
         (
             250.0,
             replace(

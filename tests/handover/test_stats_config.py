@@ -99,7 +99,7 @@ def test_pingpong_claim_is_strict_and_can_fail():
     np.testing.assert_array_equal(pingpong_strictly_lowest(ds), [True, False, False])
 
 
-def test_sensitivity_variant_values_print_as_configured():
+def test_sensitivity_case_values_print_as_configured():
     import xarray as xr
 
     from railradio.handover.keys import sens_values
@@ -107,10 +107,10 @@ def test_sensitivity_variant_values_print_as_configured():
 
     ds = xr.Dataset(
         {
-            "switch": ("variant", ["none", "a3.ttt_s", "radio.load_factor", "joint.wslr"]),
-            "value": ("variant", ["reference", "0.64", "0.3", "mean"]),
+            "switch": ("case", ["none", "a3.ttt_s", "radio.load_factor", "joint.wslr"]),
+            "value": ("case", ["reference", "0.64", "0.3", "mean"]),
         },
-        coords={"variant": ["reference", "ttt_s_0p64", "load_factor_0p3", "wslr_mean"]},
+        coords={"case": ["reference", "ttt_s_0p64", "load_factor_0p3", "wslr_mean"]},
     )
     out = sens_values(ds)
     assert set(out) == {"handover.sens.ttt_s_0p64.value", "handover.sens.load_factor_0p3.value"}

@@ -44,7 +44,7 @@ def _measure(x: np.ndarray, rng, rrh_x: np.ndarray, n_use: int = 3):
 
 
 def _cfg(q: float, gate: bool = True) -> TrackerConfig:
-    return TrackerConfig(variant="aod_toa", q=q, sigma_aod_rad=SIG_AOD, sigma_toa_s=SIG_TOA, gate=gate)
+    return TrackerConfig(measurements="aod_toa", q=q, sigma_aod_rad=SIG_AOD, sigma_toa_s=SIG_TOA, gate=gate)
 
 
 def _s0(x, v0=80.0):

@@ -16,14 +16,14 @@ def _track(err_value: float | np.ndarray, n: int = 200, spacing_m: float = 500.0
     pos = np.broadcast_to(np.asarray(err_value, dtype=float), (2, 3, 2, n)).copy()
     ds = xr.Dataset(
         {
-            "pos_err": (("receiver", "variant", "gate", "epoch"), pos),
-            "snap_err": (("receiver", "variant", "epoch"), pos[:, :, 0]),
+            "pos_err": (("receiver", "measurements", "gate", "epoch"), pos),
+            "snap_err": (("receiver", "measurements", "epoch"), pos[:, :, 0]),
             "aod_err": (("receiver", "epoch", "slot"), np.full((2, n, 3), np.radians(0.5))),
             "range_err": (("receiver", "epoch", "slot"), np.where(np.arange(3) == 2, np.nan, 0.4) * np.ones((2, n, 3))),
             "t": (("epoch",), np.arange(n) * 0.1),
             "sir_best": (("epoch",), np.full(n, 3.0)),
         },
-        coords={"receiver": rx, "variant": var, "gate": [0, 1]},
+        coords={"receiver": rx, "measurements": var, "gate": [0, 1]},
     )
     ds.attrs["config_json"] = json.dumps({"sim": {"deployment": {"spacing_m": spacing_m}}})
     return ds

@@ -101,7 +101,7 @@ def _noiseless_panel_dataset(x_ref: float) -> xr.Dataset:
 def test_lever_arm_recovers_the_reference_point(x_ref):
     dep = Deployment()
     ds = _noiseless_panel_dataset(x_ref)
-    cfg = TrackerConfig(variant="aod_toa", q=1.0, sigma_aod_rad=np.radians(0.5), sigma_toa_s=1e-9)
+    cfg = TrackerConfig(measurements="aod_toa", q=1.0, sigma_aod_rad=np.radians(0.5), sigma_toa_s=1e-9)
     dh = dep.h_bs_m - dep.h_ut_m
     fix = track_setup(ds, dep.x_m, dep.offset_m, dh, cfg, "peak", 3).meas.snapshot_fix
     p, _ = fix(0, x_ref)

@@ -72,7 +72,7 @@ def test_data_beam_policies_and_geometry_bounded_window():
     c["receiver"]["search_range_m"] = 2000.0
     scn2 = scenario_from_config(c)
     k = int(np.ceil(2000.0 / SPEED_OF_LIGHT_M_S * SAMPLE_RATE_HZ))
-    assert scn2.receiver.lags_full == k and all(v[1].lags_full == k for v in scn2.variants)
+    assert scn2.receiver.lags_full == k and all(v[1].lags_full == k for v in scn2.extra_receivers)
     assert dataclasses.replace(scn2.receiver, search_lags=None).lags_full == 6576
 
 

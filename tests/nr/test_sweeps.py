@@ -90,12 +90,12 @@ def _track(n: int, err: float) -> xr.Dataset:
     pos[..., n // 2 :] = 10 * err  # the later half is worse: the epoch cut shows
     return xr.Dataset(
         {
-            "pos_err": (("receiver", "variant", "gate", "epoch"), pos),
+            "pos_err": (("receiver", "measurements", "gate", "epoch"), pos),
             "aod_err": (("receiver", "epoch", "slot"), np.full((2, n, 3), 0.01)),
             "range_err": (("receiver", "epoch", "slot"), np.full((2, n, 3), 0.4)),
             "t": (("epoch",), np.arange(n) * 0.1),
         },
-        coords={"receiver": rx, "variant": var, "gate": [0, 1]},
+        coords={"receiver": rx, "measurements": var, "gate": [0, 1]},
         attrs={"config_json": json.dumps({"sim": {"deployment": {"spacing_m": 500.0}}})},
     )
 

@@ -20,15 +20,15 @@ def _fixed(xy, aod, toa):
     return lambda k, s: (xy[k], aod[k], toa[k])
 
 
-@pytest.mark.parametrize("variant", ["aod", "toa", "aod_toa"])
-def test_jacobian_matches_finite_differences(variant):
+@pytest.mark.parametrize("measurements", ["aod", "toa", "aod_toa"])
+def test_jacobian_matches_finite_differences(measurements):
     s = np.array([123.4, -0.3, 80.0, 0.0, 0.5, 0.0])
-    jac = jacobian(s, RRH, DH, variant)
+    jac = jacobian(s, RRH, DH, measurements)
     h = 1e-4
     for j in range(6):
         e = np.zeros(6)
         e[j] = h
-        fd = (hx(s + e, RRH, DH, variant) - hx(s - e, RRH, DH, variant)) / (2 * h)
+        fd = (hx(s + e, RRH, DH, measurements) - hx(s - e, RRH, DH, measurements)) / (2 * h)
         np.testing.assert_allclose(jac[:, j], fd, rtol=1e-6, atol=1e-12)
 
 
@@ -53,7 +53,7 @@ def _simulate(rng, n=600, dt=0.1, q=0.5, sig_aod=_SIG_AOD_RAD, sig_toa=2e-9):
     s = np.array([-300.0, 0.0, 60.0, 0.0, 0.0, 0.0])
     truth, meas = [], []
     chol = np.linalg.cholesky(qm[0::2, 0::2] + 1e-18 * np.eye(3))
-    cfg = TrackerConfig(variant="aod_toa", q=q, sigma_aod_rad=sig_aod, sigma_toa_s=sig_toa)
+    cfg = TrackerConfig(measurements="aod_toa", q=q, sigma_aod_rad=sig_aod, sigma_toa_s=sig_toa)
     for _ in range(n):
         s = f @ s
         s[0::2] += chol @ rng.standard_normal(3)
@@ -97,7 +97,7 @@ def test_missing_measurements_predict_without_nan():
 def test_gate_rejects_an_outlier():
     rng = np.random.default_rng(10)
     truth, meas, _ = _simulate(rng, n=30)
-    cfg = TrackerConfig(variant="toa", q=0.5, sigma_toa_s=2e-9, gate=True)
+    cfg = TrackerConfig(measurements="toa", q=0.5, sigma_toa_s=2e-9, gate=True)
     toa = [m[1::2].copy() for m in meas]
     toa[20][1] += 5000 / 3e8  # a 5 km TOA outlier on one RRH
     out = run_ekf(_fixed([RRH] * 30, [m[0::2] for m in meas], toa), 0.1, DH, cfg, truth[0], np.eye(6), 30)
@@ -106,7 +106,7 @@ def test_gate_rejects_an_outlier():
 
 
 def test_snapshot_ls_recovers_noiseless_position():
-    cfg = TrackerConfig(variant="aod_toa")
+    cfg = TrackerConfig(measurements="aod_toa")
     p_true = np.array([210.0, 0.0])
     s = np.r_[p_true, np.zeros(4)]
     z = hx(s, RRH, DH, "aod_toa")
@@ -212,7 +212,7 @@ def test_pcrb_true_motion_bound_orders_and_resets():
 
 def test_distance_dependent_measurement_noise():
     cfg = TrackerConfig(
-        variant="aod_toa",
+        measurements="aod_toa",
         q=1.0,
         sigma_aod_rad=0.02,
         sigma_toa_s=1e-9,
@@ -224,7 +224,7 @@ def test_distance_dependent_measurement_noise():
     np.testing.assert_allclose(w, [0.05**2, 1e-18, 0.02**2, 4e-18, 0.01**2, 16e-18])
     # without distances (or bins) the constant W
     np.testing.assert_allclose(np.diag(cfg.noise(1)), [0.02**2, 1e-18])
-    back = TrackerConfig.from_record(cfg.record(), variant="aod_toa")
+    back = TrackerConfig.from_record(cfg.record(), measurements="aod_toa")
     assert back == cfg
     with pytest.raises(ValueError, match="sigma_toa_bins_s"):
         TrackerConfig(distance_edges_m=(300.0,), sigma_aod_bins_rad=(0.1, 0.1), sigma_toa_bins_s=(1e-9,))
@@ -282,7 +282,7 @@ def test_snapshot_batch_equals_one_epoch_at_a_time():
     from railradio.nr.snapshot import snapshot_ls_batch
 
     rng = np.random.default_rng(3)
-    cfg = TrackerConfig(variant="aod_toa", sigma_aod_rad=np.radians(1.0), sigma_toa_s=2e-9)
+    cfg = TrackerConfig(measurements="aod_toa", sigma_aod_rad=np.radians(1.0), sigma_toa_s=2e-9)
     xy_all = np.full((4, 3, 2), np.nan)
     a_all, t_all, guess = np.full((4, 3), np.nan), np.full((4, 3), np.nan), np.zeros((4, 2))
     for e, m in enumerate((3, 2, 1, 3)):
@@ -330,13 +330,15 @@ def test_the_tracker_sees_no_truth():
             blind[name] = var.copy(data=np.take_along_axis(var.values, perm, axis=1))
     assert not np.array_equal(blind["rrh"].values, ds["rrh"].values)
     dep = scn.deployment
-    for variant in ("aod", "toa", "aod_toa"):
+    for measurements in ("aod", "toa", "aod_toa"):
         for gate in (False, True):
-            cfg = TrackerConfig(variant=variant, q=1.0, sigma_aod_rad=np.radians(2.0), sigma_toa_s=4e-9, gate=gate)
+            cfg = TrackerConfig(
+                measurements=measurements, q=1.0, sigma_aod_rad=np.radians(2.0), sigma_toa_s=4e-9, gate=gate
+            )
             args = (dep.x_m, dep.offset_m, dep.h_bs_m - dep.h_ut_m, scn.trajectory.dt_s, cfg)
             a, b = track(ds, *args, strength="best_score"), track(blind, *args, strength="best_score")
             for key in ("state", "nis", "snapshot", "n_used", "reacquired"):
-                np.testing.assert_array_equal(a[key], b[key], err_msg=f"{variant} gate={gate}: {key}")
+                np.testing.assert_array_equal(a[key], b[key], err_msg=f"{measurements} gate={gate}: {key}")
             assert np.isfinite(a["state"][-1, 0])
 
 

@@ -48,7 +48,7 @@ def test_ci_tunnel_overrides_valid():
     validate_config(deep_merge(cfg, {"tunnel": ci["tunnel"]}), SCHEMA)  # Snakemake merges recursively
 
 
-def test_side_wall_variant_moves_only_the_slot_line():
+def test_side_wall_case_moves_only_the_slot_line():
     """The side-wall tables get the slot line at side_wall_slot_z_m, inside the square's wall
     (and farther from the roof antenna); the other tables' config is unchanged; a position
     outside the cross-section is refused naming the slot."""

@@ -2,10 +2,10 @@
 # (source 004; docs/model/handover.md, our reconstruction of the lost equations).
 # Chain: cost grid of (m, alpha) on its own runs -> shards of crossings per (speed, batch)
 # with the selected weights -> summary per policy and speed -> figures + key numbers;
-# one-at-a-time sensitivity variants on the reference speed's runs -> their summary.
+# one-at-a-time sensitivity cases on the reference speed's runs -> their summary.
 from railradio.handover.engine import speed_label
 from railradio.handover.params import SIM_SECTIONS
-from railradio.handover.sensitivity import variants as handover_variants
+from railradio.handover.sensitivity import cases as handover_cases
 
 HO = config["handover"]
 HO_SIM = {k: HO[k] for k in SIM_SECTIONS}
@@ -13,7 +13,7 @@ HO_SWEEP = HO["sweep"]
 HO_SENS = HO["sensitivity"]
 HO_SPEEDS = [speed_label(v) for v in HO_SWEEP["speeds_kmh"]]
 HO_BATCHES = range(HO_SWEEP["n_batches"])
-HO_VARIANTS = handover_variants(HO_SENS)
+HO_CASES = handover_cases(HO_SENS)
 HO_FIGURES = {
     "handover_cost_vs_m": "results/handover/cost.nc",
     "handover_pingpong_vs_speed": "results/handover/summary.nc",
@@ -33,7 +33,7 @@ HO_CORRECTION_SPEEDS = [v for v in (100, 350) if v in HO_SWEEP["speeds_kmh"]] or
 wildcard_constraints:
     ho_speed=r"\d+(\.\d+)?",
     batch=r"\d+",
-    variant=r"[A-Za-z0-9_]+",
+    ho_case=r"[A-Za-z0-9_]+",
 
 
 rule handover_cost:
@@ -66,7 +66,7 @@ rule handover_shard:
         "results/handover/shards/v{ho_speed}/b{batch}.nc",
     params:
         sim=HO_SIM,
-        variant={},
+        case={},
         policies=HO["policies"],
         speed_kmh=lambda w: float(w.ho_speed),
         n_blocks=HO_SWEEP["n_blocks"],
@@ -109,14 +109,14 @@ rule handover_summary:
 
 
 rule handover_sensitivity_shard:
-    """One sensitivity variant at the reference speed, on the sweep's first blocks."""
+    """One sensitivity case at the reference speed, on the sweep's first blocks."""
     input:
         cost="results/handover/cost.nc",
     output:
-        "results/handover/sensitivity/{variant}/b{batch}.nc",
+        "results/handover/sensitivity/{ho_case}/b{batch}.nc",
     params:
         sim=HO_SIM,
-        variant=lambda w: HO_VARIANTS[w.variant],
+        case=lambda w: HO_CASES[w.ho_case],
         policies=HO["policies"],
         speed_kmh=float(HO_SENS["speed_kmh"]),
         n_blocks=HO_SENS["n_blocks"],
@@ -124,9 +124,9 @@ rule handover_sensitivity_shard:
         runs_per_block=HO_SWEEP["runs_per_block"],
         seed=config["seed"],
     log:
-        "results/logs/handover/sensitivity_{variant}_b{batch}.log",
+        "results/logs/handover/sensitivity_{ho_case}_b{batch}.log",
     benchmark:
-        "results/benchmarks/handover/sensitivity_{variant}_b{batch}.tsv"
+        "results/benchmarks/handover/sensitivity_{ho_case}_b{batch}.tsv"
     resources:
         mem_mb=1500,
         runtime=20,
@@ -137,15 +137,15 @@ rule handover_sensitivity_shard:
 
 
 rule handover_sensitivity:
-    """Rates and means per policy and sensitivity variant."""
+    """Rates and means per policy and sensitivity case."""
     input:
-        expand("results/handover/sensitivity/{variant}/b0.nc", variant=list(HO_VARIANTS)),
+        expand("results/handover/sensitivity/{ho_case}/b0.nc", ho_case=list(HO_CASES)),
     output:
         "results/handover/sensitivity.nc",
     params:
-        dim="variant",
-        groups=list(HO_VARIANTS),
-        variants=HO_VARIANTS,
+        dim="case",
+        groups=list(HO_CASES),
+        cases=HO_CASES,
         policies=HO["policies"],
         speed_kmh=float(HO_SENS["speed_kmh"]),
     log:

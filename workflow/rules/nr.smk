@@ -6,7 +6,7 @@ from railradio.nr.simulate import scenario_from_config
 from railradio.nr.workflow import sim_config as nr_sim
 from railradio.nr import cases as nr_cases
 from railradio.nr import records as nr_records
-from railradio.nr.measurement import VARIANTS as NR_TRACKER_VARIANTS
+from railradio.nr.measurement import MEASUREMENT_SETS
 
 # (validated with every cross-key rule in common.smk: railradio.config_checks)
 NR = config["nr"]
@@ -19,7 +19,7 @@ NR_EPOCHS = (
 NR_REALS = [f"r{i}" for i in range(NR["realizations"])]
 NR_CAL_SHARDS = 2
 NR_SIM = nr_sim(NR)
-NR_VARIANTS = list(NR_TRACKER_VARIANTS)  # the main run tracks every measurement variant (source §4)
+NR_MEASUREMENT_SETS = list(MEASUREMENT_SETS)  # the main run tracks every measurement set (source §4)
 NR_SELECTION = nr_selection(NR)
 
 # Sensitivity cases: the nr config with a case's override merged in
@@ -139,7 +139,7 @@ rule nr_calibrate:
         sim=NR_SIM,
         tracker=NR["tracker"],
         selection=NR_SELECTION,
-        variants=NR_VARIANTS,
+        measurement_sets=NR_MEASUREMENT_SETS,
     log:
         "results/logs/nr/calibrate.log",
     priority: 10
@@ -162,7 +162,7 @@ rule nr_track:
         sim=NR_SIM,
         tracker=NR["tracker"],
         selection=NR_SELECTION,
-        variants=NR_VARIANTS,
+        measurement_sets=NR_MEASUREMENT_SETS,
     log:
         "results/logs/nr/track_{real}.log",
     benchmark:
@@ -291,7 +291,7 @@ rule nr_case_calibrate:
         sim=lambda w: nr_sim(NR_CASES[w.case]),
         tracker=lambda w: NR_CASES[w.case]["tracker"],
         selection=lambda w: nr_selection(NR_CASES[w.case]),
-        variants=NR_SENS["tracker_variants"],
+        measurement_sets=NR_SENS["measurement_sets"],
         sync=lambda w: NR_CASES[w.case]["sync"],
         seed=config["seed"],
         n_epochs=lambda w: NR_CASE_N_CAL[w.case],
@@ -316,7 +316,7 @@ rule nr_case_track:
         sim=lambda w: nr_sim(NR_CASES[w.case]),
         tracker=lambda w: NR_CASES[w.case]["tracker"],
         selection=lambda w: nr_selection(NR_CASES[w.case]),
-        variants=NR_SENS["tracker_variants"],
+        measurement_sets=NR_SENS["measurement_sets"],
         sync=lambda w: NR_CASES[w.case]["sync"],
         seed=config["seed"],
         n_epochs=lambda w: NR_CASE_N[w.case],

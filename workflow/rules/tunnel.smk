@@ -1,16 +1,16 @@
 # Study `tunnel`: long-train positioning with a leaky cable in a tunnel (source 003; docs/model/tunnel.md).
 # Chain: ray families -> tabulated slot-to-receiver channel per engine (NetCDF) ->
 # RSSI map, delay spread, coverage (NetCDF) -> one run per train type and channel /
-# measurement variant (snapshot fixes, KF, PF; NetCDF) -> figures + key numbers.
+# measurement setup (snapshot fixes, KF, PF; NetCDF) -> figures + key numbers.
 from railradio.tunnel.sensitivity import sensitivity_cases
-from railradio.tunnel.study import SIDE_WALL, TABLES, VARIANTS, channel_config
+from railradio.tunnel.study import SETUPS, SIDE_WALL, TABLES, channel_config
 
 TUNNEL = config["tunnel"]
 TUNNEL_TABLES = [n for n in TABLES if SIDE_WALL not in n]  # image (square), sbr (circle), source (the source's model)
 TUNNEL_SIDE_WALL = TUNNEL["engine"] + SIDE_WALL  # the engine's channel with the cable on the side wall
 TUNNEL_TRAINS = list(TUNNEL["trains"])
-TUNNEL_VARIANTS = list(VARIANTS)
-TUNNEL_RUNS = [f"{t}/{v}" for t in TUNNEL_TRAINS for v in TUNNEL_VARIANTS]
+TUNNEL_SETUPS = list(SETUPS)
+TUNNEL_RUNS = [f"{t}/{s}" for t in TUNNEL_TRAINS for s in TUNNEL_SETUPS]
 TUNNEL_CHANNEL_KEYS = ["geometry", "cable", "wall", "rays", "source_model"]
 TUNNEL_CHANNEL = {k: TUNNEL[k] for k in TUNNEL_CHANNEL_KEYS}
 TUNNEL_FIGURE_NAMES = [
@@ -119,21 +119,21 @@ rule tunnel_run:
     """One train type crossing the tunnel: measurements, snapshot fixes, KF, rigid KF, PF."""
     input:
         lambda w: "results/tunnel/table_{}.nc".format(
-            "source" if VARIANTS[w.variant][0] == "source" else TUNNEL["engine"]
+            "source" if SETUPS[w.setup][0] == "source" else TUNNEL["engine"]
         ),
     output:
-        "results/tunnel/runs/{train}/{variant}.nc",
+        "results/tunnel/runs/{train}/{setup}.nc",
     params:
         cfg=lambda w: TUNNEL_CHANNEL
         | {k: TUNNEL[k] for k in ("measurement", "trains", "positioning", "tracking", "realizations")},
         seed=config["seed"],
     wildcard_constraints:
         train="metro|hst|freight",
-        variant="|".join(VARIANTS),
+        setup="|".join(SETUPS),
     log:
-        "results/logs/tunnel/run_{train}_{variant}.log",
+        "results/logs/tunnel/run_{train}_{setup}.log",
     benchmark:
-        "results/benchmarks/tunnel/run_{train}_{variant}.tsv"
+        "results/benchmarks/tunnel/run_{train}_{setup}.tsv"
     resources:
         mem_mb=3000,
         runtime=20,

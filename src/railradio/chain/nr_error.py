@@ -2,7 +2,7 @@
 
 Source: ``results/nr/imm/{real}.nc`` (the nr IMM rule), variable ``along_err`` (x̂ − x along
 the track, signed, [m]) of a causal tracker — by default ``ekf``, the source's EKF on the
-robust receiver's gated AOD+TOA measurements, the variant the nr IMM section reports (the
+robust receiver's gated AOD+TOA measurements, the tracker the nr IMM section reports (the
 source receiver's tracks diverge; the track files ``results/nr/track/{real}.nc`` hold only
 2-D error magnitudes, no sign).  Epochs without a detected RRH are coasted by the EKF's
 prediction, so their error is already in ``along_err``; an epoch with no tracker output

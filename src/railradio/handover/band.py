@@ -21,7 +21,7 @@ def gap_threshold_db(sigma0_db: float, joint: Joint) -> float:
     """
     if sigma0_db < 0:
         raise ValueError(f"sigma0_db must be >= 0, got {sigma0_db!r}")
-    if joint.gaph_variant == "widen":
+    if joint.gaph_rule == "widen":
         return joint.gaph_gamma_db + joint.gaph_kappa * sigma0_db
     return max(joint.gaph_gamma_db - joint.gaph_kappa * sigma0_db, joint.gaph_floor_db)
 
@@ -161,7 +161,7 @@ def sigma0_and_gaph(radio: Radio, joint: Joint) -> tuple[float, float]:
     radio : Radio
         Measurement noise σ_m [dB], measurement period [s] and L3 filter coefficient k.
     joint : Joint
-        ``measurements`` (``l3`` or ``raw``) and the GapH rule (Γ [dB], κ [1], variant, floor [dB]).
+        ``measurements`` (``l3`` or ``raw``) and the GapH rule (Γ [dB], κ [1], widen or narrow, floor [dB]).
 
     Returns
     -------

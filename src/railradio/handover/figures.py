@@ -234,22 +234,22 @@ def plot_rsrp_gap_vs_speed(summary: xr.Dataset, pdf_path, png_path=None) -> None
 
 
 def plot_sensitivity(sens: xr.Dataset, pdf_path, png_path=None) -> None:
-    """Interruption and ping-pong rate of every sensitivity variant (95 % intervals).
+    """Interruption and ping-pong rate of every sensitivity case (95 % intervals).
 
     Parameters
     ----------
     sens : xarray.Dataset
-        Rates per policy and sensitivity ``variant``: ``success`` and ``pingpong`` [1] with their
-        95 % intervals ``_lo``, ``_hi`` [1], ``affected`` (``variant``, ``policy``; only a
-        policy the variant can change is drawn) and the scalar ``speed_kmh`` [km/h].
+        Rates per policy and sensitivity ``case``: ``success`` and ``pingpong`` [1] with their
+        95 % intervals ``_lo``, ``_hi`` [1], ``affected`` (``case``, ``policy``; only a
+        policy the case can change is drawn) and the scalar ``speed_kmh`` [km/h].
     pdf_path : str or os.PathLike
         Path of the PDF to write.
     png_path : str or os.PathLike or None, optional
         Path of the PNG to write (default: ``pdf_path`` with the suffix ``.png``).
     """
-    variants = [str(v) for v in sens["variant"].values]
-    fig, axes = plotting.figure(ncols=2, figsize=(9.0, 0.28 * len(variants) + 1.6), sharey=True)
-    y = np.arange(len(variants))
+    cases = [str(v) for v in sens["case"].values]
+    fig, axes = plotting.figure(ncols=2, figsize=(9.0, 0.28 * len(cases) + 1.6), sharey=True)
+    y = np.arange(len(cases))
     for j, pol in enumerate(sens["policy"].values):
         aff = sens["affected"].sel(policy=pol).values.astype(bool)
         dy = (j - 1) * 0.22
@@ -269,7 +269,7 @@ def plot_sensitivity(sens: xr.Dataset, pdf_path, png_path=None) -> None:
                 capsize=2,
                 label=LABELS.get(str(pol), str(pol)),
             )
-    axes[0].set_yticks(y, [v if v != "reference" else "reference" for v in variants], fontsize="small")
+    axes[0].set_yticks(y, [v if v != "reference" else "reference" for v in cases], fontsize="small")
     axes[0].invert_yaxis()
     axes[0].set_xlabel("interruption rate (1 − success)")
     axes[1].set_xlabel("ping-pong rate")
@@ -290,6 +290,6 @@ FIGURES = {
 """Figure name -> (input dataset, plotting function).
 
 The input is ``cost`` (:func:`railradio.handover.cost.cost_grid`), ``summary`` (rates and
-means per policy and speed) or ``sensitivity`` (per policy and variant); every plotting
+means per policy and speed) or ``sensitivity`` (per policy and case); every plotting
 function takes ``(dataset, pdf_path, png_path=None)`` and writes the figure.
 """

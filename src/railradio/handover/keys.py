@@ -231,21 +231,21 @@ def _sig_digits(v: float) -> int:
 
 
 def sens_values(sens: xr.Dataset) -> dict[str, Any]:
-    """handover.sens.<variant>.value: the numeric value a variant sets (for the paper's table;
+    """handover.sens.<case>.value: the numeric value a case sets (for the paper's table;
     exact, from the config via the sensitivity dataset).
 
     Parameters
     ----------
     sens : xarray.Dataset
-        Rates and means per policy and sensitivity ``variant``, with ``switch`` (the config key
-        ``section.key`` a variant changes) and ``value`` (the value it sets, as text) per
-        variant.
+        Rates and means per policy and sensitivity ``case``, with ``switch`` (the config key
+        ``section.key`` a case changes) and ``value`` (the value it sets, as text) per
+        case.
 
     Returns
     -------
     dict of str to dict
         Key name -> JSON entry (:meth:`railradio.keynumbers.KeySpec.entry`, mc_stderr 0) for
-        every variant but ``reference`` whose value reads as a number; unit from the key's
+        every case but ``reference`` whose value reads as a number; unit from the key's
         suffix (``_db`` dB, ``_s`` s, ``_m`` m, else 1), significant digits as the config writes
         the value.
 
@@ -255,47 +255,47 @@ def sens_values(sens: xr.Dataset) -> dict[str, Any]:
         If a value reads as a number that is not finite.
     """
     out = {}
-    for var in sens["variant"].values:
+    for var in sens["case"].values:
         if var == "reference":
             continue
-        sw = str(sens["switch"].sel(variant=var).values)
+        sw = str(sens["switch"].sel(case=var).values)
         try:
-            val = float(str(sens["value"].sel(variant=var).values))
+            val = float(str(sens["value"].sel(case=var).values))
         except ValueError:
             continue
         name = f"handover.sens.{var}.value"
         short = sw.split(".")[-1]
         unit = next((u for suf, u in (("_db", "dB"), ("_s", "s"), ("_m", "m")) if short.endswith(suf)), "1")
-        out[name] = KeySpec(
-            name, unit, f"value of {sw} in the sensitivity variant {var}", digits=_sig_digits(val)
-        ).entry(val, 0.0)
+        out[name] = KeySpec(name, unit, f"value of {sw} in the sensitivity case {var}", digits=_sig_digits(val)).entry(
+            val, 0.0
+        )
     return out
 
 
 def sens_specs(sens: xr.Dataset) -> dict[str, KeySpec]:
-    """Specs of the sensitivity keys handover.sens.<variant>.<policy>.<metric>.
+    """Specs of the sensitivity keys handover.sens.<case>.<policy>.<metric>.
 
     Parameters
     ----------
     sens : xarray.Dataset
-        Rates and means per policy and sensitivity ``variant``, with ``switch`` and ``value``
-        per variant, ``affected`` over (``variant``, ``policy``) (the variant can change the
+        Rates and means per policy and sensitivity ``case``, with ``switch`` and ``value``
+        per case, ``affected`` over (``case``, ``policy``) (the case can change the
         policy) and the scalar ``speed_kmh`` [km/h].
 
     Returns
     -------
     dict of str to KeySpec
-        Key name -> spec, for every variant (``reference`` included), every policy it affects
+        Key name -> spec, for every case (``reference`` included), every policy it affects
         and the metrics ``success``, ``pingpong`` [1], ``delay_ms`` and ``delay_all_ms`` [ms]
         (no ``pingpong`` for ``joint``: zero by construction).
     """
     out = {}
-    for var in sens["variant"].values:
-        sw = str(sens["switch"].sel(variant=var).values)
-        val = str(sens["value"].sel(variant=var).values)
+    for var in sens["case"].values:
+        sw = str(sens["switch"].sel(case=var).values)
+        val = str(sens["value"].sel(case=var).values)
         what = "reference" if var == "reference" else f"{sw} = {val}"
         for pol in sens["policy"].values:
-            if not bool(sens["affected"].sel(variant=var, policy=pol)):
+            if not bool(sens["affected"].sel(case=var, policy=pol)):
                 continue
             for metric, unit, digits in (
                 ("success", "1", 4),
@@ -328,7 +328,7 @@ def key_numbers(
     cost : xarray.Dataset
         The cost dataset of :func:`railradio.handover.cost.cost_grid`.
     sens : xarray.Dataset
-        Rates and means per policy and sensitivity ``variant`` (with ``switch``, ``value`` and
+        Rates and means per policy and sensitivity ``case`` (with ``switch``, ``value`` and
         the scalar ``speed_kmh`` [km/h]).
     gaph_db : float
         The gap threshold GapH [dB] (from :func:`railradio.handover.band.sigma0_and_gaph`).
@@ -345,7 +345,7 @@ def key_numbers(
         Key name -> JSON entry (value, unit, source value and relation, description,
         mc_stderr, digits), for ``handover.*`` keys: cost-grid argmin and minima, per-policy
         rates and delays at 100, 250 and 350 km/h, the claim checks, GapH, σ0, bounds and the
-        sensitivity keys ``handover.sens.<variant>.*``.
+        sensitivity keys ``handover.sens.<case>.*``.
 
     Raises
     ------
@@ -415,8 +415,8 @@ def key_numbers(
     specs = sens_specs(sens)
     for name, spec in specs.items():
         _, _, var, pol, metric = name.split(".")
-        val = float(sens[metric].sel(variant=var, policy=pol))
-        se = float(sens[f"{metric}_se"].sel(variant=var, policy=pol))
+        val = float(sens[metric].sel(case=var, policy=pol))
+        se = float(sens[f"{metric}_se"].sel(case=var, policy=pol))
         out[name] = spec.entry(val, se)
     for meth in cost["wslr"].values:
         name = f"handover.cost.best_m.{meth}"

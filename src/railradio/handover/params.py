@@ -262,7 +262,7 @@ class Execution:
 class Joint:
     """The position-power joint decision (reconstruction eq. 5–15).
 
-    gaph_gamma_db, gaph_kappa, gaph_variant, gaph_floor_db
+    gaph_gamma_db, gaph_kappa, gaph_rule, gaph_floor_db
         GapH = Γ + κσ0 (``widen``) or max(Γ − κσ0, floor) (``narrow``) [ours].
     band_fit
         ``offset_exponent``: fit â and n̂ to the measured gaps; ``offset``: fit â with n known.
@@ -288,7 +288,7 @@ class Joint:
 
     gaph_gamma_db: float = 6.0
     gaph_kappa: float = 1.0
-    gaph_variant: str = "widen"
+    gaph_rule: str = "widen"
     gaph_floor_db: float = 1.0
     band_fit: str = "offset_exponent"
     exponent_bounds: tuple[float, float] = (2.0, 6.0)
@@ -304,7 +304,7 @@ class Joint:
     def __post_init__(self) -> None:
         _check("gaph_gamma_db", self.gaph_gamma_db, 0.0, 50.0, lo_open=True)
         _check("gaph_kappa", self.gaph_kappa, 0.0, 10.0)
-        _choice("gaph_variant", self.gaph_variant, ("widen", "narrow"))
+        _choice("gaph_rule", self.gaph_rule, ("widen", "narrow"))
         _check("gaph_floor_db", self.gaph_floor_db, 0.0, 50.0, lo_open=True)
         _choice("band_fit", self.band_fit, ("offset_exponent", "offset"))
         lo, hi = self.exponent_bounds

@@ -411,7 +411,7 @@ def _joint(run: _Run) -> list[dict]:
         sigma0 = math.sqrt(2) * rd.meas_sigma_db * math.sqrt(a_l3 / (2 - a_l3))
     gaph = (
         jt.gaph_gamma_db + jt.gaph_kappa * sigma0
-        if jt.gaph_variant == "widen"
+        if jt.gaph_rule == "widen"
         else max(jt.gaph_gamma_db - jt.gaph_kappa * sigma0, jt.gaph_floor_db)
     )
     src = run.filt if jt.measurements == "l3" else run.meas

@@ -1,8 +1,8 @@
-"""One-at-a-time sensitivity variants of the uncertain reconstruction choices.
+"""One-at-a-time sensitivity cases of the uncertain reconstruction choices.
 
-Each variant changes one switch of the scenario (``section.key`` → value) and is run on
+Each case changes one switch of the scenario (``section.key`` → value) and is run on
 the same random draws as the reference (common random numbers), so a difference is the
-switch's effect.  The joint weights (m, α) stay the cost grid's argmin for the variant's
+switch's effect.  The joint weights (m, α) stay the cost grid's argmin for the case's
 WSLR reading.
 """
 
@@ -23,15 +23,15 @@ AFFECTS = {
 """Policies a switch of each scenario section can change."""
 
 
-def variant_id(switch: str, value: Any) -> str:
-    """File- and key-safe name of a variant, e.g. ``load_factor_0p3``, ``wslr_mean``.
+def case_id(switch: str, value: Any) -> str:
+    """File- and key-safe name of a case, e.g. ``load_factor_0p3``, ``wslr_mean``.
 
     Parameters
     ----------
     switch : str
-        The config key the variant changes, ``section.key``.
+        The config key the case changes, ``section.key``.
     value : Any
-        The value the variant sets, in the key's own unit.
+        The value the case sets, in the key's own unit.
 
     Returns
     -------
@@ -44,7 +44,7 @@ def variant_id(switch: str, value: Any) -> str:
     return f"{short}_{text}"
 
 
-def variants(sens_cfg: dict[str, Any]) -> dict[str, dict[str, Any]]:
+def cases(sens_cfg: dict[str, Any]) -> dict[str, dict[str, Any]]:
     """``{"reference": {}, id: {"switch": "section.key", "value": v}, ...}`` in config order.
 
     Parameters
@@ -57,13 +57,13 @@ def variants(sens_cfg: dict[str, Any]) -> dict[str, dict[str, Any]]:
     Returns
     -------
     dict of str to dict
-        Variant id (:func:`variant_id`, ``reference`` first) -> variant: ``{}`` for the
+        Case id (:func:`case_id`, ``reference`` first) -> case: ``{}`` for the
         reference, else ``{"switch": "section.key", "value": v}``.
 
     Raises
     ------
     ValueError
-        If a switch is not ``section.key`` with a known section, or a variant id occurs twice.
+        If a switch is not ``section.key`` with a known section, or a case id occurs twice.
     """
     out: dict[str, dict[str, Any]] = {"reference": {}}
     for switch, values in sens_cfg.get("switches", {}).items():
@@ -71,22 +71,22 @@ def variants(sens_cfg: dict[str, Any]) -> dict[str, dict[str, Any]]:
         if section not in SIM_SECTIONS or switch.count(".") != 1:
             raise ValueError(f"sensitivity switch must be 'section.key' with section in {SIM_SECTIONS}, got {switch!r}")
         for v in values:
-            vid = variant_id(switch, v)
-            if vid in out:
-                raise ValueError(f"sensitivity variant {vid!r} defined twice")
-            out[vid] = {"switch": switch, "value": v}
+            cid = case_id(switch, v)
+            if cid in out:
+                raise ValueError(f"sensitivity case {cid!r} defined twice")
+            out[cid] = {"switch": switch, "value": v}
     return out
 
 
-def apply_variant(scn: Scenario, variant: dict[str, Any]) -> Scenario:
-    """The scenario with the variant's switch set (ValueError from the dataclass if invalid).
+def apply_case(scn: Scenario, case: dict[str, Any]) -> Scenario:
+    """The scenario with the case's switch set (ValueError from the dataclass if invalid).
 
     Parameters
     ----------
     scn : Scenario
         The reference scenario.
-    variant : dict
-        A variant of :func:`variants`: ``{}`` (the reference) or
+    case : dict
+        A case of :func:`cases`: ``{}`` (the reference) or
         ``{"switch": "section.key", "value": v}``.
 
     Returns
@@ -99,31 +99,31 @@ def apply_variant(scn: Scenario, variant: dict[str, Any]) -> Scenario:
     ValueError
         If the key is not a field of its section, or the value fails the section's checks.
     """
-    if not variant:
+    if not case:
         return scn
-    section, key = variant["switch"].split(".")
+    section, key = case["switch"].split(".")
     sub = getattr(scn, section)
     if not hasattr(sub, key):
-        raise ValueError(f"unknown sensitivity switch {variant['switch']!r}")
-    return replace(scn, **{section: replace(sub, **{key: variant["value"]})})
+        raise ValueError(f"unknown sensitivity switch {case['switch']!r}")
+    return replace(scn, **{section: replace(sub, **{key: case["value"]})})
 
 
-def affected_policies(variant: dict[str, Any], policies: tuple[str, ...]) -> tuple[str, ...]:
-    """Policies whose outcome the variant can change (all for the reference).
+def affected_policies(case: dict[str, Any], policies: tuple[str, ...]) -> tuple[str, ...]:
+    """Policies whose outcome the case can change (all for the reference).
 
     Parameters
     ----------
-    variant : dict
-        A variant of :func:`variants` (``{}`` for the reference).
+    case : dict
+        A case of :func:`cases` (``{}`` for the reference).
     policies : tuple of str
         The policies of the study.
 
     Returns
     -------
     tuple of str
-        Those of ``policies`` that :data:`AFFECTS` lists for the variant's section, in order.
+        Those of ``policies`` that :data:`AFFECTS` lists for the case's section, in order.
     """
-    if not variant:
+    if not case:
         return tuple(policies)
-    section = variant["switch"].split(".")[0]
+    section = case["switch"].split(".")[0]
     return tuple(p for p in policies if p in AFFECTS[section])

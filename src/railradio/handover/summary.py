@@ -122,7 +122,7 @@ def metrics_dataset(
         metrics[group][policy][name] -> value, from :func:`policy_metrics`; every group holds
         the same policies and names as the first.
     dim : str
-        Name of the group dimension, e.g. ``speed_kmh`` or ``variant``.
+        Name of the group dimension, e.g. ``speed_kmh`` or ``case``.
     dim_attrs : dict
         Attributes (``units``, ``long_name``) of the ``dim`` coordinate.
     coord_values : list

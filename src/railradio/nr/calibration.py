@@ -218,7 +218,7 @@ def _nees_cost(ds, out) -> float:
 
 def calibrate(
     ds,
-    variant: str,
+    measurements: str,
     rrh_x: NDArray,
     rrh_y: float,
     dh_m: float,
@@ -253,8 +253,8 @@ def calibrate(
         One receiver's estimates (a :func:`railradio.nr.simulate.simulate_epochs` dataset
         selected at one ``receiver``): ``aod_hat`` [rad], ``toa_hat`` [s], their truths
         ``aod_true``, ``toa_true``, and the strength variables, dims (``epoch``, ``cand``).
-    variant : str
-        Tracker variant: ``aod``, ``toa`` or ``aod_toa``.
+    measurements : str
+        Measurement set: ``aod``, ``toa`` or ``aod_toa``.
     rrh_x : numpy.ndarray
         Along-track positions of the RRHs, m (``Deployment.x_m``).
     rrh_y : float
@@ -304,7 +304,7 @@ def calibrate(
 
     def cfg_of(q):
         return TrackerConfig(
-            variant=variant,
+            measurements=measurements,
             q=q,
             sigma_aod_rad=s_aod,
             sigma_toa_s=s_toa,

@@ -121,7 +121,7 @@ class MeasuredCandidates:
     dh_m : float
         Height difference between the RRHs and the train antenna, m.
     cfg : TrackerConfig
-        The tracker settings (variant and W of the snapshot fixes).
+        The tracker settings (measurement set and W of the snapshot fixes).
     n_use : int
         RRHs used per epoch.
     panel_x : tuple of float

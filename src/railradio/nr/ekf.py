@@ -3,7 +3,7 @@
 The motion model (:mod:`railradio.nr.dynamics`, source eq. 10–12) and the measurement model
 (:mod:`railradio.nr.measurement`, source eq. 13–14) in an extended Kalman filter:
 filterpy's ExtendedKalmanFilter does the algebra; a χ² gate per RRH is an option. Here are
-the filter's settings (:class:`TrackerConfig`: variant, q, W, gate), its run over the epochs
+the filter's settings (:class:`TrackerConfig`: measurement set, q, W, gate), its run over the epochs
 (:func:`run_ekf`, measurements chosen by a caller-given ``select``, re-acquisition by a
 caller-given ``reacquire``) and the position NEES that scores its consistency. Which
 measurements it is given is :mod:`railradio.nr.candidates`; a whole track is
@@ -22,7 +22,7 @@ from numpy.typing import NDArray
 from scipy.stats import chi2
 
 from railradio.nr.dynamics import process_noise, transition
-from railradio.nr.measurement import VARIANTS, h_terms, jac_terms, residual_fn
+from railradio.nr.measurement import MEASUREMENT_SETS, h_terms, jac_terms, residual_fn
 
 Select = Callable[[int, NDArray], tuple[NDArray, NDArray, NDArray]]
 """``select(n, x_pred) -> (rrh_xy [m_n, 2], aod [m_n], toa [m_n])``: the measurements of
@@ -35,7 +35,7 @@ Reacquire = Callable[[int], tuple[NDArray, NDArray] | None]
 class TrackerConfig:
     """Tracker settings [ours unless noted].
 
-    variant: ``aod``, ``toa`` or ``aod_toa`` [source]; q: white-jerk intensity [m² s⁻⁵];
+    measurements: the measurement set, ``aod``, ``toa`` or ``aod_toa`` [source]; q: white-jerk intensity [m² s⁻⁵];
     sigma_aod_rad, sigma_toa_s: measurement noise standard deviations; gate: χ² innovation
     gate per RRH at ``gate_prob``. Distance-dependent W [ours, an option]: with
     ``distance_edges_m`` (increasing 2-D train–RRH distances [m]) the standard deviations of
@@ -44,8 +44,8 @@ class TrackerConfig:
 
     Attributes
     ----------
-    variant : str
-        ``aod``, ``toa`` or ``aod_toa``.
+    measurements : str
+        The measurement set: ``aod``, ``toa`` or ``aod_toa`` (:data:`railradio.nr.measurement.MEASUREMENT_SETS`).
     q : float
         White-jerk intensity, m² s⁻⁵ (> 0).
     sigma_aod_rad : float
@@ -66,11 +66,11 @@ class TrackerConfig:
     Raises
     ------
     ValueError
-        When ``variant`` is unknown, a σ, q or ``start_speed_sigma_m_s`` is not > 0, the edges
+        When ``measurements`` is unknown, a σ, q or ``start_speed_sigma_m_s`` is not > 0, the edges
         are not positive and increasing, or a bin tuple has the wrong length or a value ≤ 0.
     """
 
-    variant: str = "aod_toa"
+    measurements: str = "aod_toa"
     q: float = 1.0
     sigma_aod_rad: float = np.radians(1.0)
     sigma_toa_s: float = 1.0 / 245.76e6
@@ -84,8 +84,8 @@ class TrackerConfig:
     trajectory); large for a start at an unknown speed (the reproduction map's segment)."""
 
     def __post_init__(self) -> None:
-        if self.variant not in VARIANTS:
-            raise ValueError(f"variant must be one of {sorted(VARIANTS)}, got {self.variant!r}")
+        if self.measurements not in MEASUREMENT_SETS:
+            raise ValueError(f"measurements must be one of {sorted(MEASUREMENT_SETS)}, got {self.measurements!r}")
         for name in ("q", "sigma_aod_rad", "sigma_toa_s", "start_speed_sigma_m_s"):
             if not getattr(self, name) > 0:
                 raise ValueError(f"{name} must be > 0, got {getattr(self, name)!r}")
@@ -118,14 +118,14 @@ class TrackerConfig:
 
     @classmethod
     def from_record(cls, rec: dict, **kw) -> TrackerConfig:
-        """Inverse of :meth:`record` (``kw``: variant, gate, gate_prob).
+        """Inverse of :meth:`record` (``kw``: measurements, gate, gate_prob).
 
         Parameters
         ----------
         rec : dict
             A record of :meth:`record` (extra keys are ignored).
         **kw
-            Further :class:`TrackerConfig` fields (``variant``, ``gate``, ``gate_prob``).
+            Further :class:`TrackerConfig` fields (``measurements``, ``gate``, ``gate_prob``).
 
         Returns
         -------
@@ -156,7 +156,7 @@ class TrackerConfig:
         Returns
         -------
         numpy.ndarray
-            [n·per, n·per] diagonal W, per = the variant's components per RRH: AOD variances
+            [n·per, n·per] diagonal W, per = the measurement set's components per RRH: AOD variances
             [rad²] and TOA variances [s²], per RRH in the order AOD then TOA.
         """
         if dist_m is None:
@@ -176,14 +176,14 @@ class TrackerConfig:
         Returns
         -------
         numpy.ndarray
-            [..., per] variances, AOD [rad²] then TOA [s²] as the variant uses them: those of
+            [..., per] variances, AOD [rad²] then TOA [s²] as the measurement set uses them: those of
             each distance's bin, or without bins the overall variances (a read-only
             broadcast view).
         """
         d = np.asarray(dist_m, float)
         if not self.distance_edges_m:  # one W: the same variances for every RRH
             return np.broadcast_to(self._variances, d.shape + self._variances.shape)
-        use_aod, use_toa = VARIANTS[self.variant]
+        use_aod, use_toa = MEASUREMENT_SETS[self.measurements]
         b = np.searchsorted(self.distance_edges_m, d)
         sig = ([np.asarray(self.sigma_aod_bins_rad)[b]] if use_aod else []) + (
             [np.asarray(self.sigma_toa_bins_s)[b]] if use_toa else []
@@ -197,16 +197,16 @@ class TrackerConfig:
         Returns
         -------
         numpy.ndarray
-            [per] ``sigma_aod_rad``² [rad²] then ``sigma_toa_s``² [s²], as the variant uses
+            [per] ``sigma_aod_rad``² [rad²] then ``sigma_toa_s``² [s²], as the measurement set uses
             them (read-only).
         """
-        use_aod, use_toa = VARIANTS[self.variant]
+        use_aod, use_toa = MEASUREMENT_SETS[self.measurements]
         v = np.array(([self.sigma_aod_rad] if use_aod else []) + ([self.sigma_toa_s] if use_toa else [])) ** 2
         v.flags.writeable = False
         return v
 
     def pick(self, aod: NDArray, toa: NDArray) -> NDArray[np.float64]:
-        """The measurement vector of the variant's components, in the order of :meth:`noise`.
+        """The measurement vector of the measurement set's components, in the order of :meth:`noise`.
 
         Parameters
         ----------
@@ -221,7 +221,7 @@ class TrackerConfig:
             [m·per] ``[aod_0, toa_0, aod_1, toa_1, ...]`` (rad, s) for ``aod_toa``; the AODs
             [rad] alone for ``aod``; the TOAs [s] alone for ``toa`` (a new array).
         """
-        use_aod, use_toa = VARIANTS[self.variant]
+        use_aod, use_toa = MEASUREMENT_SETS[self.measurements]
         if not use_aod:
             return np.array(toa, dtype=float).ravel()
         if not use_toa:
@@ -255,7 +255,7 @@ def run_ekf(
     dt_s, dh_m : float
         Epoch interval [s]; height difference between the RRHs and the train antenna [m].
     cfg : TrackerConfig
-        Variant, q, W and gate.
+        Measurement set, q, W and gate.
     s0, p0 : numpy.ndarray
         Initial state [6] (x, y [m], v_x, v_y [m/s], a_x, a_y [m/s²]) and its covariance [6, 6].
     n_epochs, reacquire_after : int
@@ -275,8 +275,8 @@ def run_ekf(
     ekf.P = np.asarray(p0, float).copy()
     ekf.F = f
     ekf.Q = process_noise(dt_s, cfg.q)
-    res = residual_fn(cfg.variant)
-    per = sum(VARIANTS[cfg.variant])
+    res = residual_fn(cfg.measurements)
+    per = sum(MEASUREMENT_SETS[cfg.measurements])
     n = n_epochs
     states = np.zeros((n, 6))
     covs = np.zeros((n, 6, 6))
@@ -330,9 +330,9 @@ def _gated_update(
     dh_m : float
         Height difference between the RRHs and the train antenna, m.
     cfg : TrackerConfig
-        Variant, W and whether the gate is on.
+        Measurement set, W and whether the gate is on.
     res : callable
-        The variant's residual (:func:`railradio.nr.measurement.residual_fn`).
+        The measurement set's residual (:func:`railradio.nr.measurement.residual_fn`).
     gate : float
         χ² threshold of each RRH's squared innovation distance (1).
 
@@ -341,14 +341,14 @@ def _gated_update(
     int
         How many RRHs the update used (0: all rejected, no update).
     """
-    per = sum(VARIANTS[cfg.variant])
+    per = sum(MEASUREMENT_SETS[cfg.measurements])
     m_k = xy.shape[0]
     # h, ∂h/∂s and the RRH distances at the prediction, once for the gate and the
     # update (filterpy evaluates them at the same ekf.x: the kept RRHs' rows)
     dx, dy = ekf.x[0] - xy[:, 0], ekf.x[1] - xy[:, 1]
     h_all = np.zeros((m_k, per, 6))
-    h_all[..., :2] = jac_terms(dx, dy, dh_m, cfg.variant)
-    hx_all = h_terms(dx, dy, dh_m, cfg.variant)  # [m_k, per]
+    h_all[..., :2] = jac_terms(dx, dy, dh_m, cfg.measurements)
+    hx_all = h_terms(dx, dy, dh_m, cfg.measurements)  # [m_k, per]
     var_all = cfg.variances(np.hypot(dx, dy))  # [m_k, per]
     keep = np.ones(m_k, dtype=bool)
     if cfg.gate:  # per-RRH χ² test on the predicted innovation (all RRHs at once)

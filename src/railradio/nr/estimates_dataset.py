@@ -146,7 +146,7 @@ def estimates_dataset(scn: Scenario, epochs: np.ndarray, receivers: list[str], r
                 np.arange(n_c),
                 {"units": "1", "long_name": "place in the neighbour list (0: the anchor cell)"},
             ),
-            "receiver": ("receiver", receivers, {"units": "1", "long_name": "receiver variant"}),
+            "receiver": ("receiver", receivers, {"units": "1", "long_name": "receiver"}),
             "panel_id": ("panel_id", [0, 1], {"units": "1", "long_name": "train panel: 0 head, 1 tail"}),
         },
     )

@@ -37,7 +37,7 @@ shortcut       off (the exact computation)
 =============  =================================================================================
 
 Deterministic comparisons share every draw (data, fading, beams, loads and the noise: the
-production and its variants take the projection of the same full-rate noise), so a changed
+production and its paths take the projection of the same full-rate noise), so a changed
 decision is the shortcut's doing. The decisions, per receiver (the source's and ours): the
 detection of each SS block of each candidate, whether each candidate is among the selected
 cells, the TOA (changed by more than one full-rate sample, or present in one only) and the
@@ -45,7 +45,7 @@ AOD (by more than 0.1°, or present in one only). Stochastic comparisons share t
 far as the model allows and are judged on the distributions of the errors (a two-sample
 Kolmogorov–Smirnov test and the difference of the TOA-within-5-m share).
 
-Truth is read only to score: every variant's receiver sees the burst, the deployment and the
+Truth is read only to score: every path's receiver sees the burst, the deployment and the
 production's candidate list at that epoch (its cell-search state, read from the main run).
 
 This module holds the comparisons and the run; the measures and the rule a shortcut is
@@ -66,7 +66,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from railradio.nr.correlator import Correlator
-from railradio.nr.fidelity_detector import detector_variants
+from railradio.nr.fidelity_detector import detector_setting_receivers
 from railradio.nr.fidelity_receivers import Receivers
 from railradio.nr.motion import burst_motion
 from railradio.nr.reference import full_rate_noise, reference_received
@@ -85,7 +85,7 @@ D_FULL = 1
 
 @dataclass(frozen=True)
 class Comparison:
-    """A shortcut's measurement: the variant with it off against the variant it is
+    """A shortcut's measurement: the path with it off against the path it is
     compared with; ``stochastic`` when the two cannot share every draw; ``taken`` false when
     the production path does not use the shortcut (it is measured to show what it would
     change, and left out of :func:`railradio.nr.fidelity_keys.key_numbers`' overall verdict)."""
@@ -185,7 +185,7 @@ class _Bursts(NamedTuple):
 
 
 class FidelityRun:
-    """Runs every variant (:func:`variants`) on epochs of one realization.
+    """Runs every path (those of :data:`COMPARISONS`) on epochs of one realization.
 
     Parameters
     ----------
@@ -252,8 +252,8 @@ class FidelityRun:
         self.rx_exact = Receivers(scn, selection, D_FULL)
         self.comparisons = comparisons(scn)
         self.det_cors = {}
-        if any(n == "robust" for n, _, _ in scn.variants):
-            for label, (rc, det, kw, attrs) in detector_variants(scn).items():
+        if any(n == "robust" for n, _, _ in scn.extra_receivers):
+            for label, (rc, det, kw, attrs) in detector_setting_receivers(scn).items():
                 c = Correlator(
                     dataclasses.replace(rc, decimation=d_c),
                     det,
@@ -266,10 +266,10 @@ class FidelityRun:
                 self.det_cors[label] = c
 
     def epoch(self, epoch: int, cand: NDArray[np.int64], serving: int) -> dict:
-        """Every variant's decisions at ``epoch`` on the candidate list ``cand`` (the main
+        """Every path's decisions at ``epoch`` on the candidate list ``cand`` (the main
         run's cell search there) with the network's serving RRH ``serving`` (the main run's
-        serving-cell state there). Returns ``{"decisions": {variant: {receiver: ...}},
-        "truth": {...}, "seconds": {variant: s}}``.
+        serving-cell state there). Returns ``{"decisions": {path: {receiver: ...}},
+        "truth": {...}, "seconds": {path: s}}``.
 
         Parameters
         ----------
@@ -283,7 +283,7 @@ class FidelityRun:
         Returns
         -------
         dict
-            ``decisions`` (variant -> receiver -> decisions), ``truth``, ``seconds`` (variant ->
+            ``decisions`` (path -> receiver -> decisions), ``truth``, ``seconds`` (path ->
             computing time, s), ``detector`` (setting -> ``toa`` [full-rate samples], ``aod`` [rad],
             ``n_detected`` of our detector with one constant changed; empty without a ``robust``
             receiver), ``interference_false_alarms`` (on interference-only bursts), ``cand``, ``epoch``.

@@ -7,7 +7,7 @@ import numpy as np
 
 from railradio.nr.fidelity_stats import stack
 
-_VR = ("variant", "receiver", "epoch", "cand")
+_VR = ("path", "receiver", "epoch", "cand")
 _DIMS = ("epoch", "cand")
 
 
@@ -18,7 +18,7 @@ def to_dataset(results: list[dict], receivers: list[str]):
     Parameters
     ----------
     results : list of dict
-        Per-epoch results of :meth:`railradio.nr.fidelity.FidelityRun.epoch` (same variants,
+        Per-epoch results of :meth:`railradio.nr.fidelity.FidelityRun.epoch` (same paths,
         receivers and candidate count).
     receivers : list of str
         Receiver names.
@@ -26,24 +26,24 @@ def to_dataset(results: list[dict], receivers: list[str]):
     Returns
     -------
     xarray.Dataset
-        Per (``variant``, ``receiver``, ``epoch``, ``cand``): ``detected`` (per ``block``), ``selected``,
+        Per (``path``, ``receiver``, ``epoch``, ``cand``): ``detected`` (per ``block``), ``selected``,
         ``toa`` [full-rate samples], ``aod`` [rad]; the truth (``d3d`` [m], ``aod_true`` [rad],
-        ``in_range``), per-variant costs (``seconds`` [s]) and the detector-setting variables.
+        ``in_range``), per-path costs (``seconds`` [s]) and the detector-setting variables.
     """
     import xarray as xr
 
-    variants = list(results[0]["decisions"])
+    paths = list(results[0]["decisions"])
     settings = list(results[0]["detector"])
     st = stack(results, receivers)
     ep = np.array([r["epoch"] for r in results])
-    n_b = st[variants[0]][receivers[0]]["detected"].shape[-1]
+    n_b = st[paths[0]][receivers[0]]["detected"].shape[-1]
     n_c = results[0]["cand"].size
     ds = xr.Dataset(
-        _decision_vars(st, variants, receivers)
+        _decision_vars(st, paths, receivers)
         | _truth_vars(results)
-        | _cost_and_detector_vars(results, variants, settings, receivers),
+        | _cost_and_detector_vars(results, paths, settings, receivers),
         coords={
-            "variant": ("variant", variants, {"units": "1", "long_name": "synthesis and receiver path"}),
+            "path": ("path", paths, {"units": "1", "long_name": "synthesis and receiver path"}),
             "receiver": ("receiver", receivers, {"units": "1", "long_name": "receiver"}),
             "epoch": ("epoch", ep, {"units": "1", "long_name": "epoch of the main run's realization"}),
             "cand": ("cand", np.arange(n_c), {"units": "1", "long_name": "place in the neighbour list"}),
@@ -54,11 +54,11 @@ def to_dataset(results: list[dict], receivers: list[str]):
     return ds
 
 
-def _decision_vars(st: dict, variants: list[str], receivers: list[str]) -> dict:
+def _decision_vars(st: dict, paths: list[str], receivers: list[str]) -> dict:
     """Every path's decisions per receiver (:func:`railradio.nr.fidelity_stats.stack`'s arrays)."""
 
     def per(key):
-        return np.stack([np.stack([st[v][r][key] for r in receivers]) for v in variants])
+        return np.stack([np.stack([st[v][r][key] for r in receivers]) for v in paths])
 
     return {
         "detected": (
@@ -109,16 +109,14 @@ def _truth_vars(results: list[dict]) -> dict:
     }
 
 
-def _cost_and_detector_vars(
-    results: list[dict], variants: list[str], settings: list[str], receivers: list[str]
-) -> dict:
+def _cost_and_detector_vars(results: list[dict], paths: list[str], settings: list[str], receivers: list[str]) -> dict:
     """Each path's wall time, our detector's constants one at a time and the interference-only
     false alarms."""
     return {
         "seconds": (
-            ("variant", "epoch"),
-            np.array([[r["seconds"].get(v, np.nan) for r in results] for v in variants]),
-            {"units": "s", "long_name": "wall time of the variant's synthesis and correlation (one core)"},
+            ("path", "epoch"),
+            np.array([[r["seconds"].get(v, np.nan) for r in results] for v in paths]),
+            {"units": "s", "long_name": "wall time of the path's synthesis and correlation (one core)"},
         ),
         "det_toa": (
             ("setting",) + _DIMS,
@@ -152,16 +150,16 @@ def from_dataset(ds) -> tuple[dict, dict]:
     Returns
     -------
     stacked : dict
-        Variant -> receiver -> ``detected``, ``selected`` (bool), ``toa`` [full-rate samples],
+        Path -> receiver -> ``detected``, ``selected`` (bool), ``toa`` [full-rate samples],
         ``aod`` [rad] arrays.
     truth : dict
         ``d3d`` [m], ``aod`` [rad] and ``in_range`` (bool), [epoch, cand].
     """
     stacked = {}
-    for v in ds["variant"].values:
+    for v in ds["path"].values:
         stacked[str(v)] = {}
         for r in ds["receiver"].values:
-            sel = ds.sel(variant=v, receiver=r)
+            sel = ds.sel(path=v, receiver=r)
             stacked[str(v)][str(r)] = {
                 "detected": sel["detected"].values.astype(bool),
                 "selected": sel["selected"].values.astype(bool),

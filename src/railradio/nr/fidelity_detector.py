@@ -17,27 +17,21 @@ DETECTOR_SETTINGS = {
     "ca_window": (256, 1024),  # full-rate lags on each side (the default CA_WINDOW_FULL: 512)
     "ca_guard": (16, 64),  # full-rate guard lags (default CA_GUARD_FULL: 32)
     "ca_prescreen": (0.6, 0.9),  # share of the threshold (default CA_PRESCREEN: 0.8)
-    "toa_blocks": (
-        1,
-        2,
-        4,
-        6,
-        0,
-    ),  # the most significant detected blocks combined (0: all; default nr.receiver_variants)
+    "toa_blocks": (1, 2, 4, 6, 0),  # the most significant detected blocks combined (0: all; default nr.extra_receivers)
 }
 """One-at-a-time settings of our receiver's detector constants around the defaults."""
 
 
-def detector_variants(scn: Scenario, name: str = "robust") -> dict[str, tuple]:
+def detector_setting_receivers(scn: Scenario, name: str = "robust") -> dict[str, tuple]:
     """{label: (ReceiverConfig, detector, Correlator kwargs, attribute overrides)} for the
-    settings of :data:`DETECTOR_SETTINGS` applied to the receiver ``name`` of ``scn.variants``.
+    settings of :data:`DETECTOR_SETTINGS` applied to the receiver ``name`` of ``scn.extra_receivers``.
 
     Parameters
     ----------
     scn : Scenario
-        The scenario (its ``variants`` and correlation decimation).
+        The scenario (its ``extra_receivers`` and correlation decimation).
     name : str
-        The receiver variant whose detector constants are varied.
+        The extra receiver whose detector constants are varied.
 
     Returns
     -------
@@ -49,9 +43,9 @@ def detector_variants(scn: Scenario, name: str = "robust") -> dict[str, tuple]:
     Raises
     ------
     StopIteration
-        When ``scn.variants`` has no receiver ``name``.
+        When ``scn.extra_receivers`` has no receiver ``name``.
     """
-    rc, det = next((rc, det) for n, rc, det in scn.variants if n == name)
+    rc, det = next((rc, det) for n, rc, det in scn.extra_receivers if n == name)
     d_c = scn.search_decimation or scn.receiver.decimation
     out = {}
     for key, values in DETECTOR_SETTINGS.items():
@@ -100,7 +94,7 @@ def noise_false_alarms(
     """
     rx = Receivers(
         scn,
-        {n: "peak" for n, _, _ in [("source", None, None)] + list(scn.variants)},
+        {n: "peak" for n, _, _ in [("source", None, None)] + list(scn.extra_receivers)},
         scn.search_decimation or scn.receiver.decimation,
     )
     d = scn.receiver.decimation

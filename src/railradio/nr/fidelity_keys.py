@@ -44,7 +44,7 @@ def key_numbers(summary: dict, comps: dict[str, Comparison], n_epochs: int, seco
     n_epochs : int
         Epochs on which every shortcut was measured.
     seconds : dict of str to float
-        Variant -> mean computing time per epoch, s.
+        Path -> mean computing time per epoch, s.
 
     Returns
     -------
@@ -190,7 +190,7 @@ def detector_key_numbers(ds, noise_fa: dict[str, tuple[int, int]]) -> dict:
         )
     inr = ds["in_range"].values.astype(bool)
     d3d = ds["d3d"].values
-    prod = ds.sel(variant="production", receiver="robust")
+    prod = ds.sel(path="production", receiver="robust")
     rows = {"default": (prod["toa"].values, prod["detected"].values.sum(axis=-1))}
     for s in ds["setting"].values:
         rows[str(s)] = (ds["det_toa"].sel(setting=s).values, ds["det_n_detected"].sel(setting=s).values)

@@ -26,7 +26,7 @@ class ReceiverDecisions:
 
 
 class Receivers:
-    """The study's receivers (the source's and the variants, ``Scenario.variants``) and the
+    """The study's receivers (the source's and the extra receivers, ``Scenario.extra_receivers``) and the
     cell search's SS-RSRP correlator at one rate: the front end's (``nr.receiver.decimation``),
     as in production, or a finer one on the front end's samples band-limited-interpolated
     (1: every full-rate lag; the template zero-stuffed, the CA-CFAR window and guard the same
@@ -39,7 +39,7 @@ class Receivers:
         Parameters
         ----------
         scn : Scenario
-            The scenario (its ``receiver``, ``detector``, ``variants``, ``pfa``, ``cell_search``).
+            The scenario (its ``receiver``, ``detector``, ``extra_receivers``, ``pfa``, ``cell_search``).
         selection : dict of str to str
             Receiver name -> the strength it selects its cells by (``ss_rsrp``, ``best_score`` or ``peak``).
         decimation : int
@@ -55,7 +55,7 @@ class Receivers:
         """
         base = scn.receiver.decimation
         self.decimation = decimation
-        rx = [("source", scn.receiver, scn.detector)] + list(scn.variants)
+        rx = [("source", scn.receiver, scn.detector)] + list(scn.extra_receivers)
         self.names = [name for name, _, _ in rx]
         self.selection = selection
         self.n_use = n_use

@@ -85,12 +85,12 @@ def changed(kind: str, a: dict[str, NDArray], b: dict[str, NDArray]) -> NDArray[
 
 def stack(epochs: list[dict], receivers: list[str]) -> dict:
     """The per-epoch results of :meth:`railradio.nr.fidelity.FidelityRun.epoch` as arrays:
-    ``{variant: {receiver: {"detected" [E, C, B], "selected", "toa", "aod" [E, C]}}}``.
+    ``{path: {receiver: {"detected" [E, C, B], "selected", "toa", "aod" [E, C]}}}``.
 
     Parameters
     ----------
     epochs : list of dict
-        E results of :meth:`railradio.nr.fidelity.FidelityRun.epoch` (same variants, receivers
+        E results of :meth:`railradio.nr.fidelity.FidelityRun.epoch` (same paths, receivers
         and candidate count).
     receivers : list of str
         Receiver names.
@@ -98,7 +98,7 @@ def stack(epochs: list[dict], receivers: list[str]) -> dict:
     Returns
     -------
     dict
-        Variant -> receiver -> ``detected`` (bool) [E, C, B], ``selected`` (bool) [E, C],
+        Path -> receiver -> ``detected`` (bool) [E, C, B], ``selected`` (bool) [E, C],
         ``toa`` [full-rate samples] [E, C], ``aod`` [rad] [E, C].
     """
     out = {}
@@ -190,7 +190,7 @@ def summarize(
     Parameters
     ----------
     stacked : dict
-        Variant -> receiver -> ``detected``, ``selected``, ``toa`` [full-rate samples], ``aod``
+        Path -> receiver -> ``detected``, ``selected``, ``toa`` [full-rate samples], ``aod``
         [rad] (:func:`railradio.nr.fidelity_dataset.from_dataset`).
     truth : dict
         ``d3d`` [m], ``aod`` [rad], ``in_range`` (bool), each [E, C].
@@ -198,7 +198,7 @@ def summarize(
         Receiver names.
     comps : dict of str to Comparison or None
         Comparisons to measure (``None``: all of :data:`railradio.nr.fidelity.COMPARISONS`); those
-        whose variant is absent from ``stacked`` are skipped.
+        whose path is absent from ``stacked`` are skipped.
     seed : int
         Seed of the bootstrap generator.
 

@@ -13,7 +13,7 @@ from railradio.nr.numerology import SAMPLE_RATE_HZ
 INTEGER_SAMPLE_FLOOR_M = SPEED_OF_LIGHT_M_S / SAMPLE_RATE_HZ / np.sqrt(12)
 """σ of a uniform ±c/(2F_s) range quantization error (0.35 m)."""
 
-VARIANT_LABEL = {"aod": "AOD", "toa": "TOA", "aod_toa": "AOD+TOA"}
+MEASUREMENTS_LABEL = {"aod": "AOD", "toa": "TOA", "aod_toa": "AOD+TOA"}
 
 
 def _cdf(ax, values, **kw):
@@ -121,16 +121,19 @@ def plot_position_cdf(
     rxs = tracks[0]["receiver"].values
     fig, axes = plotting.figure(ncols=len(rxs), figsize=(3.4 * len(rxs), 3.0), squeeze=False)
     for ax, rx in zip(axes[0], rxs, strict=True):
-        for j, v in enumerate(tracks[0]["variant"].values):
+        for j, v in enumerate(tracks[0]["measurements"].values):
             e = np.concatenate(
-                [t["pos_err"].sel(receiver=rx, variant=v, gate=0).values[t["t"].values >= skip_s] for t in tracks]
+                [t["pos_err"].sel(receiver=rx, measurements=v, gate=0).values[t["t"].values >= skip_s] for t in tracks]
             )
-            _cdf(ax, e, label=f"EKF {VARIANT_LABEL[str(v)]}", color=f"C{j}")
+            _cdf(ax, e, label=f"EKF {MEASUREMENTS_LABEL[str(v)]}", color=f"C{j}")
         e = np.concatenate(
-            [t["pos_err"].sel(receiver=rx, variant="aod_toa", gate=1).values[t["t"].values >= skip_s] for t in tracks]
+            [
+                t["pos_err"].sel(receiver=rx, measurements="aod_toa", gate=1).values[t["t"].values >= skip_s]
+                for t in tracks
+            ]
         )
         _cdf(ax, e, label="EKF AOD+TOA, χ² gate", color="C2", linestyle="--")
-        e = np.concatenate([t["snap_err"].sel(receiver=rx, variant="aod_toa").values for t in tracks])
+        e = np.concatenate([t["snap_err"].sel(receiver=rx, measurements="aod_toa").values for t in tracks])
         _cdf(ax, e, label="snapshot LS", color="C3", linestyle=":")
         if bounds is not None:
             pc = np.concatenate([b["pcrb"].values[b["t"].values >= skip_s] for b in bounds])
@@ -166,7 +169,7 @@ def plot_error_vs_time(track: xr.Dataset, pdf: str, png: str, bounds: xr.Dataset
         for g, style in ((0, "-"), (1, "--")):
             ax.plot(
                 track["t"],
-                track["pos_err"].sel(receiver=rx, variant="aod_toa", gate=g),
+                track["pos_err"].sel(receiver=rx, measurements="aod_toa", gate=g),
                 linewidth=0.6,
                 linestyle=style,
                 label=f"EKF AOD+TOA ({rx}{', gated' if g else ''})",

@@ -34,7 +34,7 @@ from scipy.stats import chi2
 
 from railradio.nr.dynamics import process_noise, transition
 from railradio.nr.ekf import Reacquire, Select, TrackerConfig, run_ekf
-from railradio.nr.measurement import VARIANTS, distances_m, hx, jacobian, residual_fn
+from railradio.nr.measurement import MEASUREMENT_SETS, distances_m, hx, jacobian, residual_fn
 from railradio.nr.tracking import track_setup
 
 
@@ -225,7 +225,7 @@ def run_imm(
     reacquire_after: int = 10,
 ) -> dict[str, NDArray]:
     """Run the IMM over ``n_epochs`` epochs; ``select(n, x_pred) -> (rrh_xy, aod, toa)`` and
-    ``reacquire`` as in :func:`railradio.nr.ekf.run_ekf` (measurement noise, variant and
+    ``reacquire`` as in :func:`railradio.nr.ekf.run_ekf` (measurement noise, measurement set and
     gate from ``cfg``; its ``q`` is not used: each model has its own).
 
     Returns ``state`` [n, 6] and ``cov`` [n, 6, 6] (combined posterior), ``mu`` [n, m] (mode
@@ -241,7 +241,7 @@ def run_imm(
     dh_m : float
         Height difference between the RRHs and the train antenna [m].
     cfg : TrackerConfig
-        Variant, measurement noise W and gate (its ``q`` is not used).
+        Measurement set, measurement noise W and gate (its ``q`` is not used).
     imm : ImmConfig
         The model set.
     s0, p0 : numpy.ndarray
@@ -275,8 +275,8 @@ def run_imm(
     pi, mu = imm.initial(dt_s)
     xs = np.repeat(np.asarray(s0, float)[None], m, axis=0)
     ps = np.repeat(np.asarray(p0, float)[None], m, axis=0)
-    res = residual_fn(cfg.variant)
-    per = sum(VARIANTS[cfg.variant])
+    res = residual_fn(cfg.measurements)
+    per = sum(MEASUREMENT_SETS[cfg.measurements])
     gate = chi2.ppf(cfg.gate_prob, per) if cfg.gate else np.inf
     out = {
         "state": np.zeros((n_epochs, 6)),
@@ -358,14 +358,14 @@ def _union_gate(
 ) -> NDArray[np.bool_]:
     """Per-RRH χ² test of the measurements ``z`` of the RRHs ``xy`` [n, 2] at threshold
     ``gate``, passed if the gate of any model (states ``xs``, covariances ``ps``) passes it."""
-    per = sum(VARIANTS[cfg.variant])
+    per = sum(MEASUREMENT_SETS[cfg.measurements])
     keep = np.ones(xy.shape[0], dtype=bool)
     for i in range(xy.shape[0]):
         ok = False
         for j in range(xs.shape[0]):
-            hi = jacobian(xs[j], xy[i : i + 1], dh_m, cfg.variant)
+            hi = jacobian(xs[j], xy[i : i + 1], dh_m, cfg.measurements)
             si = hi @ ps[j] @ hi.T + cfg.noise(1, distances_m(xs[j], xy[i : i + 1]))
-            ri = res(z[i * per : (i + 1) * per], hx(xs[j], xy[i : i + 1], dh_m, cfg.variant))
+            ri = res(z[i * per : (i + 1) * per], hx(xs[j], xy[i : i + 1], dh_m, cfg.measurements))
             ok = ok or float(ri @ np.linalg.solve(si, ri)) <= gate
         keep[i] = ok
     return keep
@@ -380,11 +380,11 @@ def _update_models(
     eye = np.eye(6)
     loglik = np.empty(xs.shape[0])
     for j in range(xs.shape[0]):  # EKF update of model j (Joseph form, as filterpy's)
-        h = jacobian(xs[j], sel, dh_m, cfg.variant)
+        h = jacobian(xs[j], sel, dh_m, cfg.measurements)
         pht = ps[j] @ h.T
         s = h @ pht + r
         gain = pht @ np.linalg.inv(s)
-        nu = res(zs, hx(xs[j], sel, dh_m, cfg.variant))
+        nu = res(zs, hx(xs[j], sel, dh_m, cfg.measurements))
         loglik[j], _ = _gauss_logpdf(nu, s)
         xs[j] = xs[j] + gain @ nu
         ikh = eye - gain @ h
@@ -424,7 +424,7 @@ def track_filters(
     dt_s : float
         Epoch interval [s].
     cfg : TrackerConfig
-        The EKF's settings (and the IMM's W, variant and gate).
+        The EKF's settings (and the IMM's W, measurement set and gate).
     imm : ImmConfig or None
         The IMM's model set; None: EKF only.
     strength : str

@@ -51,7 +51,7 @@ def _per_real(tracks: list[xr.Dataset], rx: str, fn) -> tuple[float, float | Non
     return pooled, float(np.std(each, ddof=1) / np.sqrt(len(tracks)))
 
 
-_ACCURACY = re.compile(r"^track\.(?P<variant>aod_toa|aod|toa)(?P<gated>_gated)?\.err_m\.\w+$")
+_ACCURACY = re.compile(r"^track\.(?P<measurements>aod_toa|aod|toa)(?P<gated>_gated)?\.err_m\.\w+$")
 """An all-epoch accuracy key of a tracker (reported only where the track is rarely lost)."""
 
 TRACK_LOSS_SPECS = {
@@ -65,7 +65,7 @@ TRACK_LOSS_SPECS = {
     "tracked.err_m.p95": ("m", "95th percentile of the 2-D position error over the epochs not lost"),
     "tracked.err_m.p99": ("m", "99th percentile of the 2-D position error over the epochs not lost"),
 }
-"""Per tracker (receiver × variant × gate): ``track.<variant>[_gated].<metric>``."""
+"""Per tracker (receiver × measurement set × gate): ``track.<measurements>[_gated].<metric>``."""
 
 CONSISTENCY_SPECS = {
     "nis.mean": (
@@ -85,20 +85,22 @@ CONSISTENCY_SPECS = {
 only), where the track datasets carry it."""
 
 
-def _runs(ts: list[xr.Dataset], rx: str, variant: str, gate: int) -> list[tuple[np.ndarray, np.ndarray]]:
+def _runs(ts: list[xr.Dataset], rx: str, measurements: str, gate: int) -> list[tuple[np.ndarray, np.ndarray]]:
     """(t, 2-D error) of each realization after the first SKIP_S seconds."""
     out = []
     for t in ts:
         keep = t["t"].values >= SKIP_S
-        out.append((t["t"].values[keep], t["pos_err"].sel(receiver=rx, variant=variant, gate=gate).values[keep]))
+        out.append(
+            (t["t"].values[keep], t["pos_err"].sel(receiver=rx, measurements=measurements, gate=gate).values[keep])
+        )
     return out
 
 
-def _loss_fns(spacing_m: float, rx: str, variant: str, gate: int) -> dict:
+def _loss_fns(spacing_m: float, rx: str, measurements: str, gate: int) -> dict:
     """Each metric of :data:`TRACK_LOSS_SPECS` as a function of a list of track datasets."""
 
     def tracked(ts):
-        err = np.concatenate([e for _, e in _runs(ts, rx, variant, gate)])
+        err = np.concatenate([e for _, e in _runs(ts, rx, measurements, gate)])
         return err[~loss.lost_mask(err, spacing_m)]
 
     def stat(v, fn):
@@ -106,10 +108,10 @@ def _loss_fns(spacing_m: float, rx: str, variant: str, gate: int) -> dict:
 
     return {
         "lost_frac": lambda ts: float(
-            np.mean(loss.lost_mask(np.concatenate([e for _, e in _runs(ts, rx, variant, gate)]), spacing_m))
+            np.mean(loss.lost_mask(np.concatenate([e for _, e in _runs(ts, rx, measurements, gate)]), spacing_m))
         ),
         "time_to_loss_s": lambda ts: (lambda v: np.nan if v is None else v)(
-            loss.time_to_loss_s(_runs(ts, rx, variant, gate), spacing_m)
+            loss.time_to_loss_s(_runs(ts, rx, measurements, gate), spacing_m)
         ),
         "tracked.err_m.mean": lambda ts: stat(tracked(ts), np.mean),
         "tracked.err_m.p95": lambda ts: stat(tracked(ts), lambda v: np.percentile(v, 95)),
@@ -117,16 +119,16 @@ def _loss_fns(spacing_m: float, rx: str, variant: str, gate: int) -> dict:
     }
 
 
-def _consistency_fn(spacing_m: float, rx: str, variant: str, gate: int, var: str, tracked_only: bool):
+def _consistency_fn(spacing_m: float, rx: str, measurements: str, gate: int, var: str, tracked_only: bool):
     """Mean of a consistency variable after SKIP_S (over the epochs not lost if asked)."""
 
     def fn(ts):
         vals = []
         for t in ts:
             keep = t["t"].values >= SKIP_S
-            v = t[var].sel(receiver=rx, variant=variant, gate=gate).values[keep]
+            v = t[var].sel(receiver=rx, measurements=measurements, gate=gate).values[keep]
             if tracked_only:
-                err = t["pos_err"].sel(receiver=rx, variant=variant, gate=gate).values[keep]
+                err = t["pos_err"].sel(receiver=rx, measurements=measurements, gate=gate).values[keep]
                 v = v[~loss.lost_mask(err, spacing_m)]
             vals.append(v[np.isfinite(v)])
         v = np.concatenate(vals)
@@ -145,9 +147,12 @@ def _spacing(tracks: list[xr.Dataset]) -> float:
 def _metric_fns(rx: str) -> dict:
     """Each key of :data:`SPECS` as a function of a list of track datasets (receiver ``rx``)."""
 
-    def err(ts, variant, gate=0):
+    def err(ts, measurements, gate=0):
         return np.concatenate(
-            [t["pos_err"].sel(receiver=rx, variant=variant, gate=gate).values[t["t"].values >= SKIP_S] for t in ts]
+            [
+                t["pos_err"].sel(receiver=rx, measurements=measurements, gate=gate).values[t["t"].values >= SKIP_S]
+                for t in ts
+            ]
         )
 
     def meas(ts, name):
@@ -171,7 +176,7 @@ def _metric_fns(rx: str) -> dict:
         "track.aod_toa_gated.err_m.p99": lambda ts: float(np.nanpercentile(err(ts, "aod_toa", 1), 99)),
         "track.aod_toa_gated.frac_submeter": lambda ts: float(np.mean(err(ts, "aod_toa", 1) < 1.0)),
         "snapshot.aod_toa.err_m.median": lambda ts: float(
-            np.nanmedian(np.concatenate([t["snap_err"].sel(receiver=rx, variant="aod_toa").values for t in ts]))
+            np.nanmedian(np.concatenate([t["snap_err"].sel(receiver=rx, measurements="aod_toa").values for t in ts]))
         ),
     }
 
@@ -208,7 +213,7 @@ def key_numbers(tracks: list[xr.Dataset], bounds: list[xr.Dataset] | None = None
     """Key numbers of the nr tracks pooled over the realizations (docs/model/nr.md §10), each with
     the standard error of its per-realization values: the PCRB/PEB predictions (``nr.bound.*``,
     with ``bounds``), the median SIR of the strongest RRH, the loss thresholds, and per receiver
-    (prefix ``nr.`` for the source's receiver, ``nr.<receiver>.`` for a variant) the track-loss, consistency,
+    (prefix ``nr.`` for the source's receiver, ``nr.<receiver>.`` for an extra receiver) the track-loss, consistency,
     measurement and accuracy metrics of every tracker (an all-epoch accuracy is null where the
     track is lost too often, :func:`railradio.nr.loss.accuracy`); errors are counted after
     :data:`SKIP_S`.
@@ -254,32 +259,32 @@ def key_numbers(tracks: list[xr.Dataset], bounds: list[xr.Dataset] | None = None
         ),
     ):
         out[name] = KeySpec(name, unit, desc).entry(value)
-    variants = [str(v) for v in tracks[0]["variant"].values]
+    measurement_sets = [str(v) for v in tracks[0]["measurements"].values]
     for rx in [str(r) for r in tracks[0]["receiver"].values]:
         prefix = "nr." if rx == "source" else f"nr.{rx}."
         who = "" if rx == "source" else f" ({rx} receiver)"
         fns = _metric_fns(rx)
         lost = {}
-        for variant in variants:
+        for measurements in measurement_sets:
             for gate in (0, 1):
-                track = f"track.{variant}{'_gated' if gate else ''}"
-                lfns = _loss_fns(spacing, rx, variant, gate)
+                track = f"track.{measurements}{'_gated' if gate else ''}"
+                lfns = _loss_fns(spacing, rx, measurements, gate)
                 for metric, (unit, desc) in TRACK_LOSS_SPECS.items():
                     name = f"{prefix}{track}.{metric}"
                     value, se = _per_real(tracks, rx, lfns[metric])
-                    out[name] = KeySpec(name, unit, f"{desc}, EKF {variant}{', gated' if gate else ''}{who}").entry(
-                        value if np.isfinite(value) else None, se if metric != "time_to_loss_s" else None
-                    )
-                lost[(variant, gate)] = out[f"{prefix}{track}.lost_frac"]["value"]
+                    out[name] = KeySpec(
+                        name, unit, f"{desc}, EKF {measurements}{', gated' if gate else ''}{who}"
+                    ).entry(value if np.isfinite(value) else None, se if metric != "time_to_loss_s" else None)
+                lost[(measurements, gate)] = out[f"{prefix}{track}.lost_frac"]["value"]
                 for metric, (unit, desc, var, tracked_only) in CONSISTENCY_SPECS.items():
                     if var not in tracks[0]:
                         continue
                     name = f"{prefix}{track}.{metric}"
-                    fn = _consistency_fn(spacing, rx, variant, gate, var, tracked_only)
+                    fn = _consistency_fn(spacing, rx, measurements, gate, var, tracked_only)
                     value, se = _per_real(tracks, rx, fn)
-                    out[name] = KeySpec(name, unit, f"{desc}, EKF {variant}{', gated' if gate else ''}{who}").entry(
-                        value if np.isfinite(value) else None, se
-                    )
+                    out[name] = KeySpec(
+                        name, unit, f"{desc}, EKF {measurements}{', gated' if gate else ''}{who}"
+                    ).entry(value if np.isfinite(value) else None, se)
         for key, (unit, desc, src, rel) in SPECS.items():
             name = prefix + key
             if rx != "source":
@@ -287,7 +292,7 @@ def key_numbers(tracks: list[xr.Dataset], bounds: list[xr.Dataset] | None = None
             value, se = _per_real(tracks, rx, fns[key])
             m = _ACCURACY.match(key)
             if m:  # an all-epoch accuracy: null where the track is lost too often
-                lf = lost[(m["variant"], int(bool(m["gated"])))]
+                lf = lost[(m["measurements"], int(bool(m["gated"])))]
                 value = loss.accuracy(value, lf)
                 out[name] = KeySpec(name, unit, desc, src, rel).entry(
                     value, se if value is not None else None, lost_frac=lf
@@ -313,17 +318,17 @@ CALIBRATION_SPECS = {
     "sigma_aod_deg": ("deg", "calibrated AOD standard deviation (inliers of the calibration run's errors)"),
     "sigma_range_m": ("m", "calibrated TOA range standard deviation (inliers of the calibration run's errors)"),
 }
-"""Per tracker ``cal.<variant>[_gated].<metric>``, from ``calibration.json``."""
+"""Per tracker ``cal.<measurements>[_gated].<metric>``, from ``calibration.json``."""
 
 
 def calibration_key_numbers(cal: dict[str, dict]) -> dict[str, Any]:
-    """The calibrated W and q of every tracker (``receiver/variant/gate|nogate`` records of
+    """The calibrated W and q of every tracker (``receiver/measurements/gate|nogate`` records of
     ``calibration.json``) as key numbers.
 
     Parameters
     ----------
     cal : dict of str to dict
-        ``calibration.json``: tracker name (``receiver/variant/gate|nogate``) -> record
+        ``calibration.json``: tracker name (``receiver/measurements/gate|nogate``) -> record
         (``q`` [m² s⁻⁵], ``sigma_aod_rad`` [rad], ``sigma_toa_s`` [s], optional ``q_search``).
 
     Returns
@@ -337,9 +342,9 @@ def calibration_key_numbers(cal: dict[str, dict]) -> dict[str, Any]:
     """
     out: dict[str, Any] = {}
     for name, rec in cal.items():
-        rx, variant, gate = name.split("/")
+        rx, measurements, gate = name.split("/")
         prefix = "nr." if rx == "source" else f"nr.{rx}."
-        track = f"cal.{variant}{'_gated' if gate == 'gate' else ''}"
+        track = f"cal.{measurements}{'_gated' if gate == 'gate' else ''}"
         search = rec.get("q_search", {})
         i = search["q"].index(rec["q"]) if rec["q"] in search.get("q", []) else None
         values = {
@@ -353,9 +358,9 @@ def calibration_key_numbers(cal: dict[str, dict]) -> dict[str, Any]:
         who = "" if rx == "source" else f" ({rx} receiver)"
         for metric, (unit, desc) in CALIBRATION_SPECS.items():
             key = f"{prefix}{track}.{metric}"
-            out[key] = KeySpec(key, unit, f"{desc}, EKF {variant}{', gated' if gate == 'gate' else ''}{who}").entry(
-                values[metric]
-            )
+            out[key] = KeySpec(
+                key, unit, f"{desc}, EKF {measurements}{', gated' if gate == 'gate' else ''}{who}"
+            ).entry(values[metric])
     edges = [k for k in out if k.endswith(".q_at_edge") and out[k]["value"] == 1.0]
     for key, desc, value in (
         ("nr.cal.n_trackers", "trackers calibrated (receiver x measurement set x gate)", len(cal)),

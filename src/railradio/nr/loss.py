@@ -7,7 +7,7 @@ measurement association is wrong and the error no longer says how accurate a tra
 a filter that diverges to 10¹⁹ m has no "mean error". An epoch without a position (NaN) is
 lost too.
 
-Reported per tracker (receiver × measurement variant × gate):
+Reported per tracker (receiver × measurement set × gate):
 
 * ``lost_frac``: the share of the scored epochs (after the first ``SKIP_S`` seconds) lost;
 * ``time_to_loss_s``: time from the run's start to its first lost epoch (the mean over the

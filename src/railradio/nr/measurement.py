@@ -13,11 +13,11 @@ from numpy.typing import NDArray
 from railradio.constants import SPEED_OF_LIGHT_M_S
 from railradio.nr.antenna import wrap_rad
 
-VARIANTS = {"aod": (True, False), "toa": (False, True), "aod_toa": (True, True)}
-"""Measurement variants: which of (AOD, TOA) each RRH contributes (source §4)."""
+MEASUREMENT_SETS = {"aod": (True, False), "toa": (False, True), "aod_toa": (True, True)}
+"""Measurement sets: which of (AOD, TOA) each RRH contributes (source §4)."""
 
 
-def h_terms(dx: NDArray, dy: NDArray, dh_m: float, variant: str) -> NDArray[np.float64]:
+def h_terms(dx: NDArray, dy: NDArray, dh_m: float, measurements: str) -> NDArray[np.float64]:
     """h per RRH, [..., per] (AOD [rad] then TOA [s]), from the train-minus-RRH offsets
     dx, dy [...] [m] (source eq. 14, 3-D range with the known height difference).
 
@@ -27,21 +27,21 @@ def h_terms(dx: NDArray, dy: NDArray, dh_m: float, variant: str) -> NDArray[np.f
         Train-minus-RRH offsets along and across the track [m], same shape [...].
     dh_m : float
         Height difference between the RRHs and the train antenna [m].
-    variant : str
-        Measurement variant: ``aod``, ``toa`` or ``aod_toa`` (:data:`VARIANTS`).
+    measurements : str
+        Measurement set: ``aod``, ``toa`` or ``aod_toa`` (:data:`MEASUREMENT_SETS`).
 
     Returns
     -------
     numpy.ndarray
         [..., per] (per = 1 or 2 measurements per RRH): AOD atan2(dy, dx) [rad] then TOA
-        (3-D distance over c) [s], as used by the variant.
+        (3-D distance over c) [s], as used by the measurement set.
 
     Raises
     ------
     KeyError
-        When ``variant`` is not a key of :data:`VARIANTS`.
+        When ``measurements`` is not a key of :data:`MEASUREMENT_SETS`.
     """
-    use_aod, use_toa = VARIANTS[variant]
+    use_aod, use_toa = MEASUREMENT_SETS[measurements]
     out = np.empty(np.shape(dx) + (int(use_aod) + int(use_toa),))
     if use_aod:
         out[..., 0] = np.arctan2(dy, dx)
@@ -50,7 +50,7 @@ def h_terms(dx: NDArray, dy: NDArray, dh_m: float, variant: str) -> NDArray[np.f
     return out
 
 
-def jac_terms(dx: NDArray, dy: NDArray, dh_m: float, variant: str) -> NDArray[np.float64]:
+def jac_terms(dx: NDArray, dy: NDArray, dh_m: float, measurements: str) -> NDArray[np.float64]:
     """∂h/∂(x, y) per RRH, [..., per, 2], from the offsets dx, dy [...] [m].
 
     Parameters
@@ -59,8 +59,8 @@ def jac_terms(dx: NDArray, dy: NDArray, dh_m: float, variant: str) -> NDArray[np
         Train-minus-RRH offsets along and across the track [m], same shape [...].
     dh_m : float
         Height difference between the RRHs and the train antenna [m].
-    variant : str
-        Measurement variant: ``aod``, ``toa`` or ``aod_toa`` (:data:`VARIANTS`).
+    measurements : str
+        Measurement set: ``aod``, ``toa`` or ``aod_toa`` (:data:`MEASUREMENT_SETS`).
 
     Returns
     -------
@@ -70,9 +70,9 @@ def jac_terms(dx: NDArray, dy: NDArray, dh_m: float, variant: str) -> NDArray[np
     Raises
     ------
     KeyError
-        When ``variant`` is not a key of :data:`VARIANTS`.
+        When ``measurements`` is not a key of :data:`MEASUREMENT_SETS`.
     """
-    use_aod, use_toa = VARIANTS[variant]
+    use_aod, use_toa = MEASUREMENT_SETS[measurements]
     out = np.empty(np.shape(dx) + (int(use_aod) + int(use_toa), 2))
     if use_aod:
         r2 = dx**2 + dy**2
@@ -85,7 +85,7 @@ def jac_terms(dx: NDArray, dy: NDArray, dh_m: float, variant: str) -> NDArray[np
     return out
 
 
-def hx(s: NDArray, rrh_xy: NDArray, dh_m: float, variant: str) -> NDArray[np.float64]:
+def hx(s: NDArray, rrh_xy: NDArray, dh_m: float, measurements: str) -> NDArray[np.float64]:
     """Stacked measurement function (source eq. 14) for RRHs at ``rrh_xy`` [n, 2].
 
     Parameters
@@ -96,8 +96,8 @@ def hx(s: NDArray, rrh_xy: NDArray, dh_m: float, variant: str) -> NDArray[np.flo
         [n, 2] RRH positions (x, y) [m].
     dh_m : float
         Height difference between the RRHs and the train antenna [m].
-    variant : str
-        Measurement variant: ``aod``, ``toa`` or ``aod_toa`` (:data:`VARIANTS`).
+    measurements : str
+        Measurement set: ``aod``, ``toa`` or ``aod_toa`` (:data:`MEASUREMENT_SETS`).
 
     Returns
     -------
@@ -107,13 +107,13 @@ def hx(s: NDArray, rrh_xy: NDArray, dh_m: float, variant: str) -> NDArray[np.flo
     Raises
     ------
     KeyError
-        When ``variant`` is not a key of :data:`VARIANTS`.
+        When ``measurements`` is not a key of :data:`MEASUREMENT_SETS`.
     """
-    h = h_terms(s[0] - rrh_xy[:, 0], s[1] - rrh_xy[:, 1], dh_m, variant)
+    h = h_terms(s[0] - rrh_xy[:, 0], s[1] - rrh_xy[:, 1], dh_m, measurements)
     return h.ravel()  # [aod_0, toa_0, aod_1, toa_1, ...]
 
 
-def jacobian(s: NDArray, rrh_xy: NDArray, dh_m: float, variant: str) -> NDArray[np.float64]:
+def jacobian(s: NDArray, rrh_xy: NDArray, dh_m: float, measurements: str) -> NDArray[np.float64]:
     """Analytic ∂h/∂s at s: [n·m, 6] (only x, y enter).
 
     Parameters
@@ -124,8 +124,8 @@ def jacobian(s: NDArray, rrh_xy: NDArray, dh_m: float, variant: str) -> NDArray[
         [n, 2] RRH positions (x, y) [m].
     dh_m : float
         Height difference between the RRHs and the train antenna [m].
-    variant : str
-        Measurement variant: ``aod``, ``toa`` or ``aod_toa`` (:data:`VARIANTS`).
+    measurements : str
+        Measurement set: ``aod``, ``toa`` or ``aod_toa`` (:data:`MEASUREMENT_SETS`).
 
     Returns
     -------
@@ -136,21 +136,21 @@ def jacobian(s: NDArray, rrh_xy: NDArray, dh_m: float, variant: str) -> NDArray[
     Raises
     ------
     KeyError
-        When ``variant`` is not a key of :data:`VARIANTS`.
+        When ``measurements`` is not a key of :data:`MEASUREMENT_SETS`.
     """
-    jac = jac_terms(s[0] - rrh_xy[:, 0], s[1] - rrh_xy[:, 1], dh_m, variant)
+    jac = jac_terms(s[0] - rrh_xy[:, 0], s[1] - rrh_xy[:, 1], dh_m, measurements)
     out = np.zeros(jac.shape[:2] + (6,))
     out[..., :2] = jac
     return out.reshape(-1, 6)
 
 
-def residual_fn(variant: str):
+def residual_fn(measurements: str):
     """y - h with angle components wrapped to (-π, π].
 
     Parameters
     ----------
-    variant : str
-        Measurement variant: ``aod``, ``toa`` or ``aod_toa`` (:data:`VARIANTS`).
+    measurements : str
+        Measurement set: ``aod``, ``toa`` or ``aod_toa`` (:data:`MEASUREMENT_SETS`).
 
     Returns
     -------
@@ -161,9 +161,9 @@ def residual_fn(variant: str):
     Raises
     ------
     KeyError
-        When ``variant`` is not a key of :data:`VARIANTS`.
+        When ``measurements`` is not a key of :data:`MEASUREMENT_SETS`.
     """
-    use_aod, use_toa = VARIANTS[variant]
+    use_aod, use_toa = MEASUREMENT_SETS[measurements]
     per = int(use_aod) + int(use_toa)
 
     def residual(a: NDArray, b: NDArray) -> NDArray:

@@ -55,7 +55,7 @@ class Claim:
     better: str
     label: str
     tracker: str | None = None
-    """The tracker variant whose loss voids the claim (accuracy claims), if any."""
+    """The measurement set whose loss voids the claim (accuracy claims), if any."""
 
 
 CLAIMS = {
@@ -86,13 +86,13 @@ METRICS = {
 }
 """Every metric of a map cell (unit, description), each with its bootstrap interval."""
 
-VARIANTS = ("aod", "toa", "aod_toa")
+MEASUREMENT_SETS = ("aod", "toa", "aod_toa")
 """The trackers every map cell runs per receiver (the rankings need all three)."""
 
 
 def receivers(nr: dict) -> dict[str, bool]:
     """The map's receivers -> whether their trackers are gated: the source's (``source``,
-    no gate, as the source) and ours (every ``receiver_variants`` entry, gated).
+    no gate, as the source) and ours (every ``extra_receivers`` entry, gated).
 
     Parameters
     ----------
@@ -102,9 +102,9 @@ def receivers(nr: dict) -> dict[str, bool]:
     Returns
     -------
     dict of str to bool
-        Receiver name -> gated (``source`` first, then the variants in config order).
+        Receiver name -> gated (``source`` first, then the extra receivers in config order).
     """
-    return {"source": False} | {name: True for name in nr.get("receiver_variants", {})}
+    return {"source": False} | {name: True for name in nr.get("extra_receivers", {})}
 
 
 def cells(nr: dict, nr_schema: dict) -> dict[str, dict[str, Any]]:
@@ -197,7 +197,7 @@ def burst_config(cfg: dict) -> dict:
     """
     out = copy.deepcopy(sim_config(cfg))
     out["receiver"].pop("selection", None)
-    for v in out.get("receiver_variants", {}).values():
+    for v in out.get("extra_receivers", {}).values():
         v.pop("selection", None)
     return out
 
@@ -330,7 +330,7 @@ def cell_metrics(
     aod_err_rad, range_err_m : numpy.ndarray
         AOD [rad] and TOA range [m] errors of the selected RRHs, [n, 3] (NaN: none).
     pos_err_m : dict of str to numpy.ndarray
-        Tracker variant (``aod``, ``toa``, ``aod_toa``: all three) -> 2-D EKF errors [m], [n].
+        Measurement set (``aod``, ``toa``, ``aod_toa``: all three) -> 2-D EKF errors [m], [n].
     spacing_m : float
         RRH spacing [m] (an epoch is lost beyond half of it).
     idx : numpy.ndarray of int or None
@@ -339,7 +339,8 @@ def cell_metrics(
     Returns
     -------
     dict of str to numpy.ndarray
-        Metric -> [n_boot] values ([1] without ``idx``; units of :data:`METRICS`), and ``track.<variant>.lost_frac``.
+        Metric -> [n_boot] values ([1] without ``idx``; units of :data:`METRICS`), and
+        ``track.<measurements>.lost_frac``.
     """
     n = aod_err_rad.shape[0]
     if idx is None:
@@ -426,7 +427,7 @@ def cell_key_numbers(
     range_err_m : numpy.ndarray
         [n, 3] TOA range errors of the selected RRHs, m (NaN: none).
     pos_err_m : dict of str to numpy.ndarray
-        Tracker variant (``aod``, ``toa``, ``aod_toa``) -> [n] 2-D EKF position errors, m.
+        Measurement set (``aod``, ``toa``, ``aod_toa``) -> [n] 2-D EKF position errors, m.
     spacing_m : float
         RRH spacing, m (an epoch is lost beyond half of it).
     rng : numpy.random.Generator

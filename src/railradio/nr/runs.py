@@ -23,7 +23,7 @@ from railradio.nr.clocks import apply_clock_errors
 from railradio.nr.dynamics import process_noise, transition
 from railradio.nr.ekf import TrackerConfig, nees_position
 from railradio.nr.imm import ImmConfig, position_nees, q_for_jump, track_filters
-from railradio.nr.measurement import VARIANTS
+from railradio.nr.measurement import MEASUREMENT_SETS
 from railradio.nr.simulate import Scenario
 from railradio.nr.smoother import rts_smooth
 from railradio.nr.tracking import track
@@ -105,15 +105,15 @@ def point_model(ds: xr.Dataset, tracker: dict[str, Any]) -> xr.Dataset:
     return ds if tracker["lever_arm"] else ds.drop_vars("train_panel_x", errors="ignore")
 
 
-def tracker_name(rx: str, variant: str, gate: bool) -> str:
-    """The calibration record's key of one tracker: ``receiver/variant/gate|nogate``.
+def tracker_name(rx: str, measurements: str, gate: bool) -> str:
+    """The calibration record's key of one tracker: ``receiver/measurements/gate|nogate``.
 
     Parameters
     ----------
     rx : str
         Receiver name.
-    variant : str
-        Tracker variant: ``aod``, ``toa`` or ``aod_toa``.
+    measurements : str
+        Measurement set: ``aod``, ``toa`` or ``aod_toa``.
     gate : bool
         Whether the tracker runs with the χ² innovation gate.
 
@@ -122,13 +122,18 @@ def tracker_name(rx: str, variant: str, gate: bool) -> str:
     str
         The key, e.g. ``"<rx>/aod_toa/gate"``.
     """
-    return f"{rx}/{variant}/{'gate' if gate else 'nogate'}"
+    return f"{rx}/{measurements}/{'gate' if gate else 'nogate'}"
 
 
 def calibrate_receivers(
-    ds: xr.Dataset, scn: Scenario, tracker: dict[str, Any], selection: dict[str, str], variants: Sequence[str], log
+    ds: xr.Dataset,
+    scn: Scenario,
+    tracker: dict[str, Any],
+    selection: dict[str, str],
+    measurement_sets: Sequence[str],
+    log,
 ) -> dict[str, dict]:
-    """Noise levels and q of every receiver's trackers (each variant, gate off and on), each
+    """Noise levels and q of every receiver's trackers (each measurement set, gate off and on), each
     calibrated as it will run, with its q search: ``{tracker_name: record}``.
 
     Parameters
@@ -143,8 +148,8 @@ def calibrate_receivers(
     selection : dict of str to str
         Receiver name -> strength measure choosing its measured RRHs
         (:func:`railradio.nr.workflow.receiver_selection`).
-    variants : sequence of str
-        Tracker variants to calibrate (keys of :data:`railradio.nr.measurement.VARIANTS`:
+    measurement_sets : sequence of str
+        Measurement sets to calibrate (keys of :data:`railradio.nr.measurement.MEASUREMENT_SETS`:
         ``aod``, ``toa``, ``aod_toa``).
     log : logging.Logger
         Receives one line per tracker.
@@ -165,13 +170,13 @@ def calibrate_receivers(
     out = {}
     for rx in ds["receiver"].values:
         dsr = ds.sel(receiver=rx)
-        for variant in variants:
+        for measurements in measurement_sets:
             for gate in GATES:
-                name = tracker_name(rx, variant, gate)
+                name = tracker_name(rx, measurements, gate)
                 search = {}
                 cfg = calibrate(
                     dsr,
-                    variant,
+                    measurements,
                     dep.x_m,
                     dep.offset_m,
                     dep.h_bs_m - dep.h_ut_m,
@@ -194,7 +199,7 @@ def track_receivers(
     cal: dict[str, dict],
     tracker: dict[str, Any],
     selection: dict[str, str],
-    variants: Sequence[str],
+    measurement_sets: Sequence[str],
     log,
 ) -> xr.Dataset:
     """Every receiver's trackers on one realization, scored: 2-D EKF and snapshot position
@@ -212,8 +217,8 @@ def track_receivers(
         The ``nr.tracker`` config section (uses ``gate_prob``).
     selection : dict of str to str
         Receiver name -> strength measure of its measured RRHs.
-    variants : sequence of str
-        Tracker variants to run (``aod``, ``toa``, ``aod_toa``).
+    measurement_sets : sequence of str
+        Measurement sets to run (``aod``, ``toa``, ``aod_toa``).
     log : logging.Logger
         Receives each tracker's mean error.
 
@@ -221,34 +226,34 @@ def track_receivers(
     -------
     xarray.Dataset
         ``pos_err`` [m] (2-D EKF position error), ``nis`` and ``nees`` [1] (per dimension), dims
-        (``receiver``, ``variant``, ``gate``, ``epoch``); ``snap_err`` [m] (snapshot LS error),
-        dims (``receiver``, ``variant``, ``epoch``); ``aod_err`` [rad] and ``range_err`` [m] of the
+        (``receiver``, ``measurements``, ``gate``, ``epoch``); ``snap_err`` [m] (snapshot LS error),
+        dims (``receiver``, ``measurements``, ``epoch``); ``aod_err`` [rad] and ``range_err`` [m] of the
         measured RRHs, dims (``receiver``, ``epoch``, ``slot``); ``t`` [s], ``x_true`` [m],
         ``a_true`` [m/s²], ``sir_best`` [dB] per ``epoch``.
 
     Raises
     ------
     KeyError
-        When ``cal`` lacks a receiver/variant/gate combination.
+        When ``cal`` lacks a receiver/measurements/gate combination.
     """
     dep = scn.deployment
     receivers = [str(r) for r in ds["receiver"].values]
-    variants = [str(v) for v in variants]
+    measurement_sets = [str(v) for v in measurement_sets]
     n = ds.sizes["epoch"]
-    err = np.full((len(receivers), len(variants), 2, n), np.nan)
-    nis = np.full((len(receivers), len(variants), 2, n), np.nan)
-    nees = np.full((len(receivers), len(variants), 2, n), np.nan)
-    snap = np.full((len(receivers), len(variants), n), np.nan)
+    err = np.full((len(receivers), len(measurement_sets), 2, n), np.nan)
+    nis = np.full((len(receivers), len(measurement_sets), 2, n), np.nan)
+    nees = np.full((len(receivers), len(measurement_sets), 2, n), np.nan)
+    snap = np.full((len(receivers), len(measurement_sets), n), np.nan)
     meas_aod = np.full((len(receivers), n, 3), np.nan)
     meas_rng = np.full((len(receivers), n, 3), np.nan)
     x_true = ds["x_true"].values
     for i, rx in enumerate(receivers):
         dsr = ds.sel(receiver=rx)
         meas_aod[i], meas_rng[i] = measurement_errors(dsr, selection[str(rx)], flat=False)
-        for j, variant in enumerate(variants):
+        for j, measurements in enumerate(measurement_sets):
             for g, gate in enumerate(GATES):
-                c = cal[tracker_name(rx, variant, gate)]
-                cfg = TrackerConfig.from_record(c, variant=variant, gate=gate, gate_prob=tracker["gate_prob"])
+                c = cal[tracker_name(rx, measurements, gate)]
+                cfg = TrackerConfig.from_record(c, measurements=measurements, gate=gate, gate_prob=tracker["gate_prob"])
                 out = track(
                     dsr,
                     dep.x_m,
@@ -261,17 +266,17 @@ def track_receivers(
                 )
                 err[i, j, g] = np.hypot(out["state"][:, 0] - x_true, out["state"][:, 1])
                 upd = out["n_used"] > 0
-                nis[i, j, g, upd] = out["nis"][upd] / (sum(VARIANTS[variant]) * out["n_used"][upd])
+                nis[i, j, g, upd] = out["nis"][upd] / (sum(MEASUREMENT_SETS[measurements]) * out["n_used"][upd])
                 nees[i, j, g] = nees_position(out["state"], out["cov"], x_true) / 2  # scoring only
                 if g == 0:
                     snap[i, j] = np.hypot(out["snapshot"][:, 0] - x_true, out["snapshot"][:, 1])
-                log.info("%s %s gate=%s: mean error %.3f m", rx, variant, gate, np.nanmean(err[i, j, g]))
-    return _track_dataset(ds, receivers, variants, err, nis, nees, snap, meas_aod, meas_rng)
+                log.info("%s %s gate=%s: mean error %.3f m", rx, measurements, gate, np.nanmean(err[i, j, g]))
+    return _track_dataset(ds, receivers, measurement_sets, err, nis, nees, snap, meas_aod, meas_rng)
 
 
-def _track_dataset(ds, receivers, variants, err, nis, nees, snap, meas_aod, meas_rng) -> xr.Dataset:
+def _track_dataset(ds, receivers, measurement_sets, err, nis, nees, snap, meas_aod, meas_rng) -> xr.Dataset:
     """The tracks' scores as a Dataset (results/nr/track/{real}.nc)."""
-    dims = ("receiver", "variant", "gate", "epoch")
+    dims = ("receiver", "measurements", "gate", "epoch")
     return xr.Dataset(
         {
             "pos_err": (dims, err, {"units": "m", "long_name": "2-D EKF position error at the burst start"}),
@@ -282,7 +287,7 @@ def _track_dataset(ds, receivers, variants, err, nis, nees, snap, meas_aod, meas
                 {"units": "1", "long_name": "position NEES per dimension (estimate against truth, P_pos)"},
             ),
             "snap_err": (
-                ("receiver", "variant", "epoch"),
+                ("receiver", "measurements", "epoch"),
                 snap,
                 {"units": "m", "long_name": "2-D snapshot least-squares position error"},
             ),
@@ -302,8 +307,12 @@ def _track_dataset(ds, receivers, variants, err, nis, nees, snap, meas_aod, meas
             "sir_best": (("epoch",), ds["sir_best"].values, dict(ds["sir_best"].attrs)),
         },
         coords={
-            "receiver": ("receiver", receivers, {"units": "1", "long_name": "receiver variant"}),
-            "variant": ("variant", variants, {"units": "1", "long_name": "measurements used by the tracker"}),
+            "receiver": ("receiver", receivers, {"units": "1", "long_name": "receiver"}),
+            "measurements": (
+                "measurements",
+                measurement_sets,
+                {"units": "1", "long_name": "measurements used by the tracker"},
+            ),
             "gate": ("gate", [0, 1], {"units": "1", "long_name": "chi2 innovation gate off/on"}),
             "epoch": ("epoch", ds["epoch"].values, {"units": "1", "long_name": "epoch index"}),
             "slot": ("slot", [0, 1, 2], {"units": "1", "long_name": "measured RRH rank by strength"}),
@@ -367,7 +376,7 @@ def track_imm(
         )
     ds = ds.sel(receiver=rx)
     c = cal[f"{rx}/aod_toa/gate"]
-    cfg = TrackerConfig.from_record(c, variant="aod_toa", gate=True, gate_prob=tracker["gate_prob"])
+    cfg = TrackerConfig.from_record(c, measurements="aod_toa", gate=True, gate_prob=tracker["gate_prob"])
     q_quiet = c["q"] if imm_params["q_quiet"] is None else float(imm_params["q_quiet"])
     q_man = q_for_jump(imm_params["delta_a_m_s2"], traj.dt_s)
     imm = ImmConfig(q=(q_quiet, q_man), sojourn_s=tuple(imm_params["sojourn_s"]))

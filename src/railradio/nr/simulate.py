@@ -86,7 +86,7 @@ class Scenario:
     delay_spread_s: float = 20e-9
     detector: str = "source"
     pfa: float = 1e-3
-    variants: tuple = ()
+    extra_receivers: tuple = ()
     """Extra receivers run on the same bursts: ((name, ReceiverConfig, detector), ...);
     they must share the decimation and SS-block pattern of ``receiver``."""
     cell_search: CellSearchConfig = field(default_factory=CellSearchConfig)
@@ -268,14 +268,14 @@ class Estimator:
         Raises
         ------
         ValueError
-            When a receiver variant differs from ``scn.receiver`` in decimation or SS-block
+            When an extra receiver differs from ``scn.receiver`` in decimation or SS-block
             pattern, or ``scn.search_decimation`` does not divide the front end's decimation.
         """
         self.scn = scn
-        self.receivers = [("source", scn.receiver, scn.detector)] + list(scn.variants)
+        self.receivers = [("source", scn.receiver, scn.detector)] + list(scn.extra_receivers)
         for _, rc, _ in self.receivers:
             if rc.decimation != scn.receiver.decimation or rc.ssb_pattern != scn.receiver.ssb_pattern:
-                raise ValueError("receiver variants must share decimation and ssb_pattern")
+                raise ValueError("extra receivers must share decimation and ssb_pattern")
         d_fe = scn.receiver.decimation
         d_c = d_fe if scn.search_decimation is None else int(scn.search_decimation)
         if d_c > d_fe or d_fe % d_c:
@@ -454,7 +454,7 @@ def scenario_from_config(c: dict) -> Scenario:
     c : dict
         The ``nr`` section of the config (or a case's merged config): sections ``trajectory``,
         ``deployment``, ``radio``, ``antenna``, ``channel``, ``receiver``, ``traffic`` and the
-        optional ``cell_search`` and ``receiver_variants``, in the config's SI units.
+        optional ``cell_search`` and ``extra_receivers``, in the config's SI units.
 
     Returns
     -------
@@ -493,7 +493,7 @@ def scenario_from_config(c: dict) -> Scenario:
         detector=rx["detector"],
         pfa=float(rx["pfa"]),
         cell_search=CellSearchConfig(**c.get("cell_search", {})),
-        variants=tuple(
+        extra_receivers=tuple(
             (
                 name,
                 ReceiverConfig(
@@ -507,7 +507,7 @@ def scenario_from_config(c: dict) -> Scenario:
                 ),
                 v["detector"],
             )
-            for name, v in c.get("receiver_variants", {}).items()
+            for name, v in c.get("extra_receivers", {}).items()
         ),
         full_channel_range_m=(
             np.inf if c["channel"]["full_channel_range_m"] is None else float(c["channel"]["full_channel_range_m"])

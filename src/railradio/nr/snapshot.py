@@ -10,7 +10,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from railradio.nr.antenna import wrap_rad
-from railradio.nr.measurement import VARIANTS, h_terms, jac_terms
+from railradio.nr.measurement import MEASUREMENT_SETS, h_terms, jac_terms
 
 if TYPE_CHECKING:  # annotations only
     from railradio.nr.ekf import TrackerConfig
@@ -27,11 +27,11 @@ def snapshot_ls(
     rrh_xy : numpy.ndarray
         [m, 2] positions (x, y) of the measured RRHs [m].
     aod, toa : numpy.ndarray
-        [m] their measured AODs [rad] and TOAs [s] (only those of ``cfg.variant`` are used).
+        [m] their measured AODs [rad] and TOAs [s] (only those of ``cfg.measurements`` are used).
     dh_m : float
         Height difference between the RRHs and the train antenna [m].
     cfg : TrackerConfig
-        Variant and measurement noise W (the weights).
+        Measurement set and measurement noise W (the weights).
     x_init : numpy.ndarray
         [2] initial guess (x, y) [m].
     n_iter : int
@@ -85,11 +85,11 @@ def snapshot_ls_batch(
     rrh_xy : numpy.ndarray
         [E, m, 2] positions (x, y) of each epoch's measured RRHs [m]; NaN rows: padding.
     aod, toa : numpy.ndarray
-        [E, m] measured AODs [rad] and TOAs [s] (only those of ``cfg.variant`` are used).
+        [E, m] measured AODs [rad] and TOAs [s] (only those of ``cfg.measurements`` are used).
     dh_m : float
         Height difference between the RRHs and the train antenna [m].
     cfg : TrackerConfig
-        Variant and measurement noise W (:meth:`TrackerConfig.variances`).
+        Measurement set and measurement noise W (:meth:`TrackerConfig.variances`).
     x_init : numpy.ndarray
         [E, 2] initial guesses (x, y) [m].
     n_iter : int
@@ -113,7 +113,7 @@ def snapshot_ls_batch(
     if not valid.any(axis=1).all():
         raise ValueError("rrh_xy: every epoch needs at least one measured RRH")
     xy = np.where(valid[..., None], xy, 0.0)
-    use_aod, use_toa = VARIANTS[cfg.variant]
+    use_aod, use_toa = MEASUREMENT_SETS[cfg.measurements]
     n_e = valid.shape[0]
     p = np.asarray(x_init, float).copy()
     # weights [E, m, per] at the initial guess (0 for padding)
@@ -128,8 +128,8 @@ def snapshot_ls_batch(
         ok = valid[idx]
         dx = np.where(ok, p[idx, :1] - xy[idx, :, 0], 1.0)
         dy = np.where(ok, p[idx, 1:] - xy[idx, :, 1], 1.0)
-        jac = jac_terms(dx, dy, dh_m, cfg.variant)
-        h = h_terms(dx, dy, dh_m, cfg.variant)
+        jac = jac_terms(dx, dy, dh_m, cfg.measurements)
+        h = h_terms(dx, dy, dh_m, cfg.measurements)
         r = z[idx] - h
         if use_aod:
             r[..., 0] = wrap_rad(r[..., 0])

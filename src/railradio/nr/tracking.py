@@ -218,7 +218,7 @@ def track(
     dt_s : float
         Epoch interval, s.
     cfg : TrackerConfig
-        The tracker settings (variant, q, W, gate).
+        The tracker settings (measurement set, q, W, gate).
     strength : str
         Variable ranking the candidates (the receiver's selection): ``"peak"`` (combined
         correlation peak), ``"ss_rsrp"`` or ``"best_score"``.

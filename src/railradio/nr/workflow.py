@@ -3,7 +3,7 @@ fingerprint: a change here re-runs nothing by itself)."""
 
 from __future__ import annotations
 
-SIM_KEYS = ("trajectory", "deployment", "radio", "antenna", "channel", "receiver", "receiver_variants", "traffic")
+SIM_KEYS = ("trajectory", "deployment", "radio", "antenna", "channel", "receiver", "extra_receivers", "traffic")
 """The sections of the ``nr`` config that define the simulated bursts."""
 
 
@@ -34,11 +34,11 @@ def receiver_selection(c: dict) -> dict[str, str]:
     Returns
     -------
     dict of str to str
-        ``"source"`` -> ``c["receiver"]["selection"]``, then each ``receiver_variants`` name -> its
+        ``"source"`` -> ``c["receiver"]["selection"]``, then each ``extra_receivers`` name -> its
         ``selection`` (config order).
     """
     return {"source": c["receiver"]["selection"]} | {
-        name: v["selection"] for name, v in c.get("receiver_variants", {}).items()
+        name: v["selection"] for name, v in c.get("extra_receivers", {}).items()
     }
 
 

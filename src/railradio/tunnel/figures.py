@@ -140,9 +140,9 @@ def position_error_cdf(runs: dict[tuple[str, str], xr.Dataset], pdf, png) -> Non
     Parameters
     ----------
     runs : dict
-        (train, variant) -> run of :func:`railradio.tunnel.simulate.run_train`; needs
-        ``physical_separable`` for every train of :data:`TRAINS`, the other variants of
-        :data:`railradio.tunnel.study.VARIANTS` optional.
+        (train, setup) -> run of :func:`railradio.tunnel.simulate.run_train`; needs
+        ``physical_separable`` for every train of :data:`TRAINS`, the other setups of
+        :data:`railradio.tunnel.study.SETUPS` optional.
     pdf : str or os.PathLike
         Output PDF path.
     png : str or os.PathLike

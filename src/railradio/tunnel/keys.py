@@ -274,9 +274,9 @@ def key_numbers(
     Parameters
     ----------
     runs : dict
-        (train, variant) -> run of :func:`railradio.tunnel.simulate.run_train`; needs
+        (train, setup) -> run of :func:`railradio.tunnel.simulate.run_train`; needs
         ``physical_separable`` for every train of :data:`TRAINS` (``hst`` also gives the CEP
-        and dilutions); the other variants of :data:`railradio.tunnel.study.VARIANTS` are
+        and dilutions); the other setups of :data:`railradio.tunnel.study.SETUPS` are
         optional (their keys null when missing).
     maps : dict
         Table name -> map of :func:`railradio.tunnel.study.make_map`; needs ``image``,

@@ -60,7 +60,7 @@ from railradio.tunnel.wideband import (
 TRAIN_IDS = {"metro": 1, "hst": 2, "freight": 3}
 """Train type -> its number in the random-stream keys (``spawn_key('tunnel', ...)``; another name: 9)."""
 MEASUREMENTS = ("separable", "wideband")
-VARIANT_IDS = {
+PROPAGATION_MEASUREMENT_IDS = {
     ("physical", "separable"): 1,
     ("physical", "wideband"): 2,
     ("source", "separable"): 3,
@@ -206,7 +206,13 @@ def environment(seed: int, which: str, realization: int, tunnel: Tunnel, mm: Mea
 def _noise_rng(seed: int, train: Train, propagation: str, measurement: str, realization: int):
     return make_rng(
         seed,
-        spawn_key("tunnel", 200, TRAIN_IDS.get(train.name, 9), VARIANT_IDS[(propagation, measurement)], realization),
+        spawn_key(
+            "tunnel",
+            200,
+            TRAIN_IDS.get(train.name, 9),
+            PROPAGATION_MEASUREMENT_IDS[(propagation, measurement)],
+            realization,
+        ),
     )
 
 
@@ -366,17 +372,17 @@ def run_train(
     ValueError
         When ``realizations`` < 1.
     KeyError
-        When (``propagation``, ``measurement``) is not a key of :data:`VARIANT_IDS`.
+        When (``propagation``, ``measurement``) is not a key of :data:`PROPAGATION_MEASUREMENT_IDS`.
     """
     if realizations < 1:
         raise ValueError(f"realizations must be >= 1, got {realizations!r}")
-    vid = VARIANT_IDS[(propagation, measurement)]
+    pm_id = PROPAGATION_MEASUREMENT_IDS[(propagation, measurement)]
     tid = TRAIN_IDS.get(train.name, 9)
     tones = tone_response(table, mm) if measurement == "wideband" else None
     cal = _calibrate(table, tunnel, cable, train, mm, propagation, measurement, tracking, seed, tones)
     ev = _evaluate(table, tunnel, cable, train, mm, propagation, measurement, tracking, seed, tones, cal.bias_s)
     tracks = track_fixes(
-        ev.res, cal.r0_m2, tracking, train.receiver_offsets_m, make_rng(seed, spawn_key("tunnel", 400, tid, vid))
+        ev.res, cal.r0_m2, tracking, train.receiver_offsets_m, make_rng(seed, spawn_key("tunnel", 400, tid, pm_id))
     )
     ds = _run_dataset(ev, tracks, cal, tunnel, cable, train, propagation, measurement)
     _add_errors(ds, ev.x_head, train.length_m)
@@ -403,12 +409,12 @@ class _Calibration(NamedTuple):
 def _calibrate(table, tunnel, cable, train, mm, propagation, measurement, tracking, seed, tones) -> _Calibration:
     """The calibration run of :func:`run_train`: a survey with known positions over the first
     ``calibration_m`` of travel (its wideband fixes take the candidate nearest the truth)."""
-    vid = VARIANT_IDS[(propagation, measurement)]
+    pm_id = PROPAGATION_MEASUREMENT_IDS[(propagation, measurement)]
     tid = TRAIN_IDS.get(train.name, 9)
     shadow_cal, delay_cal = environment(seed, "calibration", 0, tunnel, mm)
     lo = train.length_m
     _, xh_cal = epochs(tunnel, train, tracking["rate_hz"], (lo, min(tunnel.length_m, lo + tracking["calibration_m"])))
-    rng_cal = make_rng(seed, spawn_key("tunnel", 300, tid, vid))
+    rng_cal = make_rng(seed, spawn_key("tunnel", 300, tid, pm_id))
     xrx_cal, cal = snapshot_fixes(
         table,
         tunnel,

@@ -61,7 +61,7 @@ def channel_config(cfg: dict[str, Any], name: str, keys: list[str]) -> dict[str,
 
 
 def side_wall_config(cfg: dict[str, Any]) -> dict[str, Any]:
-    """The tunnel config with the slot line moved to the side wall (the sensitivity variant).
+    """The tunnel config with the slot line moved to the side wall (the sensitivity case).
 
     Parameters
     ----------
@@ -79,15 +79,15 @@ def side_wall_config(cfg: dict[str, Any]) -> dict[str, Any]:
     return cfg | {"geometry": cfg["geometry"] | {"slot_z_m": z}}
 
 
-VARIANTS = {
+SETUPS = {
     "physical_separable": ("physical", "separable"),
     "physical_separable_ar1": ("physical", "separable"),
     "physical_separable_slot_bias": ("physical", "separable"),
     "physical_wideband": ("physical", "wideband"),
     "source_separable": ("source", "separable"),
 }
-"""Run variant -> (propagation of the channel table, measurement model of the receiver)."""
-VARIANT_DELAY_ERROR = {"physical_separable_ar1": "ar1", "physical_separable_slot_bias": "slot_bias"}
+"""Run setup -> (propagation of the channel table, measurement model of the receiver)."""
+SETUP_DELAY_ERROR = {"physical_separable_ar1": "ar1", "physical_separable_slot_bias": "slot_bias"}
 """Runs of the separable receiver with a correlated delay error instead of the configured
 one (white, the source's reading [ours]); the same draws otherwise."""
 TABLE_OF_PROPAGATION = {"physical": None, "source": "source"}  # physical: the configured engine

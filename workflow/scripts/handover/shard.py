@@ -3,29 +3,29 @@
 from railradio.handover.cost import best_weights
 from railradio.handover.engine import shard_blocks, simulate_blocks
 from railradio.handover.params import scenario_from_config
-from railradio.handover.sensitivity import affected_policies, apply_variant
+from railradio.handover.sensitivity import affected_policies, apply_case
 from railradio.io import read_dataset, write_dataset
 from railradio.workflow import setup_script
 
 smk = snakemake  # noqa: F821 - injected by Snakemake
 log = setup_script(smk.log[0])
 p = smk.params
-variant = dict(p.variant)
-scn = apply_variant(scenario_from_config(p.sim), variant)
+case = dict(p.case)
+scn = apply_case(scenario_from_config(p.sim), case)
 jt = scn.joint
 if jt.m is None or jt.alpha is None:
     m, alpha = best_weights(read_dataset(smk.input.cost), jt.wslr)
     scn = scn.with_weights(m if jt.m is None else jt.m, alpha if jt.alpha is None else jt.alpha)
 blocks = shard_blocks(p.n_blocks, p.n_batches, int(smk.wildcards.batch))
-policies = affected_policies(variant, tuple(p.policies))
+policies = affected_policies(case, tuple(p.policies))
 log.info(
-    "speed %s km/h, blocks %s, policies %s, joint (m, alpha) = (%s, %s), variant %s",
+    "speed %s km/h, blocks %s, policies %s, joint (m, alpha) = (%s, %s), case %s",
     p.speed_kmh,
     blocks,
     policies,
     scn.joint.m,
     scn.joint.alpha,
-    variant or "reference",
+    case or "reference",
 )
 ds = simulate_blocks(scn, p.speed_kmh, p.seed, blocks, p.runs_per_block, policies)
 write_dataset(
@@ -36,7 +36,7 @@ write_dataset(
         "speed_kmh": p.speed_kmh,
         "blocks": [blocks.start, blocks.stop],
         "runs_per_block": p.runs_per_block,
-        "variant": variant,
+        "case": case,
     },
     None,
     title=f"handover: per-handover outcomes at {p.speed_kmh} km/h, blocks {blocks.start}-{blocks.stop - 1}",

@@ -1,4 +1,4 @@
-"""Adapter: shards -> rates and means per policy and speed (or per sensitivity variant)."""
+"""Adapter: shards -> rates and means per policy and speed (or per sensitivity case)."""
 
 import numpy as np
 import xarray as xr
@@ -23,27 +23,27 @@ if p.dim == "speed_kmh":
     out = metrics_dataset(
         metrics, "speed_kmh", {"units": "km/h", "long_name": "train speed"}, [float(c) for c in coords]
     )
-else:  # sensitivity: policies not affected by a variant are NaN there
+else:  # sensitivity: policies not affected by a case are NaN there
     allp = list(p.policies)
     for key in coords:
         for pol in allp:
             if pol not in metrics[key]:
                 metrics[key][pol] = {n: np.nan for n in next(iter(metrics[key].values()))}
         metrics[key] = {pol: metrics[key][pol] for pol in allp}
-    out = metrics_dataset(metrics, "variant", {"units": "1", "long_name": "sensitivity variant"}, coords)
-    info = dict(p.variants)
+    out = metrics_dataset(metrics, "case", {"units": "1", "long_name": "sensitivity case"}, coords)
+    info = dict(p.cases)
     out["switch"] = (
-        "variant",
+        "case",
         [info[c].get("switch", "none") for c in coords],
         {"units": "1", "long_name": "config switch changed"},
     )
     out["value"] = (
-        "variant",
+        "case",
         [str(info[c].get("value", "reference")) for c in coords],
         {"units": "1", "long_name": "its value"},
     )
     out["affected"] = (
-        ("variant", "policy"),
+        ("case", "policy"),
         np.array([[np.isfinite(metrics[c][pol]["success"]) for pol in allp] for c in coords]),
         {"units": "1", "long_name": "the switch can change this policy"},
     )

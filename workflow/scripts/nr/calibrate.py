@@ -9,5 +9,5 @@ smk = snakemake  # noqa: F821
 log = setup_script(smk.log[0])
 p = smk.params
 ds = point_model(read_shards(smk.input), p.tracker)
-out = calibrate_receivers(ds, scenario_from_config(dict(p.sim)), p.tracker, p.selection, p.variants, log)
+out = calibrate_receivers(ds, scenario_from_config(dict(p.sim)), p.tracker, p.selection, p.measurement_sets, log)
 write_json(smk.output[0], out)

@@ -11,6 +11,6 @@ log = setup_script(smk.log[0])
 p = smk.params
 ds = case_estimates(read_shards(smk.input), p.n_epochs, p.seed, 1000, p.sync)  # 1000: the calibration run's ID
 out = calibrate_receivers(
-    point_model(ds, p.tracker), scenario_from_config(dict(p.sim)), p.tracker, p.selection, p.variants, log
+    point_model(ds, p.tracker), scenario_from_config(dict(p.sim)), p.tracker, p.selection, p.measurement_sets, log
 )
 write_json(smk.output[0], out)

@@ -14,7 +14,7 @@ p = smk.params
 ds = case_estimates(read_shards(smk.input.shards), p.n_epochs, p.seed, 0, p.sync)  # 0: r0
 cal = json.loads(open(smk.input.calibration, encoding="utf-8").read())
 res = track_receivers(
-    point_model(ds, p.tracker), scenario_from_config(dict(p.sim)), cal, p.tracker, p.selection, p.variants, log
+    point_model(ds, p.tracker), scenario_from_config(dict(p.sim)), cal, p.tracker, p.selection, p.measurement_sets, log
 )
 write_dataset(
     res,

@@ -13,7 +13,7 @@ p = smk.params
 ds = read_shards(smk.input.shards)
 cal = json.loads(open(smk.input.calibration, encoding="utf-8").read())
 res = track_receivers(
-    point_model(ds, p.tracker), scenario_from_config(dict(p.sim)), cal, p.tracker, p.selection, p.variants, log
+    point_model(ds, p.tracker), scenario_from_config(dict(p.sim)), cal, p.tracker, p.selection, p.measurement_sets, log
 )
 write_dataset(
     res,

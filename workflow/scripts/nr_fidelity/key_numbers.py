@@ -22,7 +22,7 @@ comps = comparisons(scn)
 stacked, truth = from_dataset(ds)
 receivers = [str(r) for r in ds["receiver"].values]
 summary = summarize(stacked, truth, receivers, comps, seed=smk.params.seed)
-seconds = {str(v): float(np.nanmean(ds["seconds"].sel(variant=v).values)) for v in ds["variant"].values}
+seconds = {str(v): float(np.nanmean(ds["seconds"].sel(path=v).values)) for v in ds["path"].values}
 noise = noise_false_alarms(scn, int(smk.params.noise_bursts), make_rng(smk.params.seed, spawn_key("nr", NOISE_ONLY_ID)))
 numbers = key_numbers(summary, comps, ds.sizes["epoch"], seconds) | detector_key_numbers(ds, noise)
 write_json(smk.output.json, numbers)

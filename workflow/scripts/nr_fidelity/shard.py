@@ -25,7 +25,7 @@ epochs = sample_epochs(
 mine = epochs[int(smk.wildcards.fshard) :: int(fid["n_shards"])]
 key = spawn_key("nr", int(fid["realization"]))
 run = FidelityRun(scn, smk.params.seed, key, dict(smk.params.selection))
-receivers = ["source"] + [name for name, _, _ in scn.variants]
+receivers = ["source"] + [name for name, _, _ in scn.extra_receivers]
 results = []
 for e in mine:
     row = main.sel(epoch=int(e))

@@ -6,7 +6,7 @@ import xarray as xr
 
 from railradio.io import write_dataset
 from railradio.nr.calibration import calibrate, measurement_errors, selected
-from railradio.nr.reproduction_map import VARIANTS
+from railradio.nr.reproduction_map import MEASUREMENT_SETS
 from railradio.nr.runs import read_shards
 from railradio.nr.simulate import scenario_from_config
 from railradio.nr.tracking import track
@@ -26,7 +26,7 @@ tr = dict(smk.params.tracker)
 receivers = {str(k): bool(v) for k, v in dict(smk.params.receivers).items()}
 sel = dict(smk.params.selection)
 n = seg.sizes["epoch"]
-err = np.full((len(receivers), len(VARIANTS), n), np.nan)
+err = np.full((len(receivers), len(MEASUREMENT_SETS), n), np.nan)
 aod = np.full((len(receivers), n, 3), np.nan)
 rng = np.full((len(receivers), n, 3), np.nan)
 aod_true = np.full((len(receivers), n, 3), np.nan)
@@ -38,11 +38,11 @@ for i, (rx, gate) in enumerate(receivers.items()):
     order, ok = selected(dsr, sel[rx])  # the same RRHs: their truth and detections
     aod_true[i] = np.where(ok, np.take_along_axis(dsr["aod_true"].values, order, axis=1), np.nan)
     n_det[i] = np.where(ok, np.take_along_axis(dsr["n_detected"].values, order, axis=1), 0)
-    for j, variant in enumerate(VARIANTS):
+    for j, measurements in enumerate(MEASUREMENT_SETS):
         search = {}
         cfg = calibrate(
             calr,
-            variant,
+            measurements,
             dep.x_m,
             dep.offset_m,
             dep.h_bs_m - dep.h_ut_m,
@@ -54,13 +54,13 @@ for i, (rx, gate) in enumerate(receivers.items()):
             search=search,
             start_speed_sigma_m_s=float(smk.params.start_speed_sigma_m_s),
         )
-        cal[f"{rx}/{variant}"] = cfg.record() | {"gate": gate, "q_search": search}
+        cal[f"{rx}/{measurements}"] = cfg.record() | {"gate": gate, "q_search": search}
         out = track(dsr, dep.x_m, dep.offset_m, dep.h_bs_m - dep.h_ut_m, dt, cfg, strength=sel[rx], snapshot=False)
         err[i, j] = np.hypot(out["state"][:, 0] - seg["x_true"].values, out["state"][:, 1])  # scoring only
-        log.info("%s %s (gate %s): q %.3g, mean error %.3f m", rx, variant, gate, cfg.q, np.nanmean(err[i, j]))
+        log.info("%s %s (gate %s): q %.3g, mean error %.3f m", rx, measurements, gate, cfg.q, np.nanmean(err[i, j]))
 res = xr.Dataset(
     {
-        "pos_err": (("receiver", "variant", "epoch"), err, {"units": "m", "long_name": "2-D EKF position error"}),
+        "pos_err": (("receiver", "measurements", "epoch"), err, {"units": "m", "long_name": "2-D EKF position error"}),
         "aod_err": (
             ("receiver", "epoch", "slot"),
             aod,
@@ -91,7 +91,11 @@ res = xr.Dataset(
     },
     coords={
         "receiver": ("receiver", list(receivers), {"units": "1", "long_name": "receiver"}),
-        "variant": ("variant", list(VARIANTS), {"units": "1", "long_name": "measurements used by the tracker"}),
+        "measurements": (
+            "measurements",
+            list(MEASUREMENT_SETS),
+            {"units": "1", "long_name": "measurements used by the tracker"},
+        ),
         "epoch": ("epoch", seg["epoch"].values, {"units": "1", "long_name": "epoch index of r0"}),
         "slot": ("slot", [0, 1, 2], {"units": "1", "long_name": "selected RRH rank by strength"}),
     },

@@ -28,7 +28,7 @@ for cell, path in zip(smk.params.cells, smk.input, strict=True):
             rx,
             d["aod_err"].values,
             d["range_err"].values,
-            {str(v): d["pos_err"].sel(variant=v).values for v in d["variant"].values},
+            {str(v): d["pos_err"].sel(measurements=v).values for v in d["measurements"].values},
             spacing,
             make_rng(int(smk.params.seed), spawn_key("nr", 2000)),
             int(mp["block_epochs"]),

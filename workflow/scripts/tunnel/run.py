@@ -1,11 +1,11 @@
-"""Adapter: one train type, one channel/measurement variant -> results/tunnel/runs/{train}_{variant}.nc."""
+"""Adapter: one train type, one channel/measurement setup -> results/tunnel/runs/{train}_{setup}.nc."""
 
 from railradio.io import read_dataset, write_dataset
 from railradio.rng import spawn_key
-from railradio.tunnel.simulate import TRAIN_IDS, VARIANT_IDS, run_train
+from railradio.tunnel.simulate import PROPAGATION_MEASUREMENT_IDS, TRAIN_IDS, run_train
 from railradio.tunnel.study import (
-    VARIANT_DELAY_ERROR,
-    VARIANTS,
+    SETUP_DELAY_ERROR,
+    SETUPS,
     cable_from_config,
     measurement_from_config,
     train_from_config,
@@ -16,13 +16,11 @@ from railradio.workflow import setup_script
 smk = snakemake  # noqa: F821 - injected by Snakemake
 log = setup_script(smk.log[0])
 cfg = smk.params.cfg
-prop, meas = VARIANTS[smk.wildcards.variant]
+prop, meas = SETUPS[smk.wildcards.setup]
 table = read_dataset(smk.input[0])
 tunnel = tunnel_from_config(cfg, table.attrs["shape"])
 train = train_from_config(cfg, smk.wildcards.train)
-over = (
-    {"delay_error": VARIANT_DELAY_ERROR[smk.wildcards.variant]} if smk.wildcards.variant in VARIANT_DELAY_ERROR else {}
-)
+over = {"delay_error": SETUP_DELAY_ERROR[smk.wildcards.setup]} if smk.wildcards.setup in SETUP_DELAY_ERROR else {}
 ds = run_train(
     table,
     tunnel,
@@ -35,11 +33,11 @@ ds = run_train(
     smk.params.seed,
     realizations=cfg["realizations"],
 )
-log.info("%s %s: KF p95 %.3f m", smk.wildcards.train, smk.wildcards.variant, float(ds["kf_err"].quantile(0.95)))
+log.info("%s %s: KF p95 %.3f m", smk.wildcards.train, smk.wildcards.setup, float(ds["kf_err"].quantile(0.95)))
 write_dataset(
     ds,
     smk.output[0],
     cfg,
-    spawn_key("tunnel", 200, TRAIN_IDS[train.name], VARIANT_IDS[(prop, meas)]),
+    spawn_key("tunnel", 200, TRAIN_IDS[train.name], PROPAGATION_MEASUREMENT_IDS[(prop, meas)]),
     title=f"tunnel: {train.name} crossing, {prop} channel, {meas} measurements",
 )
