@@ -11,12 +11,16 @@ rule, each naming its key, the value and what the other keys allow. Two kinds of
   around its base stations); their ``ValueError`` is reported under the section's key.
 
 The nr sensitivity cases are validated here too, each as the nr section with the case
-merged in (:func:`railradio.nr.cases.merged_cases`), under ``nr.sensitivity.cases.<case>``.
+merged in (:func:`railradio.nr.cases.merged_cases`), under ``nr.sensitivity.cases.<case>``,
+and so are the cells of the nr reproduction map (:func:`railradio.nr.reproduction_map.cells`).
+:func:`check_config` returns them (:class:`Checked`): the workflow plans its nr jobs from
+these (:func:`railradio.nr.plan.nr_plan`), so each is merged and validated once.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Iterator, Mapping
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -25,6 +29,25 @@ from railradio.config import ConfigError, Validator
 
 Problem = tuple[str, Any, str]
 """(dotted key, its value, what the rule allows)."""
+
+
+@dataclass(frozen=True)
+class Checked:
+    """The nr configs the checks merged and validated, handed to the workflow so that it
+    does not merge and validate them again (:func:`railradio.nr.plan.nr_plan` copies them).
+
+    Attributes
+    ----------
+    nr_cases : dict of str to dict
+        Sensitivity case name -> the nr section with the case merged in, schema-valid with
+        the defaults filled (:func:`railradio.nr.cases.merged_cases`, config order).
+    nr_map_cells : dict of str to dict
+        Reproduction-map cell name -> its whole nr config, schema-valid
+        (:func:`railradio.nr.reproduction_map.cells`, map order).
+    """
+
+    nr_cases: dict[str, dict[str, Any]]
+    nr_map_cells: dict[str, dict[str, Any]]
 
 
 def _get(cfg: Mapping[str, Any], key: str) -> Any:
@@ -188,7 +211,7 @@ def _prefixed(root: str, problems: Iterator[Problem]) -> Iterator[Problem]:
         yield f"{root}.{key}", value, rule
 
 
-def _nr(cfg: Mapping[str, Any], schema: Mapping[str, Any]) -> Iterator[Problem]:
+def _nr(cfg: Mapping[str, Any], schema: Mapping[str, Any], built: dict[str, Any]) -> Iterator[Problem]:
     from railradio.nr import cases as nr_cases
 
     nr = cfg["nr"]
@@ -213,9 +236,10 @@ def _nr(cfg: Mapping[str, Any], schema: Mapping[str, Any]) -> Iterator[Problem]:
     except ConfigError as exc:
         yield "nr.sensitivity.cases", "…", str(exc).replace("invalid configuration:\n  ", "")
         return
+    built["nr_cases"] = cases
     for name, case in cases.items():
         yield from nr_problems(case, root=f"nr.sensitivity.cases.{name}", main=False)
-    yield from _nr_map(nr, schema, n_main)
+    yield from _nr_map(nr, schema, n_main, built)
     for name, sw in sens["sweeps"].items():
         key = f"nr.sensitivity.sweeps.{name}"
         bad = [c for c in sw["cases"] if c != "base" and c not in cases]
@@ -227,7 +251,9 @@ def _nr(cfg: Mapping[str, Any], schema: Mapping[str, Any]) -> Iterator[Problem]:
             yield f"{key}.reference", sw["reference"], "one of the sweep's cases"
 
 
-def _nr_map(nr: Mapping[str, Any], schema: Mapping[str, Any], n_main: int | None) -> Iterator[Problem]:
+def _nr_map(
+    nr: Mapping[str, Any], schema: Mapping[str, Any], n_main: int | None, built: dict[str, Any]
+) -> Iterator[Problem]:
     """The reproduction map: a segment inside the main run, blocks that fit it, the main
     run's M_T among the mapped ones, every cell a valid nr config."""
     from railradio.nr import reproduction_map as nr_map
@@ -265,6 +291,7 @@ def _nr_map(nr: Mapping[str, Any], schema: Mapping[str, Any], n_main: int | None
     except ConfigError as exc:
         yield "nr.map.data", "…", str(exc).replace("invalid configuration:\n  ", "")
         return
+    built["nr_map_cells"] = cells
     for name, cell in cells.items():
         yield from nr_problems(cell, root=f"nr.map ({name})", main=False)
 
@@ -406,8 +433,38 @@ def _tunnel(cfg: Mapping[str, Any]) -> Iterator[Problem]:
         yield from _probe(f"tunnel.trains.{name}", lambda name=name: study.train_from_config(tu, name))
 
 
-def problems(cfg: Mapping[str, Any], schema: Mapping[str, Any]) -> list[Problem]:
+def problems(cfg: Mapping[str, Any], schema: Mapping[str, Any], built: dict[str, Any] | None = None) -> list[Problem]:
     """Every cross-key rule ``cfg`` (schema-valid, defaults filled) breaks.
+
+    Parameters
+    ----------
+    cfg : mapping
+        The whole workflow config, schema-valid with the defaults filled.
+    schema : mapping
+        The JSON schema of the whole config (``workflow/schemas/config.schema.yaml``).
+    built : dict, optional
+        Receives the merged, validated nr configs the checks build, for reuse: the
+        sensitivity cases under ``"nr_cases"`` and the map cells under ``"nr_map_cells"``,
+        each once the checks get that far (both when no rule is broken).
+
+    Returns
+    -------
+    list of tuple of (str, object, str)
+        One :data:`Problem` per broken rule (dotted key, its value or ``"…"``, what the rule
+        allows), by study: fusion, nr, handover, chain, tunnel; empty if none is broken.
+    """
+    out: list[Problem] = []
+    out += _fusion(cfg)
+    out += _nr(cfg, schema, {} if built is None else built)
+    out += _handover(cfg, schema)
+    out += _chain(cfg)
+    out += _tunnel(cfg)
+    return out
+
+
+def check_config(cfg: Mapping[str, Any], schema: Mapping[str, Any]) -> Checked:
+    """Raise :class:`ConfigError` naming each key whose value breaks a rule between keys;
+    else return the nr configs the checks merged and validated.
 
     Parameters
     ----------
@@ -418,28 +475,9 @@ def problems(cfg: Mapping[str, Any], schema: Mapping[str, Any]) -> list[Problem]
 
     Returns
     -------
-    list of tuple of (str, object, str)
-        One :data:`Problem` per broken rule (dotted key, its value or ``"…"``, what the rule
-        allows), by study: fusion, nr, handover, chain, tunnel; empty if none is broken.
-    """
-    out: list[Problem] = []
-    out += _fusion(cfg)
-    out += _nr(cfg, schema)
-    out += _handover(cfg, schema)
-    out += _chain(cfg)
-    out += _tunnel(cfg)
-    return out
-
-
-def check_config(cfg: Mapping[str, Any], schema: Mapping[str, Any]) -> None:
-    """Raise :class:`ConfigError` naming each key whose value breaks a rule between keys.
-
-    Parameters
-    ----------
-    cfg : mapping
-        The whole workflow config, schema-valid with the defaults filled.
-    schema : mapping
-        The JSON schema of the whole config (``workflow/schemas/config.schema.yaml``).
+    Checked
+        The nr sensitivity cases and map cells, each merged with the nr section and
+        validated (once): the workflow's nr plan reuses them.
 
     Raises
     ------
@@ -447,7 +485,8 @@ def check_config(cfg: Mapping[str, Any], schema: Mapping[str, Any]) -> None:
         If any rule of :func:`problems` is broken; the message lists every broken rule with
         its key, value and what is allowed.
     """
-    found = problems(cfg, schema)
+    built: dict[str, Any] = {}
+    found = problems(cfg, schema, built)
     if found:
         lines = [
             f"config key '{k}': "
@@ -456,3 +495,4 @@ def check_config(cfg: Mapping[str, Any], schema: Mapping[str, Any]) -> None:
             for k, v, rule in found
         ]
         raise ConfigError("invalid configuration:\n  " + "\n  ".join(lines))
+    return Checked(nr_cases=built["nr_cases"], nr_map_cells=built["nr_map_cells"])

@@ -19,7 +19,7 @@ rule chain_shard:
     """Crossings of one shard of blocks at the chain speed: every position input, every policy."""
     input:
         cost="results/handover/cost.nc",
-        nr=expand("results/nr/imm/{real}.nc", real=NR_REALS),
+        nr=expand("results/nr/imm/{real}.nc", real=NR_PLAN.realizations),
     output:
         "results/chain/shards/b{batch}.nc",
     params:
@@ -63,8 +63,8 @@ rule chain_key_numbers:
     """Key numbers chain.*: nr-driven success and ping-pong, the sigma crossover, nr error statistics."""
     input:
         summary="results/chain/summary.nc",
-        nr=expand("results/nr/imm/{real}.nc", real=NR_REALS),
-        track=expand("results/nr/track/{real}.nc", real=NR_REALS),
+        nr=expand("results/nr/imm/{real}.nc", real=NR_PLAN.realizations),
+        track=expand("results/nr/track/{real}.nc", real=NR_PLAN.realizations),
     output:
         "results/chain/key_numbers.json",
     params:

@@ -21,10 +21,11 @@ from railradio.config import load_schema, validate_config
 from railradio.config_checks import check_config
 
 # The schema (types, ranges, a default for every key), then the rules between keys: a bad
-# value stops Snakemake here, naming the key, before any job.
+# value stops Snakemake here, naming the key, before any job. The check returns the nr
+# sensitivity cases and map cells it merged and validated; nr.smk plans from them.
 CONFIG_SCHEMA = load_schema(Path(workflow.basedir) / "workflow/schemas/config.schema.yaml")
 validate_config(config, CONFIG_SCHEMA)
-check_config(config, CONFIG_SCHEMA)
+CONFIG_CHECKED = check_config(config, CONFIG_SCHEMA)
 
 # Each study's rule file registers its figures and key-number fragment here.
 STUDY_FIGURES = {}

@@ -1,34 +1,21 @@
 # Study `nr`: 5G NR SS-burst positioning of a high-speed train (source 000, docs/model/nr.md).
 # Chain: trajectory -> per-shard channel + burst + per-cell estimates (NetCDF) ->
 # calibration run (noise levels, q) -> EKF tracking per realization -> figures + numbers.
-from railradio.nr.workflow import receiver_selection as nr_selection
-from railradio.nr.simulate import scenario_from_config
-from railradio.nr.workflow import sim_config as nr_sim
-from railradio.nr import cases as nr_cases
 from railradio.nr import records as nr_records
-from railradio.nr.measurement import MEASUREMENT_SETS
+from railradio.nr.plan import nr_plan, plain
 
-# (validated with every cross-key rule in common.smk: railradio.config_checks)
+# The config's nr section (validated with every cross-key rule in common.smk:
+# railradio.config_checks), and what the nr rule files derive from it, computed once and
+# read-only (railradio.nr.plan.NrPlan): the sensitivity cases and the map's cells are the
+# ones the config check merged and validated. A rule's params get plain dicts and lists
+# (plain): Snakemake compares their repr to decide re-runs.
 NR = config["nr"]
-NR_SCN = scenario_from_config(NR)
-NR_EPOCHS = (
-    NR_SCN.trajectory.n_epochs
-    if NR["max_epochs"] is None
-    else min(NR["max_epochs"], NR_SCN.trajectory.n_epochs)
+NR_PLAN = nr_plan(
+    NR,
+    CONFIG_SCHEMA["properties"]["nr"],
+    cases=CONFIG_CHECKED.nr_cases,
+    map_cells=CONFIG_CHECKED.nr_map_cells,
 )
-NR_REALS = [f"r{i}" for i in range(NR["realizations"])]
-NR_CAL_SHARDS = 2
-NR_SIM = nr_sim(NR)
-NR_MEASUREMENT_SETS = list(MEASUREMENT_SETS)  # the main run tracks every measurement set (source §4)
-NR_SELECTION = nr_selection(NR)
-
-# Sensitivity cases: the nr config with a case's override merged in
-NR_SENS = NR["sensitivity"]
-NR_CASES = nr_cases.merged_cases(NR, CONFIG_SCHEMA["properties"]["nr"])
-NR_CASE_EPOCHS = min(NR_SENS["epochs"], NR_SCN.trajectory.n_epochs)
-NR_SWEEPS = NR_SENS["sweeps"]
-NR_CASE_N = {c: nr_cases.case_epochs(NR_CASES[c], NR_SENS) for c in NR_CASES}
-NR_CASE_N_CAL = {c: nr_cases.case_cal_epochs(NR_CASES[c], NR) for c in NR_CASES}
 
 register_figures(
     "nr",
@@ -41,8 +28,8 @@ register_figures(
     ],
 )
 KEY_NUMBER_FRAGMENTS.append("results/nr/key_numbers.json")
-if NR_CASES:
-    register_figures("nr_sensitivity", ["nr_sensitivity"] + (["nr_sweeps"] if NR_SWEEPS else []))
+if NR_PLAN.cases:
+    register_figures("nr_sensitivity", ["nr_sensitivity"] + (["nr_sweeps"] if NR_PLAN.sweeps else []))
     # the cases' paper-scale key numbers are a published record (make records;
     # railradio.published), read while current, else the cases run here: CI's reproduction
     # skips their ~2 000 s of job time; at CI scale (another config) they always run
@@ -62,8 +49,8 @@ rule nr_trajectory:
     output:
         "results/nr/trajectory.nc",
     params:
-        sim=NR_SIM,
-        n_epochs=NR_EPOCHS,
+        sim=plain(NR_PLAN.sim),
+        n_epochs=NR_PLAN.n_epochs,
     log:
         "results/logs/nr/trajectory.log",
     benchmark:
@@ -80,9 +67,9 @@ rule nr_shard:
         "results/nr/estimates/{real}/s{shard}.nc",
     params:
         real="{real}",
-        sim=NR_SIM,
+        sim=plain(NR_PLAN.sim),
         seed=config["seed"],
-        n_epochs=NR_EPOCHS,
+        n_epochs=NR_PLAN.n_epochs,
         n_shards=NR["n_shards"],
     log:
         "results/logs/nr/shard_{real}_s{shard}.log",
@@ -110,10 +97,10 @@ rule nr_cal_shard:
         "results/nr/estimates/cal/s{shard}.nc",
     params:
         real="cal",
-        sim=NR_SIM,
+        sim=plain(NR_PLAN.sim),
         seed=config["seed"],
         n_epochs=NR["calibration"]["epochs"],
-        n_shards=NR_CAL_SHARDS,
+        n_shards=NR_PLAN.n_cal_shards,
         calibration=NR["calibration"],
     log:
         "results/logs/nr/shard_cal_s{shard}.log",
@@ -132,14 +119,14 @@ rule nr_cal_shard:
 rule nr_calibrate:
     """Measurement noise and process noise from the calibration run (its own seed key)."""
     input:
-        expand("results/nr/estimates/cal/s{shard}.nc", shard=range(NR_CAL_SHARDS)),
+        expand("results/nr/estimates/cal/s{shard}.nc", shard=range(NR_PLAN.n_cal_shards)),
     output:
         "results/nr/calibration.json",
     params:
-        sim=NR_SIM,
+        sim=plain(NR_PLAN.sim),
         tracker=NR["tracker"],
-        selection=NR_SELECTION,
-        measurement_sets=NR_MEASUREMENT_SETS,
+        selection=plain(NR_PLAN.selection),
+        measurement_sets=plain(NR_PLAN.measurement_sets),
     log:
         "results/logs/nr/calibrate.log",
     priority: 10
@@ -159,10 +146,10 @@ rule nr_track:
     output:
         "results/nr/track/{real}.nc",
     params:
-        sim=NR_SIM,
+        sim=plain(NR_PLAN.sim),
         tracker=NR["tracker"],
-        selection=NR_SELECTION,
-        measurement_sets=NR_MEASUREMENT_SETS,
+        selection=plain(NR_PLAN.selection),
+        measurement_sets=plain(NR_PLAN.measurement_sets),
     log:
         "results/logs/nr/track_{real}.log",
     benchmark:
@@ -180,9 +167,9 @@ rule nr_bounds:
     output:
         "results/nr/bounds/{real}.nc",
     params:
-        sim=NR_SIM,
+        sim=plain(NR_PLAN.sim),
         seed=config["seed"],
-        n_epochs=NR_EPOCHS,
+        n_epochs=NR_PLAN.n_epochs,
         # the calibration of the tracker the IMM study uses (nr.imm.receiver, AOD+TOA, gated)
         calibrated=f"{NR['imm']['receiver']}/aod_toa/gate",
     log:
@@ -200,9 +187,9 @@ rule nr_sample:
     output:
         "results/nr/samples.nc",
     params:
-        sim=NR_SIM,
+        sim=plain(NR_PLAN.sim),
         seed=config["seed"],
-        epochs=[min(2000, NR_EPOCHS - 1)],
+        epochs=[min(2000, NR_PLAN.n_epochs - 1)],
     log:
         "results/logs/nr/sample.log",
     benchmark:
@@ -218,8 +205,8 @@ rule nr_figures:
     input:
         trajectory="results/nr/trajectory.nc",
         samples="results/nr/samples.nc",
-        tracks=expand("results/nr/track/{real}.nc", real=NR_REALS),
-        bounds=expand("results/nr/bounds/{real}.nc", real=NR_REALS),
+        tracks=expand("results/nr/track/{real}.nc", real=NR_PLAN.realizations),
+        bounds=expand("results/nr/bounds/{real}.nc", real=NR_PLAN.realizations),
     output:
         [report(f, caption="../report/nr.rst", category="nr") for f in STUDY_FIGURES["nr"]],
     log:
@@ -236,8 +223,8 @@ rule nr_key_numbers:
     """Key numbers nr.* pooled over the realizations, with their spread, and the
     calibrated W and q of every tracker."""
     input:
-        tracks=expand("results/nr/track/{real}.nc", real=NR_REALS),
-        bounds=expand("results/nr/bounds/{real}.nc", real=NR_REALS),
+        tracks=expand("results/nr/track/{real}.nc", real=NR_PLAN.realizations),
+        bounds=expand("results/nr/bounds/{real}.nc", real=NR_PLAN.realizations),
         calibration="results/nr/calibration.json",
     output:
         "results/nr/key_numbers.json",
@@ -260,11 +247,11 @@ rule nr_case_shard:
         "results/nr/cases/{case}/estimates/{real}/s{shard}.nc",
     params:
         real="{real}",
-        sim=lambda w: nr_sim(NR_CASES[w.case]),
+        sim=lambda w: plain(NR_PLAN.case_sim[w.case]),
         seed=config["seed"],
-        n_epochs=lambda w: NR_CASE_N_CAL[w.case] if w.real == "cal" else NR_CASE_N[w.case],
-        n_shards=lambda w: nr_cases.case_n_shards(NR_CASES[w.case], NR, NR_SENS, w.real, NR_CAL_SHARDS),
-        calibration=lambda w: NR_CASES[w.case]["calibration"] if w.real == "cal" else None,
+        n_epochs=lambda w: NR_PLAN.case_n_cal_epochs[w.case] if w.real == "cal" else NR_PLAN.case_n_epochs[w.case],
+        n_shards=lambda w: NR_PLAN.case_n_shards[w.case][w.real],
+        calibration=lambda w: plain(NR_PLAN.cases[w.case]["calibration"]) if w.real == "cal" else None,
     log:
         "results/logs/nr/cases/{case}_shard_{real}_s{shard}.log",
     benchmark:
@@ -284,17 +271,17 @@ rule nr_case_calibrate:
     """Calibration of a sensitivity case (its own calibration run, the main run's key; the
     case's clock errors, nr.sync, on the calibration run's own RRH offsets)."""
     input:
-        lambda w: nr_cases.case_inputs(w.case, NR_CASES, NR, NR_SENS, "cal", NR_EPOCHS, NR_CAL_SHARDS),
+        lambda w: plain(NR_PLAN.case_inputs[w.case]["cal"]),
     output:
         "results/nr/cases/{case}/calibration.json",
     params:
-        sim=lambda w: nr_sim(NR_CASES[w.case]),
-        tracker=lambda w: NR_CASES[w.case]["tracker"],
-        selection=lambda w: nr_selection(NR_CASES[w.case]),
-        measurement_sets=NR_SENS["measurement_sets"],
-        sync=lambda w: NR_CASES[w.case]["sync"],
+        sim=lambda w: plain(NR_PLAN.case_sim[w.case]),
+        tracker=lambda w: plain(NR_PLAN.cases[w.case]["tracker"]),
+        selection=lambda w: plain(NR_PLAN.case_selection[w.case]),
+        measurement_sets=NR["sensitivity"]["measurement_sets"],
+        sync=lambda w: plain(NR_PLAN.cases[w.case]["sync"]),
         seed=config["seed"],
-        n_epochs=lambda w: NR_CASE_N_CAL[w.case],
+        n_epochs=lambda w: NR_PLAN.case_n_cal_epochs[w.case],
     log:
         "results/logs/nr/cases/{case}_calibrate.log",
     benchmark:
@@ -308,18 +295,18 @@ rule nr_case_calibrate:
 rule nr_case_track:
     """EKF tracks of a sensitivity case (its epochs; TOAs with the case's clock errors)."""
     input:
-        shards=lambda w: nr_cases.case_inputs(w.case, NR_CASES, NR, NR_SENS, "r0", NR_EPOCHS, NR_CAL_SHARDS),
+        shards=lambda w: plain(NR_PLAN.case_inputs[w.case]["r0"]),
         calibration="results/nr/cases/{case}/calibration.json",
     output:
         "results/nr/cases/{case}/track.nc",
     params:
-        sim=lambda w: nr_sim(NR_CASES[w.case]),
-        tracker=lambda w: NR_CASES[w.case]["tracker"],
-        selection=lambda w: nr_selection(NR_CASES[w.case]),
-        measurement_sets=NR_SENS["measurement_sets"],
-        sync=lambda w: NR_CASES[w.case]["sync"],
+        sim=lambda w: plain(NR_PLAN.case_sim[w.case]),
+        tracker=lambda w: plain(NR_PLAN.cases[w.case]["tracker"]),
+        selection=lambda w: plain(NR_PLAN.case_selection[w.case]),
+        measurement_sets=NR["sensitivity"]["measurement_sets"],
+        sync=lambda w: plain(NR_PLAN.cases[w.case]["sync"]),
         seed=config["seed"],
-        n_epochs=lambda w: NR_CASE_N[w.case],
+        n_epochs=lambda w: NR_PLAN.case_n_epochs[w.case],
     log:
         "results/logs/nr/cases/{case}_track.log",
     benchmark:
@@ -334,15 +321,14 @@ rule nr_case_key_numbers:
     """Key numbers sens.nr.<case>.* beside the main run's r0 on the same epochs (base)."""
     input:
         base="results/nr/track/r0.nc",
-        cases=expand("results/nr/cases/{case}/track.nc", case=list(NR_CASES)),
+        cases=expand("results/nr/cases/{case}/track.nc", case=list(NR_PLAN.cases)),
     output:
         "results/nr/cases/key_numbers.json",
     params:
-        cases=list(NR_CASES),
-        n_epochs={"base": NR_CASE_EPOCHS} | NR_CASE_N,
+        cases=list(NR_PLAN.cases),
+        n_epochs={"base": NR_PLAN.sens_base_epochs} | plain(NR_PLAN.case_n_epochs),
         # the TOA floor of the base and of every case with RRH clock offsets
-        sync_sigma_s={"base": 0.0} | {c: nr_cases.sync_sigma_s(NR_CASES[c]) for c in NR_CASES
-                                      if nr_cases.sync_sigma_s(NR_CASES[c]) > 0},
+        sync_sigma_s={"base": 0.0} | {c: s for c, s in NR_PLAN.case_sync_sigma_s.items() if s > 0},
     log:
         "results/logs/nr/cases/key_numbers.log",
     benchmark:
@@ -365,7 +351,7 @@ rule nr_case_figure:
         ),
         png="results/figures/nr_sensitivity.png",
     params:
-        cases=["base"] + [c for c in NR_CASES if not any(c in sw["cases"] for sw in NR_SWEEPS.values())],
+        cases=["base"] + plain(NR_PLAN.unswept_cases),
     log:
         "results/logs/nr/cases/figure.log",
     benchmark:
@@ -389,8 +375,8 @@ rule nr_case_sweeps_figure:
         ),
         png="results/figures/nr_sweeps.png",
     params:
-        sweeps=NR_SWEEPS,
-        sync_sigma_s={c: nr_cases.sync_sigma_s(NR_CASES[c]) for c in NR_CASES},
+        sweeps=plain(NR_PLAN.sweeps),
+        sync_sigma_s=plain(NR_PLAN.case_sync_sigma_s),
     log:
         "results/logs/nr/cases/sweeps_figure.log",
     benchmark:

@@ -5,8 +5,6 @@
 # publishes its key numbers to paper/fidelity_numbers.json, which the key-number merge reads.
 from railradio.nr import records as nr_records
 
-NR_FID = NR["fidelity"]
-NR_FID_REAL = f"r{NR_FID['realization']}"
 # the published paper-scale numbers (make fidelity) join every run's key numbers
 if Path(workflow.basedir, nr_records.FIDELITY.numbers_file).exists():
     KEY_NUMBER_FRAGMENTS.append(nr_records.FIDELITY.numbers_file)
@@ -16,15 +14,15 @@ rule nr_fidelity_shard:
     """Every path on one shard of the sampled epochs (the main run's candidate lists and
     serving cells there)."""
     input:
-        expand("results/nr/estimates/{real}/s{shard}.nc", real=NR_FID_REAL, shard=range(NR["n_shards"])),
+        expand("results/nr/estimates/{real}/s{shard}.nc", real=NR_PLAN.fidelity_real, shard=range(NR["n_shards"])),
     output:
         "results/nr/fidelity/s{fshard}.nc",
     params:
-        sim=NR_SIM,
+        sim=plain(NR_PLAN.sim),
         seed=config["seed"],
-        n_epochs=NR_EPOCHS,
-        fidelity=NR_FID,
-        selection=NR_SELECTION,
+        n_epochs=NR_PLAN.n_epochs,
+        fidelity=NR["fidelity"],
+        selection=plain(NR_PLAN.selection),
     wildcard_constraints:
         fshard=r"\d+",
     log:
@@ -43,15 +41,15 @@ rule nr_fidelity_shard:
 rule nr_fidelity:
     """Key numbers nr.fidelity.* and nr.detector.*, and the figure of the changed decisions."""
     input:
-        expand("results/nr/fidelity/s{fshard}.nc", fshard=range(NR_FID["n_shards"])),
+        expand("results/nr/fidelity/s{fshard}.nc", fshard=range(NR["fidelity"]["n_shards"])),
     output:
         json="results/nr/fidelity/key_numbers.json",
         pdf="results/nr/fidelity/nr_fidelity.pdf",
         png="results/nr/fidelity/nr_fidelity.png",
     params:
-        sim=NR_SIM,
+        sim=plain(NR_PLAN.sim),
         seed=config["seed"],
-        noise_bursts=NR_FID["noise_bursts"],
+        noise_bursts=NR["fidelity"]["noise_bursts"],
     log:
         "results/logs/nr/fidelity.log",
     benchmark:

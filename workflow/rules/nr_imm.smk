@@ -1,7 +1,6 @@
 # Tracking that does not lag (docs/model/nr.md §6): the nr study's EKF beside an
 # IMM (quiet + manoeuvre white-jerk models) and an RTS smoother, around the trajectory's
 # acceleration changes. Reads the nr shards and calibration; simulates nothing.
-NR_IMM = NR["imm"]
 
 register_figures("nr_imm", ["nr_imm_lag"])
 KEY_NUMBER_FRAGMENTS.append("results/nr/imm/key_numbers.json")
@@ -15,10 +14,10 @@ rule nr_imm:
     output:
         "results/nr/imm/{real}.nc",
     params:
-        sim=NR_SIM,
+        sim=plain(NR_PLAN.sim),
         tracker=NR["tracker"],
-        imm=NR_IMM,
-        selection=NR_SELECTION,
+        imm=NR["imm"],
+        selection=plain(NR_PLAN.selection),
     wildcard_constraints:
         real=r"r\d+",
     log:
@@ -34,11 +33,11 @@ rule nr_imm:
 rule nr_imm_key_numbers:
     """Key numbers nr.track.{ekf,imm,rts}.* pooled over the realizations, with their spread."""
     input:
-        expand("results/nr/imm/{real}.nc", real=NR_REALS),
+        expand("results/nr/imm/{real}.nc", real=NR_PLAN.realizations),
     output:
         "results/nr/imm/key_numbers.json",
     params:
-        window_s=NR_IMM["window_s"],
+        window_s=NR["imm"]["window_s"],
     log:
         "results/logs/nr/imm_key_numbers.log",
     benchmark:
@@ -52,7 +51,7 @@ rule nr_imm_key_numbers:
 rule nr_imm_figure:
     """Error, lag and IMM mode probability around each acceleration change."""
     input:
-        expand("results/nr/imm/{real}.nc", real=NR_REALS),
+        expand("results/nr/imm/{real}.nc", real=NR_PLAN.realizations),
     output:
         pdf=report(
             "results/figures/nr_imm_lag.pdf",
@@ -61,7 +60,7 @@ rule nr_imm_figure:
         ),
         png="results/figures/nr_imm_lag.png",
     params:
-        window_s=NR_IMM["figure_window_s"],
+        window_s=NR["imm"]["figure_window_s"],
     log:
         "results/logs/nr/imm_figure.log",
     benchmark:

@@ -2,14 +2,8 @@
 # for its receiver and ours against the assumptions it leaves open (M_T x data beams, and
 # template x selection on the default bursts), every cell on the same segment of r0 with
 # its own short calibration run. Bursts are re-used wherever only the tracker changes.
+# The cells, their runs and the shards they read: NR_PLAN.map_* (nr.smk; railradio.nr.plan).
 from railradio.nr import records as nr_records
-from railradio.nr import reproduction_map as nr_map
-
-NR_MAP = NR["map"]
-NR_MAP_CELLS = nr_map.cells(NR, CONFIG_SCHEMA["properties"]["nr"])
-NR_MAP_SEGMENT = [int(e) for e in NR_MAP["segment"]]
-NR_MAP_CALIBRATION = nr_map.calibration_section(NR)
-NR_MAP_RID = {"r0": 0, "cal": 1001}  # the segment is r0's; the calibration runs have their own key
 
 register_figures("nr_map", ["nr_reproduction_map"])
 # Its paper-scale key numbers are a published record (make records; railradio.published): the
@@ -26,12 +20,12 @@ rule nr_map_shard:
     output:
         "results/nr/map/{cell}/estimates/{real}/s{shard}.nc",
     params:
-        sim=lambda w: nr_map.burst_config(NR_MAP_CELLS[w.cell]),
+        sim=lambda w: plain(NR_PLAN.map_burst_config[w.cell]),
         seed=config["seed"],
-        epochs=lambda w: NR_MAP_SEGMENT if w.real == "r0" else [0, NR_MAP_CALIBRATION["epochs"]],
-        n_shards=lambda w: NR_MAP["n_shards"] if w.real == "r0" else 1,
-        calibration=lambda w: NR_MAP_CALIBRATION if w.real == "cal" else None,
-        rid=lambda w: NR_MAP_RID[w.real],
+        epochs=lambda w: plain(NR_PLAN.map_epochs[w.real]),
+        n_shards=lambda w: NR_PLAN.map_n_shards[w.real],
+        calibration=lambda w: plain(NR_PLAN.map_calibration) if w.real == "cal" else None,
+        rid=lambda w: NR_PLAN.map_rid[w.real],
     wildcard_constraints:
         cell=r"[a-z][a-z0-9_]*",
         real="r0|cal",
@@ -52,18 +46,17 @@ rule nr_map_cell:
     """A map cell's trackers: each receiver's AOD, TOA and AOD+TOA EKF (the source's
     ungated, ours gated) calibrated on the cell's calibration run, run on the segment."""
     input:
-        segment=lambda w: nr_map.shard_paths(w.cell, "r0", NR_MAP_CELLS, NR, NR_EPOCHS),
-        calibration=lambda w: nr_map.shard_paths(w.cell, "cal", NR_MAP_CELLS, NR, NR_EPOCHS),
+        segment=lambda w: plain(NR_PLAN.map_inputs[w.cell]["r0"]),
+        calibration=lambda w: plain(NR_PLAN.map_inputs[w.cell]["cal"]),
     output:
         "results/nr/map/{cell}/track.nc",
     params:
-        sim=lambda w: nr_map.burst_config(NR_MAP_CELLS[w.cell]),
+        sim=lambda w: plain(NR_PLAN.map_burst_config[w.cell]),
         tracker=NR["tracker"],
-        selection=lambda w: nr_selection(NR_MAP_CELLS[w.cell]),
-        receivers=lambda w: {rx: g for rx, g in nr_map.receivers(NR).items()
-                             if rx in nr_map.cell_receivers(w.cell, NR)},
-        segment=NR_MAP_SEGMENT,
-        start_speed_sigma_m_s=NR_MAP["start_speed_sigma_m_s"],
+        selection=lambda w: plain(NR_PLAN.map_selection[w.cell]),
+        receivers=lambda w: plain(NR_PLAN.map_receivers[w.cell]),
+        segment=plain(NR_PLAN.map_segment),
+        start_speed_sigma_m_s=NR["map"]["start_speed_sigma_m_s"],
     wildcard_constraints:
         cell=r"[a-z][a-z0-9_]*",
     log:
@@ -80,13 +73,13 @@ rule nr_map_key_numbers:
     """Key numbers nr.map.<cell>.<receiver>.<metric> with block-bootstrap intervals, the
     claims' statuses, and per claim the cells where it holds / fails / is not resolved."""
     input:
-        expand("results/nr/map/{cell}/track.nc", cell=list(NR_MAP_CELLS)),
+        expand("results/nr/map/{cell}/track.nc", cell=list(NR_PLAN.map_cells)),
     output:
         "results/nr/map/key_numbers.json",
     params:
-        cells=list(NR_MAP_CELLS),
+        cells=list(NR_PLAN.map_cells),
         seed=config["seed"],
-        map=NR_MAP,
+        map=NR["map"],
         nr=NR,
     log:
         "results/logs/nr/map/key_numbers.log",
@@ -110,7 +103,7 @@ rule nr_map_figure:
         ),
         png="results/figures/nr_reproduction_map.png",
     params:
-        cells=list(NR_MAP_CELLS),
+        cells=list(NR_PLAN.map_cells),
         nr=NR,
     log:
         "results/logs/nr/map/figure.log",

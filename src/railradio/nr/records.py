@@ -107,7 +107,8 @@ MAP = Record(
         "workflow/scripts/nr_map/key_numbers.py",
     ),
     map_inputs,
-    rule_files=("workflow/rules/nr_map.smk",),
+    # the rule file's params and inputs, and the plan they read (its cells, runs and shards)
+    rule_files=("workflow/rules/nr_map.smk", "src/railradio/nr/plan.py"),
 )
 """The reproduction map (``make records``; rule ``nr_map_key_numbers``)."""
 
@@ -122,7 +123,8 @@ CASES = Record(
         "workflow/scripts/nr/case_key_numbers.py",
     ),
     cases_inputs,
-    rule_files=("workflow/rules/nr.smk",),
+    # the rule file's params and inputs, and the plan they read (the cases' epochs, shards, inputs)
+    rule_files=("workflow/rules/nr.smk", "src/railradio/nr/plan.py"),
 )
 """The nr sensitivity cases (``make records``; rule ``nr_case_key_numbers``)."""
 
