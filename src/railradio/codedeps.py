@@ -61,13 +61,19 @@ def module_path(name: str, root: Path = SRC_ROOT) -> Path | None:
         if ``name`` is not under ``railradio`` or names no file (e.g. a function imported
         with ``from railradio.x import y``).
     """
+    return _module_path(name, root)
+
+
+@cache
+def _module_path(name: str, root: Path) -> Path | None:
+    """:func:`module_path`, from the directory listings (:func:`_listing`) once per process."""
     parts = name.split(".")
     if parts[0] != PACKAGE:
         return None
     base = root.joinpath(*parts[1:])
-    if (base / "__init__.py").is_file():
+    if "__init__.py" in _listing(base)[0]:
         return base / "__init__.py"
-    if base.with_suffix(".py").is_file():
+    if f"{base.name}.py" in _listing(base.parent)[0]:
         return base.with_suffix(".py")
     return None
 
@@ -89,7 +95,7 @@ def _python_source(path: Path) -> tuple[tuple[str, ...], frozenset[str], bool, b
     """One parse of a Python file, cached while it is unchanged: (dotted names imported,
     string literals, whether it imports relatively, :func:`file_digest`'s form)."""
     st = path.stat()
-    return _python_source_cached(path.resolve(), st.st_mtime_ns, st.st_size)
+    return _python_source_cached(path.absolute(), st.st_mtime_ns, st.st_size)
 
 
 @cache
@@ -143,8 +149,17 @@ def _references(path: Path, local_dirs: tuple[Path, ...] | None, root: Path) -> 
 
 
 @cache
+def _listing(directory: Path) -> tuple[frozenset[str], frozenset[str]]:
+    """(file names, subdirectory names) in ``directory``, both empty if it is not one;
+    listed once per process (a workflow's files do not come and go while its DAG is built)."""
+    if not directory.is_dir():
+        return frozenset(), frozenset()
+    entries = list(directory.iterdir())
+    return frozenset(p.name for p in entries if p.is_file()), frozenset(p.name for p in entries if p.is_dir())
+
+
 def _file_names(directory: Path, suffix: str = "") -> frozenset[str]:
-    return frozenset(p.name for p in directory.iterdir() if p.is_file() and p.name.endswith(suffix))
+    return frozenset(n for n in _listing(directory)[0] if n.endswith(suffix))
 
 
 def _data_files(path: Path, root: Path) -> set[Path]:
@@ -240,7 +255,12 @@ def third_party(script: str | Path, root: Path = SRC_ROOT) -> dict[str, str]:
     ValueError
         As :func:`script_closure`.
     """
-    files = [Path(script).resolve(), *(p for n, p in script_closure(script, root).items() if not n.startswith("data/"))]
+    return _third_party(script, script_closure(script, root))
+
+
+def _third_party(script: str | Path, closure: dict[str, Path]) -> dict[str, str]:
+    """:func:`third_party` of a script whose :func:`script_closure` is ``closure``."""
+    files = [Path(script).resolve(), *(p for n, p in closure.items() if not n.startswith("data/"))]
     tops = {n.split(".")[0] for f in files for n in _facts(f)[0]} - {PACKAGE}
     dists = _distributions()
     out = {}
@@ -373,11 +393,12 @@ def script_code_hash(script: str | Path, root: Path = SRC_ROOT) -> str:
     """
     h = hashlib.sha256()
     h.update(file_digest(script))
-    for name, path in script_closure(script, root).items():
+    closure = script_closure(script, root)
+    for name, path in closure.items():
         h.update(name.encode())
         h.update(b"\0")
         h.update(file_digest(path))
         h.update(b"\0")
-    for dist, ver in third_party(script, root).items():
+    for dist, ver in _third_party(script, closure).items():
         h.update(f"{dist}=={ver}\0".encode())
     return h.hexdigest()[:16]
