@@ -14,7 +14,14 @@ from pathlib import Path
 
 import pytest
 
-from railradio.codedeps import _without_string_statements, file_digest, script_closure, script_code_hash
+from railradio.codedeps import (
+    _without_string_statements,
+    clear_caches,
+    file_digest,
+    module_path,
+    script_closure,
+    script_code_hash,
+)
 
 from .conftest import ROOT, copy_workflow
 
@@ -144,13 +151,34 @@ def test_changing_a_module_changes_exactly_the_hashes_of_the_rules_that_run_it(t
     assert {r: script_code_hash(s, root) for r, s in rules.items()} == base  # restored
 
 
+def test_module_lookups_from_listings_match_the_file_system(tmp_path):
+    """module_path answers from directory listings read once per process: the same answer as
+    asking the file system for every module a rule reaches and for names that are not
+    modules; a module added later is found after clear_caches()."""
+    root = ROOT / "src/railradio"
+    names = {n for s in rule_scripts().values() for n in script_closure(s) if not n.startswith(("data/", "local/"))}
+    for n in sorted(names) + ["railradio.nr.no_such_module", "railradio.nr.ekf.run_ekf", "numpy.linalg"]:
+        base = root.joinpath(*n.split(".")[1:])
+        fs = base / "__init__.py" if (base / "__init__.py").is_file() else base.with_suffix(".py")
+        assert module_path(n, root) == (fs if n.startswith("railradio") and fs.is_file() else None), n
+    pkg = tmp_path / "railradio"
+    pkg.mkdir()
+    (pkg / "__init__.py").write_text("", encoding="utf-8")
+    assert module_path("railradio.late", pkg) is None
+    (pkg / "late.py").write_text("X = 1\n", encoding="utf-8")
+    clear_caches()
+    assert module_path("railradio.late", pkg) == pkg / "late.py"
+
+
 @pytest.mark.parametrize(
     ("module", "rules"),
-    [  # the stale results found by an independent audit: each must re-run now
+    [  # modules each of these rules reaches only through another module or a helper script
         ("railradio.nr.keys", {"nr_figures", "nr_imm_figure"}),
         ("railradio.nr.bounds", {"nr_imm"}),
         ("railradio.plotting", {"nr_imm_key_numbers"}),
         ("railradio.nr.tracking", {"nr_case_track", "nr_case_calibrate", "nr_track", "nr_calibrate"}),
+        ("railradio.nr.ekf", {"nr_case_track", "nr_case_calibrate", "nr_track", "nr_calibrate"}),
+        ("railradio.nr.candidates", {"nr_case_track", "nr_case_calibrate", "nr_track", "nr_calibrate"}),
     ],
 )
 def test_known_dependencies_are_found(module, rules):

@@ -34,6 +34,7 @@ import ast
 import hashlib
 import io
 import sys
+import time
 import tokenize
 from functools import cache, lru_cache
 from pathlib import Path
@@ -60,6 +61,10 @@ def module_path(name: str, root: Path = SRC_ROOT) -> Path | None:
         ``<root>/<sub>/__init__.py`` for a package or ``<root>/<sub>.py`` for a module; None
         if ``name`` is not under ``railradio`` or names no file (e.g. a function imported
         with ``from railradio.x import y``).
+
+    Notes
+    -----
+    Directories are listed once per process (:func:`clear_caches` forgets the listings).
     """
     return _module_path(name, root)
 
@@ -71,9 +76,9 @@ def _module_path(name: str, root: Path) -> Path | None:
     if parts[0] != PACKAGE:
         return None
     base = root.joinpath(*parts[1:])
-    if "__init__.py" in _listing(base)[0]:
+    if "__init__.py" in _listing(base):
         return base / "__init__.py"
-    if f"{base.name}.py" in _listing(base.parent)[0]:
+    if f"{base.name}.py" in _listing(base.parent):
         return base.with_suffix(".py")
     return None
 
@@ -92,18 +97,32 @@ def _facts(path: Path) -> tuple[tuple[str, ...], frozenset[str]]:
 
 
 def _python_source(path: Path) -> tuple[tuple[str, ...], frozenset[str], bool, bytes]:
-    """One parse of a Python file, cached while it is unchanged: (dotted names imported,
-    string literals, whether it imports relatively, :func:`file_digest`'s form)."""
+    """One parse of a Python file, cached while its content is unchanged: (dotted names
+    imported, string literals, whether it imports relatively, :func:`file_digest`'s form).
+    The parse is cached on the bytes themselves. A file whose status (time stamp, size,
+    inode) was seen before is not read again, unless its time stamp is under
+    :data:`_RACY_NS` old: two writes within the file system's clock tick can share a time
+    stamp and a size (Git's "racy clean" entries, handled alike)."""
     st = path.stat()
-    return _python_source_cached(path.absolute(), st.st_mtime_ns, st.st_size)
+    key = (str(path), st.st_mtime_ns, st.st_size, st.st_ino)
+    if key in _BY_STATUS and time.time_ns() - st.st_mtime_ns > _RACY_NS:
+        return _BY_STATUS[key]
+    out = _python_source_cached(str(path), path.read_bytes())
+    _BY_STATUS[key] = out
+    return out
+
+
+_RACY_NS = 2_000_000_000
+"""How old a file's time stamp must be before its status alone identifies its content, ns."""
+_BY_STATUS: dict[tuple[str, int, int, int], tuple[tuple[str, ...], frozenset[str], bool, bytes]] = {}
 
 
 @cache
-def _python_source_cached(path: Path, mtime_ns: int, size: int) -> tuple[tuple[str, ...], frozenset[str], bool, bytes]:
+def _python_source_cached(path: str, source: bytes) -> tuple[tuple[str, ...], frozenset[str], bool, bytes]:
     names: list[str] = []
     strings: set[str] = set()
     relative = False
-    tree = ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
+    tree = ast.parse(source.decode("utf-8"), filename=path)
     for node in ast.walk(tree):
         if isinstance(node, ast.Import):
             names += [a.name for a in node.names]
@@ -149,17 +168,23 @@ def _references(path: Path, local_dirs: tuple[Path, ...] | None, root: Path) -> 
 
 
 @cache
-def _listing(directory: Path) -> tuple[frozenset[str], frozenset[str]]:
-    """(file names, subdirectory names) in ``directory``, both empty if it is not one;
-    listed once per process (a workflow's files do not come and go while its DAG is built)."""
+def _listing(directory: Path) -> frozenset[str]:
+    """The names of the files in ``directory`` (none if it is not a directory), listed once
+    per process: a workflow's files do not come and go while its DAG is built (a process
+    that adds or removes a module and hashes again calls :func:`clear_caches` first)."""
     if not directory.is_dir():
-        return frozenset(), frozenset()
-    entries = list(directory.iterdir())
-    return frozenset(p.name for p in entries if p.is_file()), frozenset(p.name for p in entries if p.is_dir())
+        return frozenset()
+    return frozenset(p.name for p in directory.iterdir() if p.is_file())
 
 
 def _file_names(directory: Path, suffix: str = "") -> frozenset[str]:
-    return frozenset(n for n in _listing(directory)[0] if n.endswith(suffix))
+    return frozenset(n for n in _listing(directory) if n.endswith(suffix))
+
+
+def clear_caches() -> None:
+    """Forget the directory listings and module lookups (file contents are re-read anyway)."""
+    _listing.cache_clear()
+    _module_path.cache_clear()
 
 
 def _data_files(path: Path, root: Path) -> set[Path]:
