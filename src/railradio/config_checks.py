@@ -198,7 +198,7 @@ def nr_problems(nr: Mapping[str, Any], root: str = "nr", main: bool = True) -> I
         yield (
             f"{root}.imm.receiver",
             nr["imm"]["receiver"],
-            f"one of {sorted(receivers)} (source or a extra_receivers name)",
+            f"one of {sorted(receivers)} (source or an nr.extra_receivers name)",
         )
     dt = nr["trajectory"]["dt_s"]
     for i, tau in enumerate(nr["imm"]["sojourn_s"]):

@@ -1,4 +1,4 @@
-"""Closed-form reference values of the handover study (review of the success rates).
+"""Closed-form reference values of the handover study, against which its simulated success rates are checked.
 
 In the interference-limited regime (thermal noise neglected), with the other cell loaded by
 η, an attempt at a point where both links have the same mean power succeeds iff the true

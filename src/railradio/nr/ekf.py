@@ -244,7 +244,7 @@ def run_ekf(
 ) -> dict[str, NDArray]:
     """Run the EKF over ``n_epochs`` epochs; ``select(n, x_pred) -> (rrh_xy, aod, toa)`` chooses the measurements
     of epoch n from the predicted state: from the RRHs ``rrh_xy`` [m_n, 2] (possibly none: prediction only).
-    With the gate on, ``reacquire(n) -> (position [2], covariance [2, 2]) | None`` re-seeds the position after
+    With the gate on, ``reacquire(n) -> (position [2], covariance [2, 2]) | None`` re-initialises the position after
     ``reacquire_after`` consecutive epochs whose measurements were all rejected (track loss: a gate alone never
     lets a lost filter back) [ours].
 

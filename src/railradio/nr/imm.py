@@ -326,7 +326,7 @@ def run_imm(
 
 
 def _reseed(xs: NDArray, ps: NDArray, fix: tuple[NDArray, NDArray]) -> None:
-    """Re-seed, in place, every model's position from ``fix`` (position [2], covariance
+    """Re-initialise, in place, every model's position from ``fix`` (position [2], covariance
     [2, 2]), its cross-covariances with the other state components zeroed."""
     xs[:, :2] = fix[0]
     ps[:, :2, :] = 0.0

@@ -10,8 +10,8 @@ way down: mappings are read-only (:class:`types.MappingProxyType`), sequences ar
 
 A rule's params get plain values (:func:`plain`): Snakemake re-runs a job when the
 ``repr`` of a param changes and leaves out of that comparison any value that is not a
-builtin container (a read-only mapping would silently not count), so a param is the
-``dict``/``list`` it was before the plan existed. No job script imports this module: a
+builtin container (a read-only mapping would silently not count), so every param is a
+plain ``dict``/``list``. No job script imports this module: a
 change here re-runs exactly the jobs whose params or inputs it changes. The published
 records of the map and the cases (:mod:`railradio.nr.records`), which hold no params,
 record its code beside their rule files.

@@ -231,7 +231,7 @@ def wideband_candidates(tau_s: np.ndarray, tunnel: Tunnel, cable: Cable, bias_s:
 def resolve_ambiguity(
     cand_m: np.ndarray, offsets_m: np.ndarray, feed_spacing_m: float, start_m: tuple[float, float], gate_m: float
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Resolve the wideband fixes' +- / which-feed ambiguity from the measurements [seed-free].
+    """Resolve the wideband fixes' +- / which-feed ambiguity from the measurements alone [ours].
 
     ``cand_m`` [epoch, receiver, candidate]: every receiver's cable-ranging candidates
     (:func:`wideband_candidates`); receiver k sits ``offsets_m[k]`` behind the head.  Every
