@@ -57,7 +57,7 @@ reproduce: $(STAMP)  ## paper scale from nothing, compared with paper/numbers.js
 	$(BIN)/python -m railradio.keynumbers results/key_numbers.json paper/numbers.json
 
 expected: $(STAMP)  ## regenerate tests/expected/key_numbers_ci.json (CI scale, private dir)
-	d=$$(mktemp -d) && cp -r Snakefile workflow config paper $$d/ && \
+	d=$$(mktemp -d) && cp -r Snakefile workflow config paper src $$d/ && \
 	  (cd $$d && $(CURDIR)/$(BIN)/snakemake numbers -j$(JOBS) --workflow-profile workflow/profiles/default \
 	     --configfile config/ci.yaml -q rules) && \
 	  cp $$d/results/key_numbers.json tests/expected/key_numbers_ci.json && rm -rf $$d
