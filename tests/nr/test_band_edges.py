@@ -75,3 +75,77 @@ def test_bad_decimations_are_refused():
         BandEdges(Synthesizer(ReceiverConfig(decimation=1, n_blocks=8), prof, pool), pool, 8)
     with pytest.raises(ValueError, match="n_nodes"):
         BandEdges(band, pool, 8, n_nodes=1)
+
+
+def test_the_fast_path_is_the_tone_by_tone_sum():
+    """The edges' tones interpolated on Chebyshev points of each segment (the fast path)
+    against every tone summed one by one (``exact``): equal to 1e-7 of the edges' power
+    (measured 1e-9 with the default points)."""
+    rng = np.random.default_rng(2)
+    pool = qpsk_pool(rng, 16)
+    prof = tdl_profile("TDL-D", 20e-9)
+    links = _links(3, rng)
+    band = Synthesizer(ReceiverConfig(decimation=4, n_blocks=8), prof, pool, data_beam="train", exact_spill=True)
+    draws = band.draws(links, np.random.default_rng(4))
+    fast = BandEdges(band, pool, 8)(links, draws, 0.1)
+    exact = BandEdges(band, pool, 8, exact=True)(links, draws, 0.1)
+    assert np.mean(np.abs(fast - exact) ** 2) < 1e-7 * np.mean(np.abs(exact) ** 2)
+
+
+@pytest.mark.slow
+def test_at_the_papers_interference_the_edges_complete_the_band():
+    """One paper-scale epoch of realization 1 (≥ 15 RRHs in range, their traffic, the
+    train at speed): the production's band plus the edges equals the full-rate burst to
+    1e-6 of the omitted power (measured 5e-8 with 6 nodes), held or following the train
+    (``motion``); the omitted power is above the receiver noise there, and with the edges
+    our receiver's decisions on the full-rate burst and on the production's are the same
+    (on the 200 epochs of the fidelity target: none of 76 800 block detections, 1 200
+    selections and 743 TOAs changed)."""
+    import yaml
+
+    from railradio.config import load_schema, validate_config
+    from railradio.nr.fidelity import FidelityRun
+    from railradio.nr.fidelity_stats import changed
+    from railradio.nr.motion import burst_motion
+    from railradio.nr.resample import upsample
+    from railradio.nr.simulate import KEY_POOL, scenario_from_config
+    from railradio.nr.workflow import receiver_selection
+    from railradio.rng import make_rng, spawn_key
+
+    root = __import__("pathlib").Path(__file__).resolve().parents[2]
+    config = yaml.safe_load((root / "config/config.yaml").read_text(encoding="utf-8"))
+    validate_config(config, load_schema(root / "workflow/schemas/config.schema.yaml"))
+    scn = scenario_from_config(config["nr"])
+    key = spawn_key("nr", 1)
+    run = FidelityRun(scn, config["seed"], key, receiver_selection(config["nr"]))
+    pool = qpsk_pool(make_rng(config["seed"], key + (KEY_POOL,)), scn.pool_size)
+    edges = BandEdges(run.fast, pool, scn.receiver.decimation)
+    lb = run.synthesis.advance(3700)[3]
+    ep = run._inputs(3700, np.asarray(lb.rrh[:6]), int(lb.rrh[np.argmax(lb.rx_power_dbm)]))
+    links, common = ep.links, ep.common
+    assert links.n >= 15
+    noise = links.noise_psd_w_hz * links.n_chains * scn.receiver.num.sample_rate_hz
+    motion = burst_motion(ep.lb, scn, ep.x_m, ep.v_m_s, ep.a_m_s2, ep.t0_s)
+    args = (links, common["draws"], common["t0_s"], common["d2d_m"], common["serving"])
+    bursts = {}
+    for mo in (None, motion):
+        z, s_min = run.fast(links, None, noise=False, motion=mo, **common)
+        band = project(z, run.down)
+        full = project(run.fast_full(links, None, noise=False, motion=mo, **common)[0], scn.receiver.decimation)
+        omitted = np.mean(np.abs(full - band) ** 2)
+        corrected = band + edges(*args, motion=mo)
+        residual = np.mean(np.abs(full - corrected) ** 2)
+        assert omitted > noise
+        assert residual < 1e-6 * omitted
+        bursts.setdefault("corrected", corrected)
+        bursts.setdefault("full", full)
+    n8 = np.random.default_rng(1).standard_normal(2 * full.size).astype(np.float32).view(np.complex64)
+    n8 *= np.float32(np.sqrt(noise / 2))
+    d = scn.receiver.decimation // run.rx.decimation
+    a, b = (run.rx(upsample(bursts[k] + n8, d), s_min, ep.n1, ep.n2)["robust"] for k in ("corrected", "full"))
+    arrays = [
+        {"detected": x.detected[None], "selected": x.selected[None], "toa": x.toa_samples[None], "aod": x.aod_rad[None]}
+        for x in (a, b)
+    ]
+    for kind in ("detection", "selection", "toa", "aod"):
+        assert np.nansum(changed(kind, *arrays)) == 0

@@ -40,10 +40,48 @@ from numpy.typing import NDArray
 from railradio.nr.numerology import N_ACTIVE, N_FFT, SAMPLE_RATE_HZ
 from railradio.nr.synthesis import Links, Synthesizer, _LinkGrid
 
-N_NODES = 8
+N_NODES = 6
 """Chebyshev nodes per edge spectrum: the smallest count at which the correction equals the
 full-rate burst to float32 rounding on paper-scale epochs (−94 dB of the omitted power with
 ρ folded; 6 nodes: −73 dB), ``tests/nr/test_band_edges.py``."""
+
+
+N_POINTS = (12, 8)
+"""Chebyshev points of the tone-domain interpolation (fast path): in the synthesized band and
+in each side of the far band. Every kernel the edges take is smooth in the tone index on
+each segment (its poles half a band away): measured error with these counts in
+``tests/nr/test_band_edges.py``."""
+
+
+def _tone_basis(k_all: NDArray[np.int64], n: int, n_points: tuple[int, int]) -> tuple[NDArray, NDArray]:
+    """Lagrange interpolation on Chebyshev points, per tone segment (the band [-n/2, n/2) and
+    the far band's two sides): a function f of the tone, smooth on each segment, is
+    Σ_j f(κ_j) Ψ[k, j] at every tone k. Returns Ψ [K, R] and the points κ_j [R] (tone units,
+    not integers)."""
+    segments = [(-n // 2, n // 2, n_points[0])]
+    lo_far, hi_far = int(k_all.min()), int(k_all.max()) + 1
+    segments += [(lo_far, -n // 2, n_points[1]), (n // 2, hi_far, n_points[1])]
+    psi = np.zeros((k_all.size, sum(r for _, _, r in segments)))
+    points = []
+    col = 0
+    for lo, hi, r in segments:
+        centre, half = (lo + hi - 1) / 2.0, (hi - 1 - lo) / 2.0
+        j = np.arange(r)
+        t = np.cos(np.pi * (2 * j + 1) / (2 * r))
+        w = (-1.0) ** j * np.sin(np.pi * (2 * j + 1) / (2 * r))
+        inside = (k_all >= lo) & (k_all < hi)
+        x = (k_all[inside] - centre) / half
+        diff = x[:, None] - t[None, :]
+        hit = np.isclose(diff, 0.0, atol=1e-12)
+        diff[hit] = 1.0
+        lag = w[None, :] / diff
+        lag /= lag.sum(axis=1, keepdims=True)
+        rows = hit.any(axis=1)
+        lag[rows] = hit[rows]
+        psi[np.flatnonzero(inside), col : col + r] = lag
+        points.append(centre + half * t)
+        col += r
+    return psi, np.concatenate(points)
 
 
 def kappa(theta: NDArray) -> NDArray[np.complex128]:
@@ -83,13 +121,21 @@ class BandEdges:
         When ``d_fe`` is not a multiple of D_s, D_s is 1 (nothing left out), or ``n_nodes`` < 2.
     """
 
-    def __init__(self, syn: Synthesizer, pool: NDArray[np.complex64], d_fe: int, n_nodes: int = N_NODES):
+    def __init__(
+        self,
+        syn: Synthesizer,
+        pool: NDArray[np.complex64],
+        d_fe: int,
+        n_nodes: int = N_NODES,
+        n_points: tuple[int, int] = N_POINTS,
+        exact: bool = False,
+    ):
         d_s = syn.cfg.decimation
         if d_s == 1 or d_fe % d_s:
             raise ValueError(f"d_fe must be a multiple of the synthesis decimation {d_s} > 1, got {d_fe!r}")
         if n_nodes < 2:
             raise ValueError(f"n_nodes must be >= 2, got {n_nodes!r}")
-        self.syn, self.d_s, self.d_fe = syn, d_s, int(d_fe)
+        self.syn, self.d_s, self.d_fe, self.exact = syn, d_s, int(d_fe), exact
         n = syn.cfg.num.n_fft
         k_band = syn.k.astype(np.int64)  # the fast path's bins, in its FFT order
         k_far = np.r_[np.arange(-N_ACTIVE // 2, -n // 2), np.arange(n // 2, N_ACTIVE // 2)]
@@ -105,22 +151,46 @@ class BandEdges:
         self.x_nodes = np.cos(np.pi * (2 * j + 1) / (2 * n_nodes))
         self.bary = (-1.0) ** j * np.sin(np.pi * (2 * j + 1) / (2 * n_nodes))  # barycentric weights
         self.nu_nodes = self.x_nodes * np.pi / self.d_fe  # [rad/full-rate sample]
+        self.pool_all = np.concatenate([syn.pool_band, self.pool_far], axis=1)  # [P + 1, K], idle row last
+        self.psi, self.k_points = _tone_basis(self.k_all, n, n_points)
+        self.w_points = 2 * np.pi * self.k_points / N_FFT
+        self.points_band = np.arange(self.k_points.size) < n_points[0]
+        self._rows: dict = {}
+        self._weights: NDArray | None = None
+        self._mask_types: dict[bytes, int] = {}
+        self._masks: list[NDArray[np.bool_]] = []
         f_k = self.k_all * (SAMPLE_RATE_HZ / N_FFT)
         self.basis_all = np.exp(-2j * np.pi * np.outer(syn.profile.delays_s, f_k))  # [L, K]
         self.f_k_far = k_far * (SAMPLE_RATE_HZ / N_FFT)
 
-    def kernel(self, w_d: float, cls: int) -> NDArray[np.complex128]:
-        """K_k(ν_i) at the nodes for an edge at a sample P ≡ ``cls`` (mod D_s) of a link whose
-        tones are shifted by the LOS Doppler ``w_d`` [rad/full-rate sample]: [n_nodes, K]."""
-        th = self.w_k[None, :] + w_d - self.nu_nodes[:, None]
-        out = np.empty(th.shape, np.complex128)
-        far = ~self.is_band
-        out[:, far] = kappa(th[:, far])
-        alias = 0.0
-        for m in range(1, self.d_s):
-            turn = np.exp(-2j * np.pi * m * cls / self.d_s)
-            alias = alias + turn * kappa(th[:, self.is_band] - 2 * np.pi * m / self.d_s)
-        out[:, self.is_band] = -alias
+    def kernels(self, w_d: float, w_k: NDArray | None = None, band: NDArray | None = None) -> NDArray:
+        """K_k(ν_i) at the nodes, for an edge at a sample P ≡ c (mod D_s), c = 0..D_s-1, of a
+        link whose tones are shifted by the LOS Doppler ``w_d`` [rad/full-rate sample]:
+        [D_s, n_nodes, K] (``w_k``, ``band``: other tones [rad/full-rate sample] and whether
+        each is in the synthesized band; default every tone).
+
+        Parameters
+        ----------
+        w_d : float
+            LOS Doppler [rad/full-rate sample].
+        w_k : numpy.ndarray or None
+            Tones [rad/full-rate sample] (default: every tone, :attr:`w_k`).
+        band : numpy.ndarray of bool or None
+            Whether each tone is in the synthesized band (default :attr:`is_band`).
+
+        Returns
+        -------
+        numpy.ndarray of complex128
+            [D_s, n_nodes, len(w_k)].
+        """
+        w_k = self.w_k if w_k is None else w_k
+        band = self.is_band if band is None else band
+        th = w_k[None, :] + w_d - self.nu_nodes[:, None]  # [n_nodes, K]
+        out = np.empty((self.d_s,) + th.shape, np.complex128)
+        out[:, :, ~band] = kappa(th[:, ~band])[None]
+        aliases = np.stack([kappa(th[:, band] - 2 * np.pi * m / self.d_s) for m in range(1, self.d_s)])
+        turn = np.exp(-2j * np.pi * np.outer(np.arange(self.d_s), np.arange(1, self.d_s)) / self.d_s)
+        out[:, :, band] = -np.einsum("cm,mjk->cjk", turn, aliases)
         return out
 
     def __call__(
@@ -178,17 +248,13 @@ class BandEdges:
         ramps = np.exp(-2j * np.pi * np.outer(frac + sp["cp0"], syn.k) / n).astype(np.complex64)
         t_firsts = (num.symbol_start(sp["s_min"]) + n_cs) / fs + t0_s
         u = np.empty((sp["symbols"].size, n), dtype=np.complex64)
+        on_grid = not np.any((self.d_s * sp["starts"]) % self.d_fe)
         for r in range(links.n):
             if n_cs[r] >= total:
                 continue
             pool_idx, g_r = draws[r]["pool_idx"], g_syms[r]
             if not at_train[r] and syn.data_beam != "none":
                 pool_idx = np.where(draws[r]["busy"], pool_idx, syn.idle_row)
-            ov = syn.overlay(links.n_id1[r], links.n_id2[r])
-            grid = _LinkGrid(pool_idx, ov, ramps[r], g_r, sp["long_of"], sp["long_ramp"])
-            geo = None if geo_h is None else geo_h[r]
-            syn._fill_grid(u, grid, np.ones((1, 1), np.complex64) if geo is None else geo, geo is not None)
-            tones = self._tones(u, pool_idx, g_r, float(frac[r]), sp, None if geo_far is None else geo_far[r])
             gains = None
             if full[r] and prof.powers.size:
                 gains, _ = syn._tap_gains(links, r, draws[r], amp_l, t_sym)
@@ -199,6 +265,15 @@ class BandEdges:
                 t_first_s=float(t_firsts[r]),
                 phase0_rad=float(links.phase0[r]),
             )
+            if not self.exact and on_grid and motion is None and (gains is None or syn.exact_spill):
+                cell = self._cell(links.n_id1[r], links.n_id2[r])
+                self._link_fast(acc, pool_idx, g_r, cell, gains, sp, m_full, **link)
+                continue
+            ov = syn.overlay(links.n_id1[r], links.n_id2[r])
+            grid = _LinkGrid(pool_idx, ov, ramps[r], g_r, sp["long_of"], sp["long_ramp"])
+            geo = None if geo_h is None else geo_h[r]
+            syn._fill_grid(u, grid, np.ones((1, 1), np.complex64) if geo is None else geo, geo is not None)
+            tones = self._tones(u, pool_idx, g_r, float(frac[r]), sp, None if geo_far is None else geo_far[r])
             self._link(acc, tones, gains, sp, m_full, **link)
         return self._spectrum(acc, m_full)
 
@@ -234,12 +309,10 @@ class BandEdges:
         def los(p):  # the LOS phasor at full-rate samples p
             return np.exp(1j * (w_rad_s * (t_first_s + (p - origin0) / fs) + phase0_rad))
 
-        kernels: dict[int, NDArray] = {}
+        all_kernels = self.kernels(w_d)
 
         def kern(cls: int) -> NDArray[np.complex128]:
-            if cls not in kernels:
-                kernels[cls] = self.kernel(w_d, cls)
-            return kernels[cls]
+            return all_kernels[cls]
 
         starts, cps = sp["starts"], sp["cps"]
         cp_turn = np.exp(2j * np.pi * np.outer(cps, self.k_all) / n)
@@ -309,13 +382,196 @@ class BandEdges:
         """The edges' sum through the front end: each node's DFT, the nodes interpolated at
         every bin of the front end's band (barycentric Lagrange), back to time at F_s/D_fe."""
         m = m_full // self.d_fe
-        per_node = sfft.fft(acc, axis=0, workers=1)  # bins in m-point FFT order
-        x = sfft.fftfreq(m, 1.0 / m) / (m / 2.0)  # ν_q / (π/D_fe)
-        diff = x[:, None] - self.x_nodes[None, :]
-        at_node = diff == 0
-        diff[at_node] = 1.0
-        w = self.bary[None, :] / diff
-        w /= w.sum(axis=1, keepdims=True)
-        rows = at_node.any(axis=1)
-        w[rows] = at_node[rows]
-        return (sfft.ifft((per_node * w).sum(axis=1), workers=1) / self.d_fe).astype(np.complex64)
+        per_node = sfft.fft(np.ascontiguousarray(acc.T).astype(np.complex64), axis=1, workers=1)  # m-point order
+        if self._weights is None or self._weights.shape[1] != m:
+            x = sfft.fftfreq(m, 1.0 / m) / (m / 2.0)  # ν_q / (π/D_fe)
+            diff = x[None, :] - self.x_nodes[:, None]
+            at_node = diff == 0
+            diff[at_node] = 1.0
+            w = self.bary[:, None] / diff
+            w /= w.sum(axis=0, keepdims=True)
+            cols = at_node.any(axis=0)
+            w[:, cols] = at_node[:, cols]
+            self._weights = w.astype(np.complex64)
+        per_node *= self._weights
+        return (sfft.ifft(per_node.sum(axis=0), workers=1) / self.d_fe).astype(np.complex64)
+
+    # -- the fast path: the tones interpolated on Chebyshev points of each segment ---------------
+
+    def _cell(self, n_id1: int, n_id2: int) -> tuple[NDArray[np.int64], NDArray[np.int64], NDArray]:
+        """A cell's SS-block overlay by symbol: its mask type (-1: none) and its distinct
+        values' row (-1: none) per symbol, and the distinct values over every tone [U, K]."""
+        syn = self.syn
+        key = (int(n_id1), int(n_id2), int(syn._span["n_pre"]))
+        cached = self._rows.get(("cell",) + key)
+        if cached is not None:
+            return cached
+        ov_row, _, ov_mask, ov_val = syn.overlay(n_id1, n_id2)
+        mtype = np.full(ov_row.size, -1, dtype=np.int64)
+        vrow = np.full(ov_row.size, -1, dtype=np.int64)
+        values: dict[bytes, int] = {}
+        for o in range(ov_mask.shape[0]):
+            mb = ov_mask[o].tobytes()
+            if mb not in self._mask_types:
+                self._mask_types[mb] = len(self._masks)
+                self._masks.append(np.r_[ov_mask[o], np.zeros(self.k_far.size, bool)])
+            vb = ov_val[o].tobytes()
+            values.setdefault(vb, len(values))
+            at = ov_row == o
+            mtype[at], vrow[at] = self._mask_types[mb], values[vb]
+        distinct = np.zeros((len(values), self.k_all.size), np.complex128)
+        for o in range(ov_val.shape[0]):
+            distinct[values[ov_val[o].tobytes()], : ov_val.shape[1]] = ov_val[o]
+        out = (mtype, vrow, distinct, key[:2], np.flatnonzero(vrow >= 0))
+        self._rows[("cell",) + key] = out
+        return out
+
+    def _tables(self, shifts: tuple[int, ...]) -> NDArray[np.complex64]:
+        """The data pool's rows (and the idle one) delayed by each of ``shifts`` full-rate
+        samples (× e^{-jω_k shift}), interpolated, once per overlay mask type (none, then each
+        type: the masked tones cleared): [(T + 1)·(P + 1), len(shifts), R] (cached)."""
+        key = ("pool", shifts, len(self._masks))
+        if key not in self._rows:
+            out = []
+            for sh in shifts:
+                src = self.pool_all * np.exp(-1j * self.w_k * sh)
+                parts = [src] + [src * ~mask for mask in self._masks]
+                out.append(np.concatenate(parts) @ self.psi)
+            self._rows[key] = np.ascontiguousarray(np.stack(out, axis=1).astype(np.complex64))
+        return self._rows[key]
+
+    def _overlay_tables(self, cell, shifts: tuple[int, ...]) -> NDArray[np.complex64]:
+        """A cell's distinct overlay values delayed by each of ``shifts``, interpolated
+        [U, len(shifts), R] (cached)."""
+        key = ("ov", cell[3], shifts)
+        if key not in self._rows:
+            ph = np.exp(-1j * np.outer(shifts, self.w_k))
+            self._rows[key] = ((cell[2][:, None, :] * ph[None, :, :]) @ self.psi).astype(np.complex64)
+        return self._rows[key]
+
+    def _symbol_rows(self, shifts: tuple[int, ...], pool_idx, cell) -> NDArray[np.complex64]:
+        """Every symbol's tones (data under its overlay) delayed by each of ``shifts``,
+        interpolated [S, len(shifts), R]."""
+        mtype, vrow = cell[0], cell[1]
+        out = np.take(self._tables(shifts), pool_idx + (mtype + 1) * self.pool_all.shape[0], axis=0)
+        ss = cell[4]
+        out[ss] += self._overlay_tables(cell, shifts)[vrow[ss]]
+        return out
+
+    def _point_kernels(self, base, cls, eps, rho) -> NDArray[np.complex64]:
+        """[E, R, n_nodes]: the kernels at the points (:meth:`kernels`, [D_s, R, n_nodes]) for E edges at samples
+        P ≡ ``cls[e]`` (mod D_s), times e^{jω ε_e} (the edge's sub-sample offset) and e^{-jν_i ρ_e}
+        (its offset from the F_s/D_fe grid)."""
+        k = base[np.asarray(cls)]
+        k = k * np.exp(1j * np.outer(eps, self.w_points))[:, :, None]
+        k *= np.exp(-1j * np.outer(rho, self.nu_nodes))[:, None, :]
+        return k.astype(np.complex64)
+
+    def _link_fast(self, acc, pool_idx, g_r, cell, gains, sp, m_full, n_c, tau0_s, w_rad_s, t_first_s, phase0_rad):
+        """One link's edges as :meth:`_link` computes them tone by tone, each edge's tones
+        interpolated on the segments' Chebyshev points (exact spill, no motion)."""
+        d, fs, n = self.d_s, SAMPLE_RATE_HZ, self.syn.cfg.num.n_fft
+        starts, cps = sp["starts"], sp["cps"]
+        g = g_r.astype(np.float64) / n
+        origin0 = d * n_c
+        half, n_nodes = self.d_fe // 2, self.x_nodes.size
+        base = d * starts // self.d_fe  # each symbol's start on the F_s/D_fe grid
+        prof = self.syn.profile
+        nc_full = int(np.ceil(tau0_s * fs - 1e-9))
+        kern0 = self.kernels(w_rad_s / fs, self.w_points, self.points_band).transpose(0, 2, 1)  # [D_s, R, J]
+
+        def los(p):
+            return np.exp(1j * (w_rad_s * (t_first_s + (p - origin0) / fs) + phase0_rad))
+
+        # the rows: each symbol's tones at its end (shift 0: the previous symbol's at the next
+        # start), at its start (shift D·cp_s), and at the taps' integer delays (their spill)
+        cp_vals = tuple(int(d * c) for c in np.unique(cps))
+        tap_shift = np.round(prof.delays_s * fs).astype(np.int64) if gains is not None else np.zeros(0, np.int64)
+        shifts = tuple(sorted({0, *cp_vals, *(int(t) for t in tap_shift)}))
+        rows = self._symbol_rows(shifts, pool_idx, cell)  # [S, n_shift, R]
+        cur = rows[:, shifts.index(cp_vals[0])].copy()
+        for cp in cp_vals[1:]:
+            at = d * cps == cp
+            cur[at] = rows[at, shifts.index(cp)]
+        prev = rows[:, shifts.index(0)]
+        delta = np.empty_like(cur)
+        delta[0] = -g[0] * cur[0]
+        delta[1:] = g[:-1, None] * prev[:-1] - g[1:, None] * cur[1:]
+        # every copy's symbol edges, summed per offset from the symbol starts' grid
+        delays, gains_c, basis = self._copies(gains, starts.size)
+        c = np.ceil((tau0_s + delays) * fs - 1e-9).astype(np.int64)
+        rho = (c + half) % self.d_fe - half
+        kern = self._point_kernels(kern0, c % d, c - (tau0_s + delays) * fs, rho)  # [C, R, J]
+        vals = (delta @ kern.transpose(1, 0, 2).reshape(kern.shape[1], -1)).reshape(starts.size, c.size, n_nodes)
+        first = c[None, :] + d * starts[:, None]  # [S, C]
+        turn = np.exp(1j * w_rad_s * c / fs)
+        vals *= (gains_c * (los(d * starts)[:, None] * turn) * (first < m_full)).astype(np.complex64)[:, :, None]
+        # the copies' edges lie a few grid samples after each symbol's start: summed there
+        off = (c - rho) // self.d_fe
+        nc_off = (nc_full - ((nc_full + half) % self.d_fe - half)) // self.d_fe
+        lo = min(int(off.min()), nc_off)
+        width = max(int(off.max()), nc_off) - lo + 1
+        one_hot = np.zeros((c.size, width), np.complex64)
+        one_hot[np.arange(c.size), off - lo] = 1
+        local = (vals.transpose(0, 2, 1) @ one_hot).transpose(0, 2, 1)  # [S, width, J]
+        self._burst_end(acc, pool_idx, g, cell, (gains_c, basis), first, sp, m_full, tau0_s, kern0, los)
+        if gains is None:
+            self._scatter(acc, base, lo, local)
+            return
+        # the taps' gains switching at each slot start, on the previous symbols' delayed copies
+        dg = gains[1:].astype(np.complex128) - gains[:-1]
+        b = nc_full + d * starts[1:]
+        rho_b = (nc_full + half) % self.d_fe - half
+        frac = prof.delays_s * fs - tap_shift
+        kern = self._point_kernels(kern0, np.full(frac.size, nc_full % d), (nc_full - tau0_s * fs) - frac, rho_b)
+        w = (dg * (-g[:-1] * los(b) * (b < m_full))[:, None]).astype(np.complex64)  # [S-1, L]
+        spill = np.take(rows[:-1], [shifts.index(int(t)) for t in tap_shift], axis=1)  # [S-1, L, R]
+        spill *= w[:, :, None]
+        local[1:, nc_off - lo] += spill.reshape(b.size, -1) @ kern.reshape(-1, n_nodes)
+        self._scatter(acc, base, lo, local)
+
+    @staticmethod
+    def _scatter(acc, base, lo: int, local) -> None:
+        """Add ``local`` [S, width, J] at grid samples base[s] + lo + 0..width-1 (disjoint)."""
+        m = acc.shape[0]
+        acc[(base[:, None] + lo + np.arange(local.shape[1])[None, :]) % m] += local
+
+    def _copies(self, gains, n_sym: int) -> tuple[NDArray[np.float64], NDArray[np.complex128], NDArray]:
+        """The delayed copies of a link's symbols: delays [C] (s), gains per symbol [S, C]
+        (the taps', the LOS added to a tap at delay 0; no taps: one copy of gain 1) and each
+        copy's delay as a phase per tone e^{-jω_k τ F_s} [C, K]."""
+        prof = self.syn.profile
+        if gains is None:
+            return np.zeros(1), np.ones((n_sym, 1), np.complex128), np.ones((1, self.k_all.size))
+        delays = np.asarray(prof.delays_s, dtype=np.float64)
+        g = gains.astype(np.complex128)
+        basis = self.basis_all
+        if prof.los_power > 0:
+            zero = np.flatnonzero(delays == 0)
+            if zero.size:
+                g[:, zero[0]] += np.sqrt(prof.los_power)
+            else:
+                delays = np.r_[delays, 0.0]
+                g = np.concatenate([g, np.full((n_sym, 1), np.sqrt(prof.los_power), np.complex128)], axis=1)
+                basis = np.vstack([basis, np.ones((1, basis.shape[1]))])
+        return delays, g, basis
+
+    def _burst_end(self, acc, pool_idx, g, cell, copies, first, sp, m_full, tau0_s, kern0, los) -> None:
+        """The burst's end at sample M (sample 0 of the circular burst): every copy's piece
+        there ends, the tones summed over the copies on the symbol each holds there."""
+        d, fs = self.d_s, SAMPLE_RATE_HZ
+        starts, cps = sp["starts"], sp["cps"]
+        nc_full = int(np.ceil(tau0_s * fs - 1e-9))
+        s_end = int(np.flatnonzero(nc_full + d * starts <= m_full - 1)[-1])  # the slot (its gains)
+        held = (first < m_full).sum(axis=0) - 1  # [C] the symbol each copy holds at M - 1
+        mtype, vrow, distinct = cell[0], cell[1], cell[2]
+        gains_c, basis = copies
+        row = np.zeros(self.k_all.size, np.complex128)
+        for sl in np.unique(held):
+            on = held == sl
+            src = self.pool_all[pool_idx[sl]].astype(np.complex128)
+            if mtype[sl] >= 0:
+                src = src * ~self._masks[mtype[sl]] + distinct[vrow[sl]]
+            y = m_full - tau0_s * fs - d * (starts[sl] + cps[sl])  # the tones' phase reference
+            row += g[sl] * src * np.exp(1j * self.w_k * y) * (gains_c[s_end, on] @ basis[on])
+        acc[0] += (row @ self.psi) @ kern0[0] * los(m_full)
