@@ -8,7 +8,9 @@ ideal filter to F_s/D, per-block windows on the F_s/D_c lag grid). Reports ms pe
 each, their ratio, and the project's time shares; then what each shortcut's exact
 replacement costs per epoch (railradio.nr.fidelity, the same paths as the fidelity target;
 and the fast path's own exact spill, nr.channel.exact_spill, in shard-like runs), so that the
-choice of what to keep is measured.
+choice of what to keep is measured; and the band's exact completion by its symbol edges
+(railradio.nr.band_edges: ``exact_path_ms.band_edges``, and ``band_edges_vs_band`` against
+what the full band adds to the production's time).
 
     python benchmarks/bench_nr.py --out results/benchmarks/nr_bench.json
 """
@@ -216,6 +218,7 @@ def exact_costs(config: str, n_epochs: int) -> dict:
     """ms per epoch of every path of the fidelity target (railradio.nr.fidelity) on
     ``n_epochs`` epochs at cruise speed, and each against the production path's: what
     replacing a shortcut by its exact computation would cost."""
+    from railradio.nr.band_edges import BandEdges
     from railradio.nr.fidelity import FidelityRun
     from railradio.nr.workflow import receiver_selection
     from railradio.rng import spawn_key
@@ -227,17 +230,25 @@ def exact_costs(config: str, n_epochs: int) -> dict:
     validate_config(cfg, load_schema("workflow/schemas/config.schema.yaml"))
     scn = scenario_from_config(cfg["nr"])
     run = FidelityRun(scn, cfg["seed"], spawn_key("nr", 0), receiver_selection(cfg["nr"]))
+    # the band's exact completion (railradio.nr.band_edges), against the full band it replaces
+    edges = BandEdges(run.fast, run.pool_ref, scn.receiver.decimation)
     secs: dict[str, float] = {}
     for k, e in enumerate(range(2500, 2501 + n_epochs)):
         x = float(scn.trajectory.state(np.array([e * scn.trajectory.dt_s]))[0][0])
         cand = scn.deployment.nearest(x, scn.cell_search.n_neighbours).astype(np.int64)
         out = run.epoch(e, cand, int(cand[0]))
+        ep = run._inputs(e, cand, int(cand[0]))
+        c = ep.common
+        t0 = time.perf_counter()
+        edges(ep.links, c["draws"], c["t0_s"], c["d2d_m"], c["serving"])
+        out["seconds"]["band_edges"] = time.perf_counter() - t0
         if k == 0:
             continue  # warm-up: compiled kernels, caches
         for v, t in out["seconds"].items():
             secs[v] = secs.get(v, 0.0) + t / n_epochs
     rep = {f"exact_path_ms.{v}": 1e3 * t for v, t in secs.items()}
     rep.update({f"exact_path_ratio.{v}": t / secs["production"] for v, t in secs.items()})
+    rep["band_edges_vs_band"] = secs["band_edges"] / (secs["band"] - secs["production"])
     return rep
 
 

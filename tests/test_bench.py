@@ -45,6 +45,8 @@ def test_bench_nr_smoke(tmp_path):
         "exact_path_ms.exact",
         "exact_path_ratio.search",
         "exact_spill_cost_ratio",
+        "exact_path_ms.band_edges",
+        "band_edges_vs_band",
     ):
         assert math.isfinite(rep[key]) and rep[key] > 0, key
     shares = [rep[f"project_share_{k}"] for k in ("link", "synthesis_and_channel", "correlation")]
