@@ -36,6 +36,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.fft as sfft
 from numpy.typing import NDArray
+from scipy.interpolate import BarycentricInterpolator
 
 from railradio.nr.numerology import N_ACTIVE, N_FFT, SAMPLE_RATE_HZ
 from railradio.nr.synthesis import Links, Synthesizer, _LinkGrid
@@ -53,6 +54,13 @@ each segment (its poles half a band away): measured error with these counts in
 ``tests/nr/test_band_edges.py``."""
 
 
+def _chebyshev_lagrange(x: NDArray, r: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """The ``r`` Chebyshev points of the first kind on [-1, 1] and the Lagrange basis on them
+    evaluated at ``x`` [len(x), r] (scipy's barycentric interpolator of the unit vectors)."""
+    nodes = np.cos(np.pi * (2 * np.arange(r) + 1) / (2 * r))
+    return nodes, BarycentricInterpolator(nodes, np.eye(r))(np.asarray(x, dtype=np.float64))
+
+
 def _tone_basis(k_all: NDArray[np.int64], n: int, n_points: tuple[int, int]) -> tuple[NDArray, NDArray]:
     """Lagrange interpolation on Chebyshev points, per tone segment (the band [-n/2, n/2) and
     the far band's two sides): a function f of the tone, smooth on each segment, is
@@ -66,22 +74,22 @@ def _tone_basis(k_all: NDArray[np.int64], n: int, n_points: tuple[int, int]) -> 
     col = 0
     for lo, hi, r in segments:
         centre, half = (lo + hi - 1) / 2.0, (hi - 1 - lo) / 2.0
-        j = np.arange(r)
-        t = np.cos(np.pi * (2 * j + 1) / (2 * r))
-        w = (-1.0) ** j * np.sin(np.pi * (2 * j + 1) / (2 * r))
         inside = (k_all >= lo) & (k_all < hi)
-        x = (k_all[inside] - centre) / half
-        diff = x[:, None] - t[None, :]
-        hit = np.isclose(diff, 0.0, atol=1e-12)
-        diff[hit] = 1.0
-        lag = w[None, :] / diff
-        lag /= lag.sum(axis=1, keepdims=True)
-        rows = hit.any(axis=1)
-        lag[rows] = hit[rows]
+        t, lag = _chebyshev_lagrange((k_all[inside] - centre) / half, r)
         psi[np.flatnonzero(inside), col : col + r] = lag
         points.append(centre + half * t)
         col += r
     return psi, np.concatenate(points)
+
+
+def _ceil_samples(t_s) -> NDArray[np.int64]:
+    """The first full-rate sample at or after time(s) ``t_s`` (as the fast path places a delay)."""
+    return np.ceil(np.asarray(t_s) * SAMPLE_RATE_HZ - 1e-9).astype(np.int64)
+
+
+def _los_phasor(p, w_rad_s: float, t_first_s: float, origin0: int, phase0_rad: float) -> NDArray[np.complex128]:
+    """The LOS phasor e^{j(w t + φ0)} at full-rate samples ``p`` (sample ``origin0`` received at ``t_first_s``)."""
+    return np.exp(1j * (w_rad_s * (t_first_s + (np.asarray(p) - origin0) / SAMPLE_RATE_HZ) + phase0_rad))
 
 
 def kappa(theta: NDArray) -> NDArray[np.complex128]:
@@ -147,9 +155,7 @@ class BandEdges:
         if syn.data_beam == "none":
             far = np.zeros_like(far)
         self.pool_far = np.vstack([far, np.zeros((1, k_far.size), far.dtype)]).astype(np.complex64)  # + idle row
-        j = np.arange(n_nodes)
-        self.x_nodes = np.cos(np.pi * (2 * j + 1) / (2 * n_nodes))
-        self.bary = (-1.0) ** j * np.sin(np.pi * (2 * j + 1) / (2 * n_nodes))  # barycentric weights
+        self.x_nodes = _chebyshev_lagrange(np.zeros(0), n_nodes)[0]
         self.nu_nodes = self.x_nodes * np.pi / self.d_fe  # [rad/full-rate sample]
         self.pool_all = np.concatenate([syn.pool_band, self.pool_far], axis=1)  # [P + 1, K], idle row last
         self.psi, self.k_points = _tone_basis(self.k_all, n, n_points)
@@ -304,44 +310,30 @@ class BandEdges:
         d, fs = self.d_s, SAMPLE_RATE_HZ
         n = self.syn.cfg.num.n_fft
         origin0 = d * n_c  # full-rate sample of the fast path's first placed sample
-        w_d = w_rad_s / fs
 
-        def los(p):  # the LOS phasor at full-rate samples p
-            return np.exp(1j * (w_rad_s * (t_first_s + (p - origin0) / fs) + phase0_rad))
+        def los(p):
+            return _los_phasor(p, w_rad_s, t_first_s, origin0, phase0_rad)
 
-        all_kernels = self.kernels(w_d)
-
-        def kern(cls: int) -> NDArray[np.complex128]:
-            return all_kernels[cls]
-
+        kern = self.kernels(w_rad_s / fs)  # [D_s, n_nodes, K]
         starts, cps = sp["starts"], sp["cps"]
         cp_turn = np.exp(2j * np.pi * np.outer(cps, self.k_all) / n)
-        nc_full = int(np.ceil(tau0_s * fs - 1e-9))
+        nc_full = int(_ceil_samples(tau0_s))
         b = nc_full + d * starts  # slot starts
         s_end = int(np.flatnonzero(b <= m_full - 1)[-1])  # the slot holding the burst's last sample
-        delays = self.syn.profile.delays_s
-        p_los = float(self.syn.profile.los_power)
         if gains is None or not self.syn.exact_spill:  # one channel per symbol, switching at b
             x = tones
             if gains is not None:
-                x = tones * (gains.astype(np.complex128) @ self.basis_all + np.sqrt(p_los))
+                x = tones * (gains.astype(np.complex128) @ self.basis_all + np.sqrt(self.syn.profile.los_power))
             self._copy(acc, x, cp_turn, b, nc_full, 0.0, np.ones(x.shape[0]), kern, los, m_full, s_end, origin0)
             return
         # the taps' gains switch at every slot start, on the previous symbol's copies
         dh = (gains[1:].astype(np.complex128) - gains[:-1]) @ self.basis_all
         jump = (tones[:-1] * cp_turn[:-1]) * dh * np.exp(1j * self.w_k * (nc_full - origin0))[None, :]
-        self._add(acc, b[1:], -(jump @ kern(nc_full % d).T) * los(b[1:])[:, None], m_full)
+        self._add(acc, b[1:], -(jump @ kern[nc_full % d].T) * los(b[1:])[:, None], m_full)
         # each tap's copy of every symbol begins at its own delayed sample
-        g = gains.astype(np.complex128)
-        taps = list(delays)
-        if p_los > 0:
-            if np.any(delays == 0):
-                g[:, int(np.flatnonzero(delays == 0)[0])] += np.sqrt(p_los)
-            else:
-                taps.append(0.0)
-                g = np.concatenate([g, np.full((g.shape[0], 1), np.sqrt(p_los))], axis=1)
-        for p, tau_l in enumerate(taps):
-            c = int(np.ceil((tau0_s + tau_l) * fs - 1e-9))
+        delays, g, _ = self._copies(gains, starts.size)
+        for p, tau_l in enumerate(delays):
+            c = int(_ceil_samples(tau0_s + tau_l))
             self._copy(acc, tones, cp_turn, c + d * starts, c, tau_l * fs, g[:, p], kern, los, m_full, s_end, origin0)
 
     def _copy(self, acc, x, cp_turn, first, c, delay, g, kern, los, m_full, s_end, origin0) -> None:
@@ -349,21 +341,21 @@ class BandEdges:
         path's placement), delayed by ``delay`` full-rate samples, symbol s beginning at
         sample ``first[s]`` = c + D_s·start_s with the gain ``g[s]``; the piece holding the
         burst's last sample ends there. The copy's gain switches are not its own (they are
-        the slot starts')."""
+        the slot starts'). ``kern``: :meth:`kernels` [D_s, n_nodes, K]."""
         d = self.d_s
         starts = (first - c) // d
         ph = np.exp(1j * self.w_k * (c - origin0 - delay))
         delta = np.empty_like(x)
         delta[0] = -x[0]
         delta[1:] = x[:-1] * cp_turn[:-1] - x[1:]  # previous symbol's value minus this one's, at its start
-        vals = ((delta * ph[None, :]) @ kern(c % d).T) * (g * los(first))[:, None]
+        vals = ((delta * ph[None, :]) @ kern[c % d].T) * (g * los(first))[:, None]
         self._add(acc, first, vals, m_full)
         # the burst's end: the piece covering sample M - 1 (this copy's symbol there)
         s_last = int(np.flatnonzero(first <= m_full - 1)[-1]) if first[0] <= m_full - 1 else -1
         if s_last < 0:
             return
         end = x[s_last] * np.exp(1j * self.w_k * (m_full - origin0 - d * starts[s_last] - delay))
-        self._add(acc, np.array([m_full]), ((end @ kern(0).T) * g[s_end] * los(m_full))[None, :], m_full, end=True)
+        self._add(acc, np.array([m_full]), ((end @ kern[0].T) * g[s_end] * los(m_full))[None, :], m_full, end=True)
 
     def _add(self, acc, pos, vals, m_full, end: bool = False) -> None:
         """Add edge values at the nodes ``vals`` [E, n_nodes] at full-rate samples ``pos`` [E]
@@ -383,16 +375,9 @@ class BandEdges:
         every bin of the front end's band (barycentric Lagrange), back to time at F_s/D_fe."""
         m = m_full // self.d_fe
         per_node = sfft.fft(np.ascontiguousarray(acc.T).astype(np.complex64), axis=1, workers=1)  # m-point order
-        if self._weights is None or self._weights.shape[1] != m:
-            x = sfft.fftfreq(m, 1.0 / m) / (m / 2.0)  # ν_q / (π/D_fe)
-            diff = x[None, :] - self.x_nodes[:, None]
-            at_node = diff == 0
-            diff[at_node] = 1.0
-            w = self.bary[:, None] / diff
-            w /= w.sum(axis=0, keepdims=True)
-            cols = at_node.any(axis=0)
-            w[:, cols] = at_node[:, cols]
-            self._weights = w.astype(np.complex64)
+        if self._weights is None or self._weights.shape[1] != m:  # ν_q / (π/D_fe) at each bin
+            lag = _chebyshev_lagrange(sfft.fftfreq(m, 1.0 / m) / (m / 2.0), self.x_nodes.size)[1]
+            self._weights = np.ascontiguousarray(lag.T).astype(np.complex64)
         per_node *= self._weights
         return (sfft.ifft(per_node.sum(axis=0), workers=1) / self.d_fe).astype(np.complex64)
 
@@ -477,11 +462,11 @@ class BandEdges:
         half, n_nodes = self.d_fe // 2, self.x_nodes.size
         base = d * starts // self.d_fe  # each symbol's start on the F_s/D_fe grid
         prof = self.syn.profile
-        nc_full = int(np.ceil(tau0_s * fs - 1e-9))
+        nc_full = int(_ceil_samples(tau0_s))
         kern0 = self.kernels(w_rad_s / fs, self.w_points, self.points_band).transpose(0, 2, 1)  # [D_s, R, J]
 
         def los(p):
-            return np.exp(1j * (w_rad_s * (t_first_s + (p - origin0) / fs) + phase0_rad))
+            return _los_phasor(p, w_rad_s, t_first_s, origin0, phase0_rad)
 
         # the rows: each symbol's tones at its end (shift 0: the previous symbol's at the next
         # start), at its start (shift D·cp_s), and at the taps' integer delays (their spill)
@@ -499,7 +484,7 @@ class BandEdges:
         delta[1:] = g[:-1, None] * prev[:-1] - g[1:, None] * cur[1:]
         # every copy's symbol edges, summed per offset from the symbol starts' grid
         delays, gains_c, basis = self._copies(gains, starts.size)
-        c = np.ceil((tau0_s + delays) * fs - 1e-9).astype(np.int64)
+        c = _ceil_samples(tau0_s + delays)
         rho = (c + half) % self.d_fe - half
         kern = self._point_kernels(kern0, c % d, c - (tau0_s + delays) * fs, rho)  # [C, R, J]
         vals = (delta @ kern.transpose(1, 0, 2).reshape(kern.shape[1], -1)).reshape(starts.size, c.size, n_nodes)
@@ -561,7 +546,7 @@ class BandEdges:
         there ends, the tones summed over the copies on the symbol each holds there."""
         d, fs = self.d_s, SAMPLE_RATE_HZ
         starts, cps = sp["starts"], sp["cps"]
-        nc_full = int(np.ceil(tau0_s * fs - 1e-9))
+        nc_full = int(_ceil_samples(tau0_s))
         s_end = int(np.flatnonzero(nc_full + d * starts <= m_full - 1)[-1])  # the slot (its gains)
         held = (first < m_full).sum(axis=0) - 1  # [C] the symbol each copy holds at M - 1
         mtype, vrow, distinct = cell[0], cell[1], cell[2]
