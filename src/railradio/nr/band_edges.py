@@ -207,6 +207,7 @@ class BandEdges:
         d2d_m: NDArray | None = None,
         serving: NDArray[np.bool_] | None = None,
         motion=None,
+        gains: dict | None = None,
     ) -> NDArray[np.complex64]:
         """The full-rate burst minus the fast path's, through the front end (no noise).
 
@@ -261,9 +262,10 @@ class BandEdges:
             pool_idx, g_r = draws[r]["pool_idx"], g_syms[r]
             if not at_train[r] and syn.data_beam != "none":
                 pool_idx = np.where(draws[r]["busy"], pool_idx, syn.idle_row)
-            gains = None
+            tap = None
             if full[r] and prof.powers.size:
-                gains, _ = syn._tap_gains(links, r, draws[r], amp_l, t_sym)
+                tap = gains.get(r) if gains is not None else None
+                tap = syn._tap_gains(links, r, draws[r], amp_l, t_sym)[0] if tap is None else tap
             link = dict(
                 n_c=int(n_cs[r]),
                 tau0_s=float(links.tau_s[r]),
@@ -271,16 +273,16 @@ class BandEdges:
                 t_first_s=float(t_firsts[r]),
                 phase0_rad=float(links.phase0[r]),
             )
-            if not self.exact and on_grid and motion is None and (gains is None or syn.exact_spill):
+            if not self.exact and on_grid and motion is None and (tap is None or syn.exact_spill):
                 cell = self._cell(links.n_id1[r], links.n_id2[r])
-                self._link_fast(acc, pool_idx, g_r, cell, gains, sp, m_full, **link)
+                self._link_fast(acc, pool_idx, g_r, cell, tap, sp, m_full, **link)
                 continue
             ov = syn.overlay(links.n_id1[r], links.n_id2[r])
             grid = _LinkGrid(pool_idx, ov, ramps[r], g_r, sp["long_of"], sp["long_ramp"])
             geo = None if geo_h is None else geo_h[r]
             syn._fill_grid(u, grid, np.ones((1, 1), np.complex64) if geo is None else geo, geo is not None)
             tones = self._tones(u, pool_idx, g_r, float(frac[r]), sp, None if geo_far is None else geo_far[r])
-            self._link(acc, tones, gains, sp, m_full, **link)
+            self._link(acc, tones, tap, sp, m_full, **link)
         return self._spectrum(acc, m_full)
 
     def _far_geometry(self, links: Links, t_sym: NDArray, motion) -> NDArray[np.complex64]:
@@ -515,11 +517,33 @@ class BandEdges:
         local[1:, nc_off - lo] += spill.reshape(b.size, -1) @ kern.reshape(-1, n_nodes)
         self._scatter(acc, base, lo, local)
 
-    @staticmethod
-    def _scatter(acc, base, lo: int, local) -> None:
-        """Add ``local`` [S, width, J] at grid samples base[s] + lo + 0..width-1 (disjoint)."""
-        m = acc.shape[0]
-        acc[(base[:, None] + lo + np.arange(local.shape[1])[None, :]) % m] += local
+    def _scatter(self, acc, base, lo: int, local) -> None:
+        """Add ``local`` [S, width, J] at grid samples base[s] + lo + 0..width-1 (disjoint):
+        through a strided view of ``acc`` over each run of equally spaced symbol starts, by
+        index for a run that reaches past the burst's end (wrapped)."""
+        m, width = acc.shape[0], local.shape[1]
+        key = ("runs", base.size, int(base[0]), int(base[-1]))
+        runs = self._rows.get(key)
+        if runs is None:
+            step = np.diff(base)
+            cut = np.flatnonzero(step[1:] != step[:-1]) + 1  # a run ends where the spacing changes
+            edges = np.r_[0, cut + 1, base.size]
+            runs = [
+                (int(a), int(b), int(step[a]) if b - a > 1 else 0)
+                for a, b in zip(edges[:-1], edges[1:], strict=True)
+                if b > a
+            ]
+            self._rows[key] = runs
+        row = acc.strides[0]
+        for a, b, stride in runs:
+            start = int(base[a]) + lo
+            if start + stride * (b - a - 1) + width <= m:
+                view = np.lib.stride_tricks.as_strided(
+                    acc[start:], shape=(b - a, width, acc.shape[1]), strides=(stride * row, row, acc.strides[1])
+                )
+                view += local[a:b]
+            else:
+                acc[(base[a:b, None] + lo + np.arange(width)[None, :]) % m] += local[a:b]
 
     def _copies(self, gains, n_sym: int) -> tuple[NDArray[np.float64], NDArray[np.complex128], NDArray]:
         """The delayed copies of a link's symbols: delays [C] (s), gains per symbol [S, C]

@@ -19,6 +19,7 @@ import xarray as xr
 
 from railradio.constants import SPEED_OF_LIGHT_M_S
 from railradio.nr.antenna import RrhArray, TrainArray
+from railradio.nr.band_edges import BandEdges
 from railradio.nr.cellsearch import CellSearch, CellSearchConfig, correlation_key, ss_rsrp_db, warmup_start
 from railradio.nr.channel import tdl_profile
 from railradio.nr.correlator import Correlator
@@ -97,6 +98,10 @@ class Scenario:
     the exact reference (:meth:`railradio.nr.synthesis.Synthesizer._add_spill`), instead of
     being wrapped within its own symbol (the shortcut measured by ``nr.fidelity.spill``). The
     study's config sets it (``nr.channel.exact_spill``, default true)."""
+    band_edges: bool = False
+    """Add the full band's symbol edges inside the front end's band to the band synthesis
+    (:class:`railradio.nr.band_edges.BandEdges`): the burst the front end sees is then the
+    full band's (``nr.channel.band_edges``, default true)."""
     synthesis_decimation: int | None = None
     """The bursts are synthesized at F_s/D_s (the central N_FFT/D_s subcarriers) and brought
     to the receiver's front end F_s/D (``receiver.decimation``) by its ideal anti-aliasing
@@ -176,6 +181,7 @@ class Synthesis:
             scn.load,
             exact_spill=scn.exact_spill,
         )
+        self.edges = BandEdges(self.syn, pool, d_fe) if scn.band_edges and self.down > 1 else None
         self.network = ServingCell(scn.serving)
         self.next_epoch: int | None = None
 
@@ -221,14 +227,13 @@ class Synthesis:
         x, v, a, lb, serving = self.advance(epoch)
         t = epoch * self.scn.trajectory.dt_s
         link_rrh = lb.rrh if lb.link_rrh is None else lb.link_rrh
-        z, s_min = self.syn(
-            lb.links,
-            make_rng(self.seed, self.key + (KEY_EPOCH, int(epoch))),
-            t0_s=t,
-            d2d_m=lb.link_d2d_m,
-            serving=np.asarray(link_rrh) == serving,
-        )
+        rng = make_rng(self.seed, self.key + (KEY_EPOCH, int(epoch)))
+        draws = self.syn.draws(lb.links, rng)  # first, as the synthesizer would: the same stream
+        serv = np.asarray(link_rrh) == serving
+        z, s_min = self.syn(lb.links, rng, t0_s=t, d2d_m=lb.link_d2d_m, serving=serv, draws=draws)
         z = project(z, self.down)  # the receiver's front end
+        if self.edges is not None:  # what the band leaves out there
+            z += self.edges(lb.links, draws, t, lb.link_d2d_m, serv, gains=self.syn.kept_gains)
         return Burst(z, s_min, x, v, a, lb, serving)
 
 
@@ -514,6 +519,7 @@ def scenario_from_config(c: dict) -> Scenario:
         ),
         synthesis_decimation=int(c["channel"].get("synthesis_decimation", rx["decimation"])),
         exact_spill=bool(c["channel"].get("exact_spill", False)),
+        band_edges=bool(c["channel"].get("band_edges", False)),
         search_decimation=int(rx.get("search_decimation", rx["decimation"])),
         n_sinusoids=int(c["channel"]["n_sinusoids"]),
         data_beam=c["traffic"]["data_beam"],

@@ -176,6 +176,8 @@ class Synthesizer:
         self.spill_at = (np.exp(2j * np.pi * np.outer(self.k, cols) / n) / n).astype(np.complex64)  # [n, Q]
         self._overlays: dict = {}
         self._span: tuple | None = None
+        self.kept_gains: dict[int, NDArray[np.complex64]] = {}
+        """The last burst's tap gains per link index (:meth:`_tap_gains`), for the band's edges."""
 
     def span(self, max_tau_s: float) -> dict:
         """Symbol layout covering delays up to ``max_tau_s`` (cached by pre-burst length).
@@ -412,6 +414,7 @@ class Synthesizer:
         at_train = self._at_train(links, serving)
         g_syms, geo_h = self._symbol_gains(links, draws, at_train, sp, t_sym, motion)
         full = np.ones(links.n, dtype=bool) if d2d_m is None else np.asarray(d2d_m) <= self.full_channel_range_m
+        self.kept_gains = {}
         self._add_links(z, links, draws, at_train, g_syms, geo_h, full, sp, t_sym, t0_s)
         if noise:
             var = links.noise_psd_w_hz * fs * links.n_chains
@@ -527,6 +530,7 @@ class Synthesizer:
             gains = h = None
             if full[r] and prof.powers.size:
                 gains, h = self._tap_gains(links, r, draws[r], amp_l, t_sym)
+                self.kept_gains[r] = gains
             self._fill_link(x, u, grid, h, None if geo_h is None else geo_h[r], every, rows)
             y = fft_rows(x, inverse=True, out=x)
             # LOS phase e^{j(2π f t + φ0)} at receive times, applied while placing
