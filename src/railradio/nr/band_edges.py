@@ -224,6 +224,9 @@ class BandEdges:
             Time of the burst start [s].
         d2d_m, serving, motion
             As :meth:`Synthesizer.__call__`.
+        gains : dict of int to numpy.ndarray, optional
+            The taps' gains per link index the synthesizer computed for the same draws
+            (:attr:`Synthesizer.kept_gains`); missing links' gains are computed here.
 
         Returns
         -------

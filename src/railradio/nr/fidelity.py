@@ -15,8 +15,11 @@ shortcut       off (the exact computation)
                through full-rate correlators (no decimated statistics, no prescreen, no ±1
                decimated-lag refinement; the CA-CFAR window and guard the same in time)
 ``band``       the fast path at the full rate (all 600 subcarriers) instead of its band (the
-               central 1024/D_s subcarriers), both through the receiver's front end (ideal
-               anti-aliasing filter and sampling at F_s/D, :func:`~railradio.nr.resample.project`)
+               central 1024/D_s subcarriers) plus, with ``nr.channel.band_edges``, the full
+               band's symbol edges inside the front end's band
+               (:class:`railradio.nr.band_edges.BandEdges`: then only their interpolation is
+               measured), both through the receiver's front end (ideal anti-aliasing filter
+               and sampling at F_s/D, :func:`~railradio.nr.resample.project`)
 ``form``       the fast path's per-symbol frequency-domain taps (without ``exact_spill``, each
                delayed tap's copy of a symbol wrapped cyclically within the symbol's extent:
                its spill into the next symbol omitted) against every tap's own delayed extent,
@@ -65,6 +68,7 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
+from railradio.nr.band_edges import BandEdges
 from railradio.nr.correlator import Correlator
 from railradio.nr.fidelity_detector import detector_setting_receivers
 from railradio.nr.fidelity_receivers import Receivers
@@ -247,6 +251,13 @@ class FidelityRun:
             scn.load,
             exact_spill=not scn.exact_spill,
         )
+        # every path at the synthesis rate adds its own band's edges, as the production does
+        self.edges = {
+            id(syn): BandEdges(syn, pool, scn.receiver.decimation) if self.synthesis.edges is not None else None
+            for syn in (self.fast_fading, self.fast_spill)
+            if syn is not None
+        }
+        self.edges[id(self.fast)] = self.synthesis.edges
         d_c = scn.search_decimation or scn.receiver.decimation
         self.rx = Receivers(scn, selection, d_c)
         self.rx_exact = Receivers(scn, selection, D_FULL)
@@ -326,13 +337,16 @@ class FidelityRun:
         scn, d = self.scn, self.scn.receiver.decimation
         links, common, down = ep.links, ep.common, self.down
 
-        def fast(syn, **kw):  # a fast-path burst through the front end
-            out = syn(links, None, noise=False, **common, **kw)[0]
-            return project(out, down)
+        def fast(syn, **kw):  # a fast-path burst through the front end, with its band's edges
+            out = project(syn(links, None, noise=False, **common, **kw)[0], down)
+            return out + self._edges(syn, ep, links, ep.draws, ep.lb.link_d2d_m, ep.serv, kw.get("motion"))
 
         # the production burst exactly as the main run makes it (its own noise, drawn at the synthesis rate)
         own, s_min = ep.clock("own_noise", lambda: self.fast(links, ep.rng_prod, **common))
-        own = project(own, down)
+        own = ep.clock(
+            "own_noise",
+            lambda: project(own, down) + self._edges(self.fast, ep, links, ep.draws, ep.lb.link_d2d_m, ep.serv),
+        )
         z8 = ep.clock("production", lambda: fast(self.fast))
         n_full = full_rate_noise(
             make_rng(self.seed, self.key + (KEY_FIDELITY_NOISE, int(ep.epoch))), links, z8.size * d
@@ -350,6 +364,14 @@ class FidelityRun:
         z["taps"] = self._exact(ep, "taps", flat=ep.flat, **ref) + n8
         z["exact"] = self._exact(ep, "exact", motion=motion, **ref) + n8
         return _Bursts(z, s_min, n8, z8.size)
+
+    def _edges(self, syn: Synthesizer, ep: _EpochInputs, links, draws, d2d_m, serv, motion=None):
+        """The band's edges (:class:`railradio.nr.band_edges.BandEdges`) of the burst ``syn``
+        has just made from ``draws`` (its kept tap gains), 0 without ``nr.channel.band_edges``."""
+        edges = self.edges[id(syn)]
+        if edges is None:
+            return 0.0
+        return edges(links, draws, ep.t0_s, d2d_m, serv, motion=motion, gains=syn.kept_gains)
 
     def _exact(self, ep: _EpochInputs, name: str, **kw) -> NDArray[np.complex64]:
         """The exact synthesis (:func:`railradio.nr.reference.reference_received` with ``kw``,
@@ -390,16 +412,9 @@ class FidelityRun:
         # interference only: the anchor cell (the list's first) silent, its PCI still searched
         keep = np.asarray(ep.link_rrh) != ep.cand[0]
         sub = _subset_links(ep.links, keep)
-        z_int = self.fast(
-            sub,
-            None,
-            noise=False,
-            t0_s=ep.t0_s,
-            d2d_m=np.asarray(ep.lb.link_d2d_m)[keep],
-            draws=[dr for dr, k in zip(ep.draws, keep, strict=True) if k],
-            serving=ep.serv[keep],
-        )[0]
-        z_int = project(z_int, self.down)
+        d2d, draws = np.asarray(ep.lb.link_d2d_m)[keep], [dr for dr, k in zip(ep.draws, keep, strict=True) if k]
+        z_int = self.fast(sub, None, noise=False, t0_s=ep.t0_s, d2d_m=d2d, draws=draws, serving=ep.serv[keep])[0]
+        z_int = project(z_int, self.down) + self._edges(self.fast, ep, sub, draws, d2d, ep.serv[keep])
         n = b.n_samples
         z_int = z_int[:n] if z_int.size >= n else np.pad(z_int, (0, n - z_int.size))
         return {

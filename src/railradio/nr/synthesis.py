@@ -176,8 +176,7 @@ class Synthesizer:
         self.spill_at = (np.exp(2j * np.pi * np.outer(self.k, cols) / n) / n).astype(np.complex64)  # [n, Q]
         self._overlays: dict = {}
         self._span: tuple | None = None
-        self.kept_gains: dict[int, NDArray[np.complex64]] = {}
-        """The last burst's tap gains per link index (:meth:`_tap_gains`), for the band's edges."""
+        self.kept_gains: dict[int, NDArray[np.complex64]] = {}  # the last burst's tap gains by link (band edges)
 
     def span(self, max_tau_s: float) -> dict:
         """Symbol layout covering delays up to ``max_tau_s`` (cached by pre-burst length).
