@@ -17,7 +17,7 @@ DECISION_LABEL = {
 }
 COMPARISON_LABEL = {
     "search": "the decimated coarse-to-fine search against every full-rate lag",
-    "band": "the band-limited synthesis against the full band through the front end",
+    "band": "the band-limited synthesis (with nr.channel.band_edges, plus its edges) against the full band",
     "form": "each tap's symbols wrapped within their extent against the taps' spill kept",
     "spill": "each tap's symbols wrapped within their extent against the taps' spill kept, at the production's rate",
     "taps": "Rayleigh taps held per symbol against per sample",
