@@ -231,6 +231,14 @@ def test_schema_rejects_renamed_values(dotted, value, must_mention):
         ({"nr.sensitivity.epochs": 500}, ["nr.sensitivity.epochs", "main run's 160 epochs"]),
         ({"chain.speed_halfwidth_kmh": 10.0}, ["chain.speed_halfwidth_kmh", "reaches"]),  # CI: 0-57 km/h
         (
+            {"nr.channel.delay_spread_s": 1e-6},
+            ["nr.channel.delay_spread_s", "within one OFDM symbol"],
+        ),  # TDL-D: 12.5 µs
+        (
+            {"nr.sensitivity.cases": {"long": {"channel": {"tdl": "TDL-A", "delay_spread_s": 5e-7}}}},
+            ["nr.sensitivity.cases.long.channel.delay_spread_s", "TDL-A"],
+        ),
+        (
             {("handover", "sensitivity", "switches", "radio.spacing_m"): [10.0]},
             ["handover.sensitivity.switches.radio.spacing_m[0]", ">= 500"],
         ),

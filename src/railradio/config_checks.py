@@ -26,6 +26,7 @@ from typing import Any
 import numpy as np
 
 from railradio.config import ConfigError, Validator
+from railradio.nr.numerology import CP_NORMAL, N_FFT, SAMPLE_RATE_HZ
 
 Problem = tuple[str, Any, str]
 """(dotted key, its value, what the rule allows)."""
@@ -191,6 +192,19 @@ def nr_problems(nr: Mapping[str, Any], root: str = "nr", main: bool = True) -> I
         yield f"{root}.channel.synthesis_decimation", d_s, f"a divisor of {root}.receiver.decimation = {d}"
     if d_c > d or d % d_c:
         yield f"{root}.receiver.search_decimation", d_c, f"a divisor of {root}.receiver.decimation = {d}"
+    # the synthesis models a delayed tap's copy of a symbol reaching at most into the next
+    # symbol (the taps' spill, the band's edges summed per symbol): the TDL's span within one
+    # normal-CP symbol, less 3 front-end samples for the delays' rounding on that grid
+    span_s = float(np.max(scn.profile.delays_s, initial=0.0))
+    limit_s = (N_FFT + CP_NORMAL - 3 * d) / SAMPLE_RATE_HZ
+    if span_s > limit_s:
+        ds = nr["channel"]["delay_spread_s"]
+        yield (
+            f"{root}.channel.delay_spread_s",
+            ds,
+            f"<= {ds * limit_s / span_s:.3g} s for {nr['channel']['tdl']} "
+            f"(its largest tap delay within one OFDM symbol, {limit_s * 1e6:.2f} µs)",
+        )
     receivers = {"source", *nr["extra_receivers"]}
     if "source" in nr["extra_receivers"]:
         yield f"{root}.extra_receivers.source", "…", "a name other than 'source' (the source's receiver, nr.receiver)"
