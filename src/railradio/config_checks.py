@@ -192,19 +192,7 @@ def nr_problems(nr: Mapping[str, Any], root: str = "nr", main: bool = True) -> I
         yield f"{root}.channel.synthesis_decimation", d_s, f"a divisor of {root}.receiver.decimation = {d}"
     if d_c > d or d % d_c:
         yield f"{root}.receiver.search_decimation", d_c, f"a divisor of {root}.receiver.decimation = {d}"
-    # the synthesis models a delayed tap's copy of a symbol reaching at most into the next
-    # symbol (the taps' spill, the band's edges summed per symbol): the TDL's span within one
-    # normal-CP symbol, less 3 front-end samples for the delays' rounding on that grid
-    span_s = float(np.max(scn.profile.delays_s, initial=0.0))
-    limit_s = (N_FFT + CP_NORMAL - 3 * d) / SAMPLE_RATE_HZ
-    if span_s > limit_s:
-        ds = nr["channel"]["delay_spread_s"]
-        yield (
-            f"{root}.channel.delay_spread_s",
-            ds,
-            f"<= {ds * limit_s / span_s:.3g} s for {nr['channel']['tdl']} "
-            f"(its largest tap delay within one OFDM symbol, {limit_s * 1e6:.2f} µs)",
-        )
+    yield from _tap_span(root, nr, scn.profile.delays_s, d)
     receivers = {"source", *nr["extra_receivers"]}
     if "source" in nr["extra_receivers"]:
         yield f"{root}.extra_receivers.source", "…", "a name other than 'source' (the source's receiver, nr.receiver)"
@@ -218,6 +206,23 @@ def nr_problems(nr: Mapping[str, Any], root: str = "nr", main: bool = True) -> I
     for i, tau in enumerate(nr["imm"]["sojourn_s"]):
         if tau < dt:
             yield f"{root}.imm.sojourn_s[{i}]", tau, f">= {root}.trajectory.dt_s = {dt}"
+
+
+def _tap_span(root: str, nr: Mapping[str, Any], delays_s, d: int) -> Iterator[Problem]:
+    """The synthesis models a delayed tap's copy of a symbol reaching at most into the next
+    symbol (the taps' spill, the band's edges summed per symbol): the TDL's span within one
+    normal-CP symbol, less 3 front-end samples (decimation ``d``) for the delays' rounding on
+    that grid."""
+    span_s = float(np.max(delays_s, initial=0.0))
+    limit_s = (N_FFT + CP_NORMAL - 3 * d) / SAMPLE_RATE_HZ
+    if span_s > limit_s:
+        ds = nr["channel"]["delay_spread_s"]
+        yield (
+            f"{root}.channel.delay_spread_s",
+            ds,
+            f"<= {ds * limit_s / span_s:.3g} s for {nr['channel']['tdl']} "
+            f"(its largest tap delay within one OFDM symbol, {limit_s * 1e6:.2f} µs)",
+        )
 
 
 def _prefixed(root: str, problems: Iterator[Problem]) -> Iterator[Problem]:
