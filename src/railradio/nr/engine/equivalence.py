@@ -1,0 +1,129 @@
+"""The shared receivers (:class:`railradio.nr.engine.SharedEstimator`) against the study's
+(:class:`railradio.nr.simulate.Estimator`) on the same bursts: which decisions the change of
+arithmetic moves (float32 rounding: the PSS + SSS correlation as the sum of its parts, the
+refinement's grid samples read from the lag grid).
+
+Both estimators run the same consecutive epochs of one realization from the same state, each
+with its own cell search, so a changed neighbour list counts and carries on. Counted per
+receiver over the (epoch, candidate) pairs both lists share: detected-block counts, TOAs
+(full-rate lags), AODs (more than 1 µrad apart), and per epoch the selected cell of each
+selection rule.
+
+    python -m railradio.nr.engine.equivalence --config config/config.yaml --first 1500 --epochs 300 --out eq.json
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+
+import numpy as np
+import yaml
+
+from railradio.nr.engine.estimator import SharedEstimator
+from railradio.nr.numerology import SAMPLE_RATE_HZ
+from railradio.nr.simulate import Estimator, Synthesis, scenario_from_config
+from railradio.rng import spawn_key
+
+AOD_TOL_RAD = 1e-6
+"""AODs further apart than this count as changed (the weights' float32 rounding moves an AOD
+by ~1e-7 rad)."""
+
+
+def _selected(m, j: int) -> dict[str, int]:
+    """The RRH each selection rule picks for receiver ``j`` (-1: none)."""
+    rows = {"ss_rsrp": m.ss_rsrp_db, "peak": m.peak[j], "best_score": m.best_score[j]}
+    return {r: int(m.cand[np.nanargmax(v)]) if np.isfinite(v).any() else -1 for r, v in rows.items()}
+
+
+def compare(scn, seed: int, key: tuple[int, ...], epochs: np.ndarray) -> dict:
+    """Run both estimators on the bursts of ``epochs`` (consecutive) and count what differs.
+
+    Parameters
+    ----------
+    scn : railradio.nr.simulate.Scenario
+        The scenario.
+    seed, key : int, tuple of int
+        The config seed and the realization's spawn key.
+    epochs : numpy.ndarray of int
+        Consecutive epoch indices.
+
+    Returns
+    -------
+    dict
+        ``epochs``; ``lists_changed`` (epochs whose neighbour lists differ); per receiver name,
+        over the shared pairs: ``pairs``, ``detections_changed``, ``toa_changed``,
+        ``aod_changed`` and ``selection_changed`` per rule (shares of epochs); ``ms_per_epoch``
+        of each estimator (process time).
+
+    Raises
+    ------
+    ValueError
+        When ``epochs`` are not consecutive.
+    """
+    epochs = np.asarray(epochs, dtype=np.int64)
+    if np.any(np.diff(epochs) != 1):
+        raise ValueError("epochs must be consecutive")
+    syn = Synthesis(scn, seed, key)
+    old, new = Estimator(scn), SharedEstimator(scn)
+    names = [n for n, _, _ in old.receivers]
+    old.start(int(epochs[0]))
+    new.start(int(epochs[0]))
+    count = {n: {"pairs": 0, "detections_changed": 0, "toa_changed": 0, "aod_changed": 0} for n in names}
+    sel = {n: {r: 0 for r in ("ss_rsrp", "peak", "best_score")} for n in names}
+    lists, cost = 0, {"study": 0.0, "shared": 0.0}
+    for e in epochs:
+        b = syn(int(e))
+        t0 = time.process_time()
+        mo = old(int(e), b.z, b.s_min)
+        t1 = time.process_time()
+        mn = new(int(e), b.z, b.s_min)
+        cost["study"] += t1 - t0
+        cost["shared"] += time.process_time() - t1
+        common = np.intersect1d(mo.cand, mn.cand)
+        lists += int(not np.array_equal(mo.cand, mn.cand))
+        io = np.array([int(np.flatnonzero(mo.cand == c)[0]) for c in common], dtype=np.int64)
+        in_ = np.array([int(np.flatnonzero(mn.cand == c)[0]) for c in common], dtype=np.int64)
+        for j, n in enumerate(names):
+            c = count[n]
+            c["pairs"] += common.size
+            c["detections_changed"] += int(np.sum(mo.n_detected[j, io] != mn.n_detected[j, in_]))
+            to, tn = mo.toa_s[j, io] * SAMPLE_RATE_HZ, mn.toa_s[j, in_] * SAMPLE_RATE_HZ
+            c["toa_changed"] += int(np.sum(~((to == tn) | (np.isnan(to) & np.isnan(tn)))))
+            ao, an = mo.aod_rad[j, io], mn.aod_rad[j, in_]
+            c["aod_changed"] += int(np.sum(~((np.abs(ao - an) <= AOD_TOL_RAD) | (np.isnan(ao) & np.isnan(an)))))
+            po, pn = _selected(mo, j), _selected(mn, j)
+            for r in sel[n]:
+                sel[n][r] += int(po[r] != pn[r])
+    n_e = epochs.size
+    out = {"epochs": int(n_e), "lists_changed": lists / n_e}
+    for n in names:
+        p = max(count[n]["pairs"], 1)
+        out[n] = {"pairs": count[n]["pairs"]} | {k: v / p for k, v in count[n].items() if k != "pairs"}
+        out[n]["selection_changed"] = {r: v / n_e for r, v in sel[n].items()}
+    out["ms_per_epoch"] = {k: 1e3 * v / n_e for k, v in cost.items()}
+    return out
+
+
+def main() -> None:  # pragma: no cover - command line
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--config", default="config/config.yaml")
+    ap.add_argument("--realization", type=int, default=1)
+    ap.add_argument("--first", type=int, default=1500)
+    ap.add_argument("--epochs", type=int, default=300)
+    ap.add_argument("--out", default=None)
+    a = ap.parse_args()
+    with open(a.config, encoding="utf-8") as fh:
+        cfg = yaml.safe_load(fh)
+    scn = scenario_from_config(cfg["nr"])
+    res = compare(scn, cfg["seed"], spawn_key("nr", a.realization), np.arange(a.first, a.first + a.epochs))
+    text = json.dumps(res, indent=2)
+    if a.out:
+        with open(a.out, "w", encoding="utf-8") as fh:
+            fh.write(text + "\n")
+    print(text)
+
+
+if __name__ == "__main__":  # pragma: no cover
+    main()

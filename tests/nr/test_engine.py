@@ -1,0 +1,102 @@
+"""The burst engine's shared receivers (railradio.nr.engine): its kernels against the
+formulations they replace, and the receivers against the study's Correlator/Estimator on
+paper-scale bursts, equal to float32 rounding."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+import yaml
+
+from railradio.nr import kernels as study_kernels
+from railradio.nr.correlator import Correlator
+from railradio.nr.engine import SharedCorrelation, SharedEstimator, kernels
+from railradio.nr.numerology import SAMPLE_RATE_HZ
+from railradio.nr.simulate import Estimator, Synthesis, scenario_from_config
+from railradio.rng import spawn_key
+
+from ..conftest import ROOT
+
+
+def _crandn(rng, *shape):
+    return (rng.standard_normal(shape) + 1j * rng.standard_normal(shape)).astype(np.complex64)
+
+
+def test_row_stats_and_cfar_peak_equal_the_study_kernels(rng):
+    c = _crandn(rng, 12, 300)
+    r, edge, stats = np.empty((12, 200), np.float32), np.empty((12, 2), np.float32), np.empty((12, 4))
+    kernels.row_stats(c, c, False, 200, r, edge, stats)
+    r0, mu, sigma, eta, arg = study_kernels.magnitude_stats(c, 200)
+    np.testing.assert_array_equal(r, r0)
+    np.testing.assert_array_equal(stats, np.stack([mu, sigma, eta, arg], axis=1))
+    np.testing.assert_allclose(edge, np.abs(c[:, [299, 200]]), rtol=1e-6)
+    for window, guard in ((16, 2), (64, 8), (150, 30)):  # the last: every window clamped
+        got = kernels.ca_cfar_peak(r, window, guard)
+        for a, b in zip(got, study_kernels.local_mean_argmax(r, window, guard), strict=True):
+            np.testing.assert_array_equal(a, b)
+    d = _crandn(rng, 12, 300)
+    kernels.row_stats(c, d, True, 200, r, edge, stats)
+    np.testing.assert_allclose(r, np.abs(c[:, :200] + d[:, :200]), rtol=1e-6)
+
+
+def test_between_lags_is_the_band_limited_correlation(rng):
+    n, d = 256, 4
+    zf, spec = _crandn(rng, 5, n), _crandn(rng, 3, n)
+    blocks, cells, k0 = np.array([0, 4, 2]), np.array([2, 0, 1]), np.array([0, 77, 255])
+    roots = np.exp(2j * np.pi * np.arange(n) / n).astype(np.complex64)
+    f = np.fft.fftfreq(n, 1.0 / n)
+    theta = 2 * np.pi * np.outer(np.arange(1, d) / d, f) / n
+    got = kernels.between_lags(zf, spec, blocks, cells, k0, roots, np.concatenate([np.cos(theta), np.sin(theta)]))
+    offsets = np.concatenate([-np.arange(d - 1, 0, -1), np.arange(1, d)]) / d
+    p = zf[blocks].astype(complex) * spec[cells]
+    want = np.abs(np.exp(2j * np.pi * np.outer(k0[:, None] + offsets[None, :], f).reshape(3, -1, n) / n) @ p[..., None])
+    np.testing.assert_allclose(got, want[..., 0] / n, rtol=2e-6)
+
+
+def test_pss_part_plus_sss_part_is_the_whole_reference():
+    cfg = yaml.safe_load((ROOT / "config/config.yaml").read_text(encoding="utf-8"))
+    scn = scenario_from_config(cfg["nr"])
+    rc = dataclasses.replace(scn.receiver, decimation=2)
+    cor = Correlator(rc, template_decimation=8)
+    sh = SharedCorrelation([cor])
+    whole = cor.spectrum(17, 2)
+    np.testing.assert_allclose(sh.part("pss", 17, 2) + sh.part("sss", 17, 2), whole, atol=1e-4 * np.abs(whole).max())
+    with pytest.raises(ValueError, match="share"):
+        SharedCorrelation([cor, Correlator(dataclasses.replace(rc, n_blocks=8), template_decimation=8)])
+    with pytest.raises(ValueError, match="at least one"):
+        SharedCorrelation([])
+
+
+@pytest.fixture(scope="module")
+def paper_epochs():
+    """Four paper-scale epochs of realization 0 (an acquisition epoch first), both estimators."""
+    cfg = yaml.safe_load((ROOT / "config/config.yaml").read_text(encoding="utf-8"))
+    scn = scenario_from_config(cfg["nr"])
+    syn = Synthesis(scn, cfg["seed"], spawn_key("nr", 0))
+    old, new = Estimator(scn), SharedEstimator(scn)
+    old.start(2500)
+    new.start(2500)
+    out = []
+    for e in range(2500, 2504):
+        b = syn(e)
+        out.append((old(e, b.z, b.s_min, keep_corr=True), new(e, b.z, b.s_min, keep_corr=True)))
+    return out
+
+
+def test_shared_receivers_equal_the_study_receivers_to_float32_rounding(paper_epochs):
+    """Every receiver (the source's and the robust one) and the cell search on the same
+    bursts: the same lists and detections, TOAs to the lag, AODs and levels to float32
+    rounding."""
+    for mo, mn in paper_epochs:
+        np.testing.assert_array_equal(mn.cand, mo.cand)
+        assert mn.acquired == mo.acquired
+        np.testing.assert_array_equal(mn.n_detected, mo.n_detected)
+        np.testing.assert_array_equal(mn.toa_s * SAMPLE_RATE_HZ, mo.toa_s * SAMPLE_RATE_HZ)
+        np.testing.assert_allclose(mn.aod_rad, mo.aod_rad, rtol=0, atol=1e-6)
+        np.testing.assert_allclose(mn.ss_rsrp_db, mo.ss_rsrp_db, rtol=0, atol=1e-4)
+        np.testing.assert_allclose(mn.peak, mo.peak, rtol=1e-4)
+        np.testing.assert_allclose(mn.best_score, mo.best_score, rtol=1e-4)
+        np.testing.assert_allclose(mn.corr, mo.corr, rtol=1e-4, atol=1e-5 * mo.corr.max())
+    assert paper_epochs[0][0].acquired
