@@ -10,7 +10,8 @@ replacement costs per epoch (railradio.nr.fidelity, the same paths as the fideli
 and the fast path's own exact spill, nr.channel.exact_spill, in shard-like runs), so that the
 choice of what to keep is measured; and the band's exact completion by its symbol edges
 (railradio.nr.band_edges: ``exact_path_ms.band_edges``, and ``band_edges_vs_band`` against
-what the full band adds to the production's time).
+what the full band adds to the production's time); and one burst through the study's path
+against the burst engine's (railradio.nr.engine: ``burst_ms.*``, ``engine_speedup``).
 
     python benchmarks/bench_nr.py --out results/benchmarks/nr_bench.json
 """
@@ -91,34 +92,46 @@ def naive_correlation(z: np.ndarray, s_min: int, cfg, n_id1: np.ndarray, n_id2: 
     return out
 
 
-def shared_receivers(config: str, n_epochs: int) -> dict:
-    """The study's receivers (railradio.nr.simulate.Estimator: the cell search and both
-    receivers, each correlating on its own) against the burst engine's
-    (railradio.nr.engine.SharedEstimator: each correlation computed once) on the same
-    consecutive paper-scale bursts of realization r0 (an acquisition epoch first, as a shard
-    starts), alternated epoch by epoch; process time per epoch."""
-    from railradio.nr.engine import SharedEstimator
+def burst_engine(config: str, n_epochs: int) -> dict:
+    """One burst as the study makes and reads it (railradio.nr.simulate: Synthesis with the
+    band's edges and the front end, then the Estimator's cell search and both receivers,
+    each correlating on its own) against the burst engine (railradio.nr.engine:
+    SpectralSynthesis, the front end in one spectral pass onto the lag grid, and
+    SharedEstimator, each correlation computed once), on the same consecutive paper-scale
+    epochs of realization r0 (an acquisition epoch first, as a shard starts), alternated
+    epoch by epoch; process time per epoch, split into the burst (synthesis, edges, front
+    end) and the receivers."""
+    from railradio.nr.engine import SharedEstimator, SpectralSynthesis
     from railradio.nr.simulate import Estimator, Synthesis
     from railradio.rng import spawn_key
 
     with open(config, encoding="utf-8") as fh:
         cfg = yaml.safe_load(fh)
     scn = scenario_from_config(cfg["nr"])
-    syn = Synthesis(scn, cfg["seed"], spawn_key("nr", 0))
-    ests = {"study": Estimator(scn), "shared": SharedEstimator(scn)}
+    key = spawn_key("nr", 0)
+    paths = {
+        "study": (Synthesis(scn, cfg["seed"], key), Estimator(scn)),
+        "engine": (SpectralSynthesis(scn, cfg["seed"], key), SharedEstimator(scn, on_lag_grid=True)),
+    }
     first = 2500
-    bursts = [syn(e) for e in range(first, first + n_epochs + 1)]
-    for est in ests.values():  # warm-up (untimed): the acquisition epoch, kernels, spectra
-        est.start(first)
-        est(first, bursts[0].z, bursts[0].s_min)
-    cost = dict.fromkeys(ests, 0.0)
-    for i, b in enumerate(bursts[1:], start=first + 1):
-        for name, est in ests.items():
+    cost = {f"{p}.{part}": 0.0 for p in paths for part in ("burst", "receivers")}
+    for i, e in enumerate(range(first, first + n_epochs + 1)):
+        for name, (syn, est) in paths.items():
+            if i == 0:  # warm-up (untimed): the acquisition epoch, kernels, caches
+                est.start(e)
             t0 = time.process_time()
-            est(i, b.z, b.s_min)
-            cost[name] += time.process_time() - t0
-    out = {f"receivers_ms_per_epoch.{k}": 1e3 * v / n_epochs for k, v in cost.items()}
-    out["receivers_shared_speedup"] = cost["study"] / cost["shared"]
+            b = syn(e)
+            t1 = time.process_time()
+            est(e, b.z, b.s_min)
+            t2 = time.process_time()
+            if i:
+                cost[f"{name}.burst"] += t1 - t0
+                cost[f"{name}.receivers"] += t2 - t1
+    out = {f"burst_ms.{k}": 1e3 * v / n_epochs for k, v in cost.items()}
+    for p in paths:
+        out[f"burst_ms.{p}.total"] = out[f"burst_ms.{p}.burst"] + out[f"burst_ms.{p}.receivers"]
+    out["engine_speedup"] = out["burst_ms.study.total"] / out["burst_ms.engine.total"]
+    out["engine_speedup_receivers"] = out["burst_ms.study.receivers"] / out["burst_ms.engine.receivers"]
     return out
 
 
@@ -241,7 +254,7 @@ def main() -> None:
     report["malloc_speedup"] = report["malloc_default_ms_per_burst"] / report["malloc_tuned_ms_per_burst"]
     report["exact_spill_cost_ratio"] = report["exact_spill_ms_per_burst"] / report["malloc_tuned_ms_per_burst"]
     report.update(fft_backends())
-    report.update(shared_receivers(args.config, max(args.epochs, 2) * 5))
+    report.update(burst_engine(args.config, max(args.epochs, 2) * 5))
     report.update(exact_costs(args.config, args.exact_epochs))
     emit(report, args.out)
 

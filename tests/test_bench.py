@@ -47,9 +47,10 @@ def test_bench_nr_smoke(tmp_path):
         "exact_spill_cost_ratio",
         "exact_path_ms.band_edges",
         "band_edges_vs_band",
-        "receivers_ms_per_epoch.study",
-        "receivers_ms_per_epoch.shared",
-        "receivers_shared_speedup",
+        "burst_ms.study.total",
+        "burst_ms.engine.total",
+        "engine_speedup",
+        "engine_speedup_receivers",
     ):
         assert math.isfinite(rep[key]) and rep[key] > 0, key
     shares = [rep[f"project_share_{k}"] for k in ("link", "synthesis_and_channel", "correlation")]

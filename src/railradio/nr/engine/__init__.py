@@ -6,5 +6,6 @@ measure this engine against it on the same bursts.
 
 from railradio.nr.engine.correlation import SharedCorrelation
 from railradio.nr.engine.estimator import SharedEstimator
+from railradio.nr.engine.frontend import SpectralBandEdges, SpectralSynthesis, front_end
 
-__all__ = ["SharedCorrelation", "SharedEstimator"]
+__all__ = ["SharedCorrelation", "SharedEstimator", "SpectralBandEdges", "SpectralSynthesis", "front_end"]

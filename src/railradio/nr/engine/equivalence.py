@@ -1,9 +1,11 @@
-"""The shared receivers (:class:`railradio.nr.engine.SharedEstimator`) against the study's
-(:class:`railradio.nr.simulate.Estimator`) on the same bursts: which decisions the change of
-arithmetic moves (float32 rounding: the PSS + SSS correlation as the sum of its parts, the
+"""The burst engine (:class:`railradio.nr.engine.SpectralSynthesis` and
+:class:`railradio.nr.engine.SharedEstimator`) against the study's path
+(:class:`railradio.nr.simulate.Synthesis` and :class:`~railradio.nr.simulate.Estimator`) on
+the same draws: which decisions the change of arithmetic moves (float32 rounding: the front
+end in one spectral pass, the PSS + SSS correlation as the sum of its parts, the
 refinement's grid samples read from the lag grid).
 
-Both estimators run the same consecutive epochs of one realization from the same state, each
+Both paths run the same consecutive epochs of one realization from the same state, each
 with its own cell search, so a changed neighbour list counts and carries on. Counted per
 receiver over the (epoch, candidate) pairs both lists share: detected-block counts, TOAs
 (full-rate lags), AODs (more than 1 µrad apart), and per epoch the selected cell of each
@@ -22,6 +24,7 @@ import numpy as np
 import yaml
 
 from railradio.nr.engine.estimator import SharedEstimator
+from railradio.nr.engine.frontend import SpectralSynthesis
 from railradio.nr.numerology import SAMPLE_RATE_HZ
 from railradio.nr.simulate import Estimator, Synthesis, scenario_from_config
 from railradio.rng import spawn_key
@@ -55,7 +58,7 @@ def compare(scn, seed: int, key: tuple[int, ...], epochs: np.ndarray) -> dict:
         ``epochs``; ``lists_changed`` (epochs whose neighbour lists differ); per receiver name,
         over the shared pairs: ``pairs``, ``detections_changed``, ``toa_changed``,
         ``aod_changed`` and ``selection_changed`` per rule (shares of epochs); ``ms_per_epoch``
-        of each estimator (process time).
+        of each path, synthesis and receivers (process time).
 
     Raises
     ------
@@ -65,22 +68,23 @@ def compare(scn, seed: int, key: tuple[int, ...], epochs: np.ndarray) -> dict:
     epochs = np.asarray(epochs, dtype=np.int64)
     if np.any(np.diff(epochs) != 1):
         raise ValueError("epochs must be consecutive")
-    syn = Synthesis(scn, seed, key)
-    old, new = Estimator(scn), SharedEstimator(scn)
+    syn, spectral = Synthesis(scn, seed, key), SpectralSynthesis(scn, seed, key)
+    old, new = Estimator(scn), SharedEstimator(scn, on_lag_grid=True)
     names = [n for n, _, _ in old.receivers]
     old.start(int(epochs[0]))
     new.start(int(epochs[0]))
     count = {n: {"pairs": 0, "detections_changed": 0, "toa_changed": 0, "aod_changed": 0} for n in names}
     sel = {n: {r: 0 for r in ("ss_rsrp", "peak", "best_score")} for n in names}
-    lists, cost = 0, {"study": 0.0, "shared": 0.0}
+    lists, cost = 0, {"study": 0.0, "engine": 0.0}
     for e in epochs:
-        b = syn(int(e))
         t0 = time.process_time()
+        b = syn(int(e))
         mo = old(int(e), b.z, b.s_min)
         t1 = time.process_time()
+        b = spectral(int(e))
         mn = new(int(e), b.z, b.s_min)
         cost["study"] += t1 - t0
-        cost["shared"] += time.process_time() - t1
+        cost["engine"] += time.process_time() - t1
         common = np.intersect1d(mo.cand, mn.cand)
         lists += int(not np.array_equal(mo.cand, mn.cand))
         io = np.array([int(np.flatnonzero(mo.cand == c)[0]) for c in common], dtype=np.int64)

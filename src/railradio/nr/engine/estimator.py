@@ -53,10 +53,16 @@ class SharedEstimator(Estimator):
     ----------
     scn : Scenario
         The scenario (as :class:`Estimator`).
+    on_lag_grid : bool
+        The bursts come on the correlation's lag grid F_s/D_c already
+        (:class:`railradio.nr.engine.frontend.SpectralSynthesis`), not at the front end's
+        F_s/D: no interpolation here.
     """
 
-    def __init__(self, scn: Scenario):
+    def __init__(self, scn: Scenario, on_lag_grid: bool = False):
         super().__init__(scn)
+        if on_lag_grid:
+            self.up = 1
         cors = list(self.cors)
         cs_index = self.cs_shared
         if cs_index is None:
