@@ -12,6 +12,7 @@ import scipy.fft as sfft
 import yaml
 
 from railradio.nr import kernels as study_kernels
+from railradio.nr.band_edges import BandEdges
 from railradio.nr.correlator import Correlator
 from railradio.nr.engine import SharedCorrelation, SharedEstimator, SpectralSynthesis, front_end, kernels
 from railradio.nr.numerology import SAMPLE_RATE_HZ
@@ -131,3 +132,19 @@ def test_spectral_synthesis_is_the_study_burst_on_the_lag_grid():
         want = upsample(a.z, 4)
         assert b.s_min == a.s_min and b.x_m == a.x_m and b.serving == a.serving
         np.testing.assert_allclose(b.z, want, rtol=0, atol=2e-6 * np.abs(want).max())
+
+
+def test_scatter_rows_adds_as_band_edges_scatter(rng):
+    """The compiled scatter adds a link's values around the symbol starts exactly as
+    BandEdges._scatter does (strided runs, and the wrapped run past the burst's end)."""
+
+    class _Holder:
+        _rows: dict = {}
+
+    base = np.array([0, 10, 20, 30, 41, 52, 95])  # two runs, the last wrapping past m = 100
+    local = _crandn(rng, base.size, 4, 3)
+    want = np.zeros((100, 3), np.complex128)
+    BandEdges._scatter(_Holder(), want, base, 2, local)
+    got = np.zeros((100, 3), np.complex128)
+    kernels.scatter_rows(got, base, 2, local)
+    np.testing.assert_array_equal(got, want)

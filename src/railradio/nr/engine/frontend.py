@@ -14,6 +14,7 @@ import scipy.fft as sfft
 from numpy.typing import NDArray
 
 from railradio.nr.band_edges import BandEdges, _chebyshev_lagrange
+from railradio.nr.engine import kernels
 from railradio.nr.simulate import KEY_EPOCH, KEY_POOL, Burst, Scenario, Synthesis
 from railradio.nr.ssb import qpsk_pool
 from railradio.rng import make_rng
@@ -21,7 +22,12 @@ from railradio.rng import make_rng
 
 class SpectralBandEdges(BandEdges):
     """:class:`BandEdges` returning the edges' DFT on the front end's m bins (m-point order,
-    the spectrum of what :class:`BandEdges` returns in time) instead of their samples."""
+    the spectrum of what :class:`BandEdges` returns in time) instead of their samples; each
+    link's values added around the symbol starts by a compiled loop
+    (:func:`railradio.nr.engine.kernels.scatter_rows`)."""
+
+    def _scatter(self, acc, base, lo: int, local) -> None:
+        kernels.scatter_rows(acc, np.asarray(base, dtype=np.int64), int(lo), np.ascontiguousarray(local))
 
     def _spectrum(self, acc, m_full) -> NDArray[np.complex64]:
         m = m_full // self.d_fe

@@ -212,3 +212,30 @@ def ca_cfar_peak(r: np.ndarray, window: int, guard: int) -> tuple:
         eta[i] = r[i, bj]
         floor_at[i] = bf
     return k_best, eta, floor_at
+
+
+@njit(cache=True, nogil=True)
+def scatter_rows(acc: np.ndarray, base: np.ndarray, lo: int, local: np.ndarray) -> None:
+    """acc[(base[s] + lo + w) mod M, :] += local[s, w, :] for every symbol s and offset w, in
+    place: one link's edge values added around each symbol start on the F_s/D_fe grid, as
+    :meth:`railradio.nr.band_edges.BandEdges._scatter` adds them (each element of ``acc``
+    receives at most one value per symbol, in the same complex128 arithmetic).
+
+    Parameters
+    ----------
+    acc : numpy.ndarray of complex128
+        The edges' accumulator [M, J], added to in place.
+    base : numpy.ndarray of int64
+        Each symbol's start on the grid, [S].
+    lo : int
+        The link's first offset from the symbol starts.
+    local : numpy.ndarray of complex64
+        Values [S, W, J].
+    """
+    m = acc.shape[0]
+    n_s, width, n_j = local.shape
+    for s in range(n_s):
+        for w in range(width):
+            row = (base[s] + lo + w) % m
+            for j in range(n_j):
+                acc[row, j] += np.complex128(local[s, w, j])
