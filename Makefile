@@ -5,6 +5,10 @@ BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 JOBS   ?= 2
 SNAKE  := $(BIN)/snakemake --workflow-profile workflow/profiles/default
+# CONFIG=my.yaml: a config file stating only what changes, laid over config/config.yaml
+# (figures, numbers, paper, report; reproduce and expected keep their own scale)
+CONFIG ?=
+OVERRIDE := $(if $(CONFIG),--configfile $(CONFIG))
 RUFF_PATHS := src workflow tests benchmarks
 export HDF5_USE_FILE_LOCKING := FALSE
 export MPLBACKEND := Agg
@@ -18,17 +22,17 @@ $(STAMP): pyproject.toml constraints.txt
 	$(BIN)/python -m pip install -q --disable-pip-version-check -c constraints.txt -e '.[test]'
 	touch $(STAMP)
 
-figures: $(STAMP)  ## every paper figure at paper scale
-	$(SNAKE) figures -j$(JOBS)
+figures: $(STAMP)  ## every paper figure at paper scale (CONFIG=my.yaml: with your overrides)
+	$(SNAKE) figures -j$(JOBS) $(OVERRIDE)
 
 numbers: $(STAMP)  ## results/key_numbers.json and results/paper/numbers.tex
-	$(SNAKE) numbers -j$(JOBS)
+	$(SNAKE) numbers -j$(JOBS) $(OVERRIDE)
 
 paper: $(STAMP)  ## results/paper/main.pdf (needs latexmk, see README)
-	$(SNAKE) paper -j$(JOBS)
+	$(SNAKE) paper -j$(JOBS) $(OVERRIDE)
 
 report: figures numbers  ## results/report.html
-	$(SNAKE) all --report results/report.html
+	$(SNAKE) all --report results/report.html $(OVERRIDE)
 
 lint: $(STAMP)  ## ruff (lint and format, pyproject.toml) and Snakemake's linter
 	$(BIN)/ruff check $(RUFF_PATHS)

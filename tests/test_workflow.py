@@ -151,6 +151,31 @@ def test_bad_config_stops_before_any_job(tmp_path, override, key):
     assert not (wd / "results").exists()
 
 
+def test_nested_command_line_config_is_named_and_a_top_level_one_is_taken(tmp_path):
+    """``--config nr={...}`` would reach the schema as strings ("'8' is not of type
+    'integer'"): the workflow stops naming the cause and ``--configfile``; ``seed=7`` works."""
+    wd = _copy_workflow(tmp_path)
+
+    def dry(*config):
+        return subprocess.run(
+            [SNAKEMAKE, "figures", "-n", "--configfile", "config/ci.yaml", "--config", *config],
+            cwd=wd,
+            env=_env(wd),
+            capture_output=True,
+            text=True,
+            check=False,
+            timeout=COMMAND_TIMEOUT_S,
+        )
+
+    run = dry("nr={'n_shards': 8}")
+    out = run.stdout + run.stderr
+    assert run.returncode != 0 and "--config nr=" in out and "--configfile my.yaml" in out, out[-2000:]
+    assert "is not of type" not in out
+    run = dry("seed=7")
+    assert run.returncode == 0, (run.stdout + run.stderr)[-2000:]
+    assert not (wd / "results").exists()
+
+
 def test_ci_key_numbers_match_expected(ci_run):
     msgs = compare(_numbers(ci_run), json.loads(EXPECTED.read_text()), mode="reproduce")
     assert msgs == [], "\n".join(msgs)

@@ -24,6 +24,18 @@ from railradio.config_checks import check_config
 # value stops Snakemake here, naming the key, before any job. The check returns the nr
 # sensitivity cases and map cells it merged and validated; nr.smk plans from them.
 CONFIG_SCHEMA = load_schema(Path(workflow.basedir) / "workflow/schemas/config.schema.yaml")
+# A nested value given with --config (nr={...}) reaches the workflow with its leaves as
+# strings, which the schema would reject one by one as "'8' is not of type 'integer'":
+# name the cause and the way that works instead.
+for _key, _value in dict(workflow.config_settings.config or {}).items():
+    if isinstance(_value, dict):
+        raise ValueError(
+            f"--config {_key}=...: a nested value on the command line reaches the workflow with its "
+            "values as strings, which the config schema rejects. Put nested overrides in a YAML file "
+            f"that states only what changes (e.g. '{_key}: {{n_shards: 8}}') and pass it with "
+            "--configfile my.yaml (make figures CONFIG=my.yaml); --config takes top-level values "
+            "only (seed=7). See docs/configuration.md."
+        )
 validate_config(config, CONFIG_SCHEMA)
 CONFIG_CHECKED = check_config(config, CONFIG_SCHEMA)
 
