@@ -66,8 +66,9 @@ expected: $(STAMP)  ## regenerate tests/expected/key_numbers_ci.json (CI scale, 
 	     --configfile config/ci.yaml -q rules) && \
 	  cp $$d/results/key_numbers.json tests/expected/key_numbers_ci.json && rm -rf $$d
 
-publish: numbers  ## copy the paper-scale key numbers to paper/numbers.json (commit it)
+publish: numbers  ## copy the paper-scale key numbers to paper/numbers.json and regenerate docs/keys.md (commit both)
 	cp results/key_numbers.json paper/numbers.json
+	$(BIN)/python -m railradio.keytable docs paper/numbers.json docs/keys.md
 
 records: $(STAMP)  ## the nr reproduction map and sensitivity cases at paper scale -> paper/{map,cases}_numbers.json (commit them)
 	$(SNAKE) records -j$(JOBS)

@@ -2,11 +2,12 @@
 
 
 rule key_numbers:
-    """Merge the studies' key-number fragments; write the JSON and the LaTeX macros."""
+    """Merge the studies' key-number fragments; write the JSON, the tidy CSV and the LaTeX macros."""
     input:
         KEY_NUMBER_FRAGMENTS,
     output:
         json=report("results/key_numbers.json", caption="../report/key_numbers.rst", category="numbers"),
+        csv=report("results/key_numbers.csv", caption="../report/key_numbers_csv.rst", category="numbers"),
         tex="results/paper/numbers.tex",
         claims="results/paper/claims.tex",
         all_numbers="results/paper/all_numbers.tex",

@@ -65,7 +65,8 @@ def plot_sweep(ds: xr.Dataset, parameter: str, pdf_path: str, png_path: str | No
             capsize=2,
             markerfacecolor="none",
         )
-    ax.plot(x, ds["crlb_m"].values, label="CRLB", **plotting.BOUND_STYLE)
+    # on top: where the fusion attains the bound its markers would hide it
+    ax.plot(x, ds["crlb_m"].values, label="CRLB", zorder=5, **plotting.BOUND_STYLE)
     ax.set_xlabel(label)
     ax.set_ylabel("position RMSE [m]")
     if log_y:

@@ -74,6 +74,7 @@ def plot_cost_vs_m(cost: xr.Dataset, pdf_path, png_path=None) -> None:
 def _rate_plot(ax, summary, name, transform=None, log=False):
     v = summary["speed_kmh"].values
     dv = 0.006 * (v.max() - v.min() + 1.0)  # side-by-side offsets of the upper-bound markers
+    bounds = False
     for j, pol in enumerate(summary["policy"].values):
         p = summary[name].sel(policy=pol).values
         lo = summary[f"{name}_lo"].sel(policy=pol).values
@@ -93,6 +94,19 @@ def _rate_plot(ax, summary, name, transform=None, log=False):
         )
         if log and np.any(~shown):  # zero observed: draw the upper bound only
             ax.plot(v[~shown] + (j - 1) * dv, hi[~shown], marker="v", linestyle="none", color=cont[0].get_color())
+            bounds = True
+    if log and bounds:  # one legend entry for every policy's markers
+        ax.plot([], [], marker="v", linestyle="none", color="grey", label="none observed: 95 % upper bound")
+
+
+def _decades(ax) -> None:
+    """Log y ticks at the decades only, labelled 10ⁿ (one format from 10⁻⁶ to 1)."""
+    from matplotlib.ticker import LogFormatterSciNotation, LogLocator, NullFormatter
+
+    ax.yaxis.set_major_locator(LogLocator(base=10))
+    ax.yaxis.set_major_formatter(LogFormatterSciNotation(base=10))
+    ax.yaxis.set_minor_locator(LogLocator(base=10, subs=np.arange(2, 10)))
+    ax.yaxis.set_minor_formatter(NullFormatter())
 
 
 def plot_pingpong_vs_speed(summary: xr.Dataset, pdf_path, png_path=None) -> None:
@@ -112,6 +126,7 @@ def plot_pingpong_vs_speed(summary: xr.Dataset, pdf_path, png_path=None) -> None
     fig, ax = plotting.figure()
     _rate_plot(ax, summary, "pingpong", log=True)
     plotting.log_axis(ax, "y")
+    _decades(ax)
     ax.set_xlabel("train speed [km/h]")
     ax.set_ylabel("ping-pong rate")
     ax.legend()
@@ -136,6 +151,7 @@ def plot_interruption_vs_speed(summary: xr.Dataset, pdf_path, png_path=None) -> 
     _rate_plot(ax, summary, "success", transform=lambda p: 1.0 - p, log=True)
     ax.axhline(1 - SUCCESS_REQUIREMENT, **plotting.BOUND_STYLE, label="requirement: success ≥ 99.5 %")
     plotting.log_axis(ax, "y")
+    _decades(ax)
     ax.set_xlabel("train speed [km/h]")
     ax.set_ylabel("interruption rate (1 − success)")
     ax.legend()

@@ -1,9 +1,11 @@
-"""Adapter: key-number fragments -> results/key_numbers.json, numbers.tex, claims.tex, and the
-report's table of our key numbers beside the source papers'."""
+"""Adapter: key-number fragments -> results/key_numbers.json, results/key_numbers.csv (tidy,
+with verdicts: railradio.keytable), numbers.tex, claims.tex, and the report's table of our key
+numbers beside the source papers'."""
 import json
 
 from railradio.io import write_json, write_text
 from railradio.keynumbers import claims_html, claims_table, config_to_latex, merge, to_latex
+from railradio.keytable import to_csv
 from railradio.nr.reproduction_map import CELL_KEY
 from railradio.workflow import setup_script
 
@@ -15,6 +17,7 @@ for path in smk.input:
         fragments.append(json.load(fh))
 numbers = merge(fragments)
 write_json(smk.output.json, numbers)
+write_text(smk.output.csv, to_csv(numbers))
 write_text(smk.output.tex, to_latex(numbers))
 write_text(smk.output.claims, claims_table(numbers, with_source_only=True))
 # the map's per-cell keys are its figure and results/key_numbers.json, not the appendix
