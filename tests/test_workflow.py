@@ -156,16 +156,8 @@ def test_nested_command_line_config_is_named_and_a_top_level_one_is_taken(tmp_pa
     'integer'"): the workflow stops naming the cause and ``--configfile``; ``seed=7`` works."""
     wd = _copy_workflow(tmp_path)
 
-    def dry(*config):
-        return subprocess.run(
-            [SNAKEMAKE, "figures", "-n", "--configfile", "config/ci.yaml", "--config", *config],
-            cwd=wd,
-            env=_env(wd),
-            capture_output=True,
-            text=True,
-            check=False,
-            timeout=COMMAND_TIMEOUT_S,
-        )
+    def dry(config):
+        return smk(wd, "figures", "-n", "--config", config, check=False, timeout=COMMAND_TIMEOUT_S)
 
     run = dry("nr={'n_shards': 8}")
     out = run.stdout + run.stderr
