@@ -44,7 +44,8 @@ from railradio.workflow import JOB_ENV
 # simulate_epochs (channel, synthesis, both receivers), as the nr_shard jobs run them.
 _SHARD_RUN = """
 import json, resource, sys, time, yaml
-from railradio.nr.simulate import scenario_from_config, simulate_epochs
+from railradio.nr.epochs import simulate_epochs
+from railradio.nr.simulate import scenario_from_config
 from railradio.rng import spawn_key
 cfg = yaml.safe_load(open(sys.argv[1]))
 cfg["nr"]["channel"]["exact_spill"] = sys.argv[3] == "exact_spill"

@@ -176,7 +176,7 @@ def test_slurm_dry_run_gives_every_job_its_rule_resources_and_cluster_shards(tmp
 
 
 def test_nr_shards_cover_every_epoch_once():
-    from railradio.nr.simulate import shard_epochs
+    from railradio.nr.epochs import shard_epochs
 
     for n_epochs in (7, 160, 2500, 5775):
         for n_shards in (1, 2, 3, 5, 12, 48, n_epochs):
@@ -194,8 +194,9 @@ def test_nr_epochs_identical_whatever_the_shards(tmp_path):
     """Simulated shards written and read back as the workflow does (railradio.nr.runs.read_shards)
     give the same per-epoch outputs for 1, 2 and 3 shards."""
     from railradio.io import write_dataset
+    from railradio.nr.epochs import shard_epochs, simulate_epochs
     from railradio.nr.runs import read_shards
-    from railradio.nr.simulate import scenario_from_config, shard_epochs, simulate_epochs
+    from railradio.nr.simulate import scenario_from_config
     from railradio.rng import spawn_key
 
     c = _ci("nr")

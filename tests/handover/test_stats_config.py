@@ -12,7 +12,7 @@ from scipy.stats import binomtest
 from railradio.config import ConfigError, load_schema, validate_config
 from railradio.handover.cost import cost_grid, full_weight_table, geometric_weight_table
 from railradio.handover.params import Scenario
-from railradio.handover.stats import clopper_pearson_interval, clustered_rate, wilson_interval
+from railradio.stats import clopper_pearson_interval, clustered_rate, wilson_interval
 
 ROOT = Path(__file__).resolve().parents[2]
 

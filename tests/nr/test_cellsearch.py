@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 import yaml
 
+from railradio.nr import epochs as epochs_mod
 from railradio.nr import simulate as sim
 from railradio.nr.cellsearch import CellSearch, CellSearchConfig, neighbour_list, ss_rsrp_db, warmup_start
 from railradio.nr.correlator import BlockCorrelation
@@ -91,8 +92,10 @@ def test_estimates_see_no_truth(monkeypatch):
     replaced by NaN (-1) once the burst is made: the estimator gets the burst, the deployment and its own state only."""
     scn = _scenario(acquire_every=20)
     epochs, key = np.arange(2430, 2450), spawn_key("nr", 0)
-    ref = sim.simulate_epochs(scn, epochs, 7, key)
-    real_call = sim.Synthesis.__call__
+    ref = epochs_mod.simulate_epochs(scn, epochs, 7, key)
+    from railradio.nr.engine import SpectralSynthesis  # the study's synthesis
+
+    real_call = SpectralSynthesis.__call__
 
     def blinded(self, epoch):
         b = real_call(self, epoch)
@@ -104,8 +107,8 @@ def test_estimates_see_no_truth(monkeypatch):
         }
         return sim.Burst(b.z, b.s_min, np.nan, np.nan, np.nan, dataclasses.replace(lb, **nan), -1)
 
-    monkeypatch.setattr(sim.Synthesis, "__call__", blinded)
-    got = sim.simulate_epochs(scn, epochs, 7, key)
+    monkeypatch.setattr(SpectralSynthesis, "__call__", blinded)
+    got = epochs_mod.simulate_epochs(scn, epochs, 7, key)
     assert np.isnan(got["x_true"]).all() and np.isnan(got["d3d"]).all()
     assert int(ref["acquired"].sum()) >= 1 and int(ref["n_detected"].sum()) > 0
     for name in ESTIMATES:
@@ -119,7 +122,10 @@ def test_estimates_identical_for_any_shard_count():
     first, n, key = 2400, 30, spawn_key("nr", 0)
     runs = {}
     for n_shards in (1, 2, 5):
-        parts = [sim.simulate_epochs(scn, first + sim.shard_epochs(n, n_shards, s), 5, key) for s in range(n_shards)]
+        parts = [
+            epochs_mod.simulate_epochs(scn, first + epochs_mod.shard_epochs(n, n_shards, s), 5, key)
+            for s in range(n_shards)
+        ]
         runs[n_shards] = {
             name: np.concatenate([p[name].values for p in parts], axis=parts[0][name].dims.index("epoch"))
             for name in ESTIMATES
@@ -138,7 +144,7 @@ def test_the_list_follows_the_train():
     panels, tens of dB down, so the anchor is often the next one), and it moves along."""
     scn = _scenario()
     dep = scn.deployment
-    ds = sim.simulate_epochs(scn, np.arange(2300, 2420), 3, spawn_key("nr", 2))
+    ds = epochs_mod.simulate_epochs(scn, np.arange(2300, 2420), 3, spawn_key("nr", 2))
     x = ds["x_true"].values
     near3 = np.argsort(np.abs(dep.x_m[None, :] - x[:, None]), axis=1)[:, :3]
     lists = ds["rrh"].values

@@ -314,9 +314,10 @@ def test_at_the_papers_interference_the_production_path_keeps_our_decisions():
     import yaml
 
     from railradio.config import load_schema, validate_config
+    from railradio.nr.epochs import simulate_epochs
     from railradio.nr.fidelity import FidelityRun
     from railradio.nr.fidelity_stats import stack, toa_error_m
-    from railradio.nr.simulate import scenario_from_config, simulate_epochs
+    from railradio.nr.simulate import scenario_from_config
     from railradio.nr.workflow import receiver_selection
     from railradio.rng import spawn_key
 

@@ -9,9 +9,10 @@ import yaml
 from railradio.constants import SPEED_OF_LIGHT_M_S
 from railradio.nr.antenna import RrhArray, TrainArray, facing_panel
 from railradio.nr.ekf import TrackerConfig
+from railradio.nr.epochs import simulate_epochs
 from railradio.nr.geometry import Deployment
 from railradio.nr.link import RadioParams, ShadowingMap, link_budget
-from railradio.nr.simulate import scenario_from_config, simulate_epochs
+from railradio.nr.simulate import scenario_from_config
 from railradio.nr.tracking import track_setup
 from railradio.rng import spawn_key
 

@@ -1,10 +1,14 @@
 """Per-epoch simulation: an epoch's result does not depend on the shard it falls in."""
 
+import logging
+
 import numpy as np
+import pytest
 import xarray as xr
 import yaml
 
-from railradio.nr.simulate import scenario_from_config, shard_epochs, simulate_epochs
+from railradio.nr.epochs import shard_epochs, shard_period, simulate_epochs
+from railradio.nr.simulate import scenario_from_config
 
 from ..conftest import ROOT
 
@@ -27,6 +31,32 @@ def test_epoch_results_independent_of_sharding():
 def test_shards_cover_the_track_once():
     got = np.concatenate([shard_epochs(5775, 12, s) for s in range(12)])
     np.testing.assert_array_equal(got, np.arange(5775))
+
+
+@pytest.mark.parametrize(("n_epochs", "n_shards"), [(5775, 4), (5775, 48), (2500, 10), (1000, 10), (160, 2)])
+def test_shards_start_where_the_receiver_restarts(n_epochs, n_shards):
+    """Every shard starts on a multiple of the restart period (no warm-up replayed) when the
+    run has at least one period per shard; else near-equal blocks. Either way the shards
+    cover the run once and none is empty."""
+    with open(ROOT / "config/config.yaml") as fh:
+        period = shard_period(yaml.safe_load(fh)["nr"])
+    assert period == 100
+    parts = [shard_epochs(n_epochs, n_shards, s, period) for s in range(n_shards)]
+    np.testing.assert_array_equal(np.concatenate(parts), np.arange(n_epochs))
+    assert all(p.size for p in parts)
+    if n_epochs // period >= n_shards:
+        assert all(p[0] % period == 0 for p in parts)
+    with pytest.raises(ValueError, match="period"):
+        shard_epochs(n_epochs, n_shards, 0, 0)
+
+
+def test_a_long_shard_reports_its_progress(caplog):
+    """simulate_epochs logs epochs done, rate and ETA (here after every epoch)."""
+    scn = _scenario()
+    with caplog.at_level(logging.INFO, logger="railradio.nr"):
+        simulate_epochs(scn, np.array([2000, 2001]), 5, (0, 7), progress_every_s=0.0)
+    lines = [r.getMessage() for r in caplog.records if r.name == "railradio.nr"]
+    assert len(lines) == 2 and lines[-1].startswith("epochs 2/2") and "ETA" in lines[-1]
 
 
 def test_data_beam_policies_and_geometry_bounded_window():

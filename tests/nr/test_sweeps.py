@@ -117,7 +117,8 @@ def test_sparse_rrhs_at_the_track_start_give_geometric_truth():
     import yaml
 
     from railradio.config import deep_merge
-    from railradio.nr.simulate import scenario_from_config, simulate_epochs
+    from railradio.nr.epochs import simulate_epochs
+    from railradio.nr.simulate import scenario_from_config
 
     from ..conftest import ROOT
 
@@ -152,7 +153,7 @@ def test_case_scheduling_reuses_bursts_and_cuts_epochs():
 
     nr, sens, cases = _cases_cfg()
     n_main = 5775
-    from railradio.nr.simulate import shard_epochs
+    from railradio.nr.epochs import shard_epochs
 
     s0 = shard_epochs(n_main, nr["n_shards"], 0).size  # epochs of the main run's first shard
     assert s0 >= 400

@@ -312,7 +312,8 @@ def test_the_tracker_sees_no_truth():
     stored order of the candidates."""
     import yaml
 
-    from railradio.nr.simulate import scenario_from_config, simulate_epochs
+    from railradio.nr.epochs import simulate_epochs
+    from railradio.nr.simulate import scenario_from_config
     from railradio.nr.tracking import track
     from railradio.rng import spawn_key
 

@@ -9,8 +9,8 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from railradio.handover.stats import clustered_mean, clustered_rate
 from railradio.keynumbers import KeySpec
+from railradio.stats import clustered_mean, clustered_rate
 
 
 def summarize(shards: Sequence[xr.Dataset]) -> xr.Dataset:

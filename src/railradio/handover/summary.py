@@ -7,7 +7,7 @@ completion incl. retries (successful handovers); delay_all = first command to co
 every handover, a failed one's re-establishment included; delay_trigger = the same from the
 trigger (A3: the start of its time-to-trigger); RSRP-GAP = |serving − target| true
 local-mean power at completion.  Intervals: Wilson with the clustered effective sample size
-(:mod:`railradio.handover.stats`).
+(:mod:`railradio.stats`).
 """
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from railradio.handover.stats import clustered_mean, clustered_rate
+from railradio.stats import clustered_mean, clustered_rate
 
 RATES = ("success", "pingpong", "retried")
 MEANS = ("delay_ms", "delay_all_ms", "delay_trigger_ms", "rsrp_gap_db", "attempts")

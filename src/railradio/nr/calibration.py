@@ -22,7 +22,7 @@ def selected(ds, strength: str = "peak", n_use: int = 3) -> tuple[NDArray, NDArr
     Parameters
     ----------
     ds : xarray.Dataset
-        One receiver's estimates (a :func:`railradio.nr.simulate.simulate_epochs` dataset
+        One receiver's estimates (a :func:`railradio.nr.epochs.simulate_epochs` dataset
         selected at one ``receiver``): ``aod_hat`` [rad], ``toa_hat`` [s], their truths
         ``aod_true``, ``toa_true``, and the strength variables, dims (``epoch``, ``cand``).
     strength : str
@@ -55,7 +55,7 @@ def measurement_errors(
     Parameters
     ----------
     ds : xarray.Dataset
-        One receiver's estimates (a :func:`railradio.nr.simulate.simulate_epochs` dataset
+        One receiver's estimates (a :func:`railradio.nr.epochs.simulate_epochs` dataset
         selected at one ``receiver``): ``aod_hat`` [rad], ``toa_hat`` [s], their truths
         ``aod_true``, ``toa_true``, and the strength variables, dims (``epoch``, ``cand``).
         Also ``d3d`` [m] with ``with_distance``.
@@ -250,7 +250,7 @@ def calibrate(
     Parameters
     ----------
     ds : xarray.Dataset
-        One receiver's estimates (a :func:`railradio.nr.simulate.simulate_epochs` dataset
+        One receiver's estimates (a :func:`railradio.nr.epochs.simulate_epochs` dataset
         selected at one ``receiver``): ``aod_hat`` [rad], ``toa_hat`` [s], their truths
         ``aod_true``, ``toa_true``, and the strength variables, dims (``epoch``, ``cand``).
     measurements : str

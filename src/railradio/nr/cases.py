@@ -15,7 +15,8 @@ from __future__ import annotations
 from typing import Any
 
 from railradio.config import deep_merge, validate_config
-from railradio.nr.simulate import scenario_from_config, shard_epochs
+from railradio.nr.epochs import shard_epochs, shard_period
+from railradio.nr.simulate import scenario_from_config
 from railradio.nr.workflow import sim_config
 
 
@@ -159,7 +160,11 @@ def case_inputs(
             else (n_main_epochs, main_cfg["n_shards"])
         )
         if n <= n_main:
-            return [f"results/nr/estimates/{real}/s{k}.nc" for k in range(n_sh) if shard_epochs(n_main, n_sh, k)[0] < n]
+            return [
+                f"results/nr/estimates/{real}/s{k}.nc"
+                for k in range(n_sh)
+                if shard_epochs(n_main, n_sh, k, shard_period(main_cfg))[0] < n
+            ]
     owner = next(c for c, other in cases.items() if sim_config(other) == sim_config(cfg) and epochs(other) == n)
     n_sh = case_n_shards(cases[owner], main_cfg, sens, real, n_cal_shards)
     return [f"results/nr/cases/{owner}/estimates/{real}/s{k}.nc" for k in range(n_sh)]

@@ -65,7 +65,7 @@ def apply_clock_errors(ds, seed: int, key: tuple[int, ...], rrh_sigma_s: float =
     Parameters
     ----------
     ds : xarray.Dataset
-        Estimates (:func:`railradio.nr.simulate.simulate_epochs`) with ``rrh`` (candidate RRH ids,
+        Estimates (:func:`railradio.nr.epochs.simulate_epochs`) with ``rrh`` (candidate RRH ids,
         dims (``epoch``, ``cand``)) and ``toa_hat`` [s].
     seed : int
         The config seed.

@@ -1,4 +1,4 @@
-"""The per-epoch record of :func:`railradio.nr.simulate.simulate_epochs` and the estimates
+"""The per-epoch record of :func:`railradio.nr.epochs.simulate_epochs` and the estimates
 dataset built from it (``results/nr/estimates/{real}/s{shard}.nc``): the reported epochs'
 truth, for scoring, beside every receiver's estimates.
 """
@@ -124,7 +124,7 @@ def estimates_dataset(scn: Scenario, epochs: np.ndarray, receivers: list[str], r
     xarray.Dataset
         Dims ``epoch``, ``cand``, ``receiver``, ``panel_id`` (and ``block``, ``lag`` for a kept
         correlation); the variables and their units are those of
-        :func:`railradio.nr.simulate.simulate_epochs`.
+        :func:`railradio.nr.epochs.simulate_epochs`.
     """
     n_c = rec.out["rrh"].shape[1]
     ds = xr.Dataset(

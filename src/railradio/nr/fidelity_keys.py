@@ -149,8 +149,8 @@ def detector_key_numbers(ds, noise_fa: dict[str, tuple[int, int]]) -> dict:
     dict of str to dict
         Key name -> its JSON entry (:meth:`railradio.keynumbers.KeySpec.entry`).
     """
-    from railradio.handover.stats import clustered_rate, wilson_interval
     from railradio.keynumbers import KeySpec
+    from railradio.stats import clustered_rate, wilson_interval
 
     out = {}
 

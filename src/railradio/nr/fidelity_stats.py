@@ -181,7 +181,7 @@ def summarize(
 ) -> dict:
     """Every comparison's measures: ``{shortcut: {receiver: {...}}}`` with, per decision,
     the changed share, its 95 % interval (clustered by epoch,
-    :func:`railradio.handover.stats.clustered_rate`) and the number of decisions; and the
+    :func:`railradio.stats.clustered_rate`) and the number of decisions; and the
     distributions' comparison: the two-sample KS p-values of the TOA range and AOD errors,
     the TOA-within-5-m shares and their difference with a paired epoch-bootstrap interval.
 
@@ -211,7 +211,7 @@ def summarize(
     """
     from scipy.stats import ks_2samp
 
-    from railradio.handover.stats import clustered_rate
+    from railradio.stats import clustered_rate
 
     rng = np.random.default_rng(seed)
     inr = truth["in_range"]

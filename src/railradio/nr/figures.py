@@ -2,18 +2,73 @@
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import xarray as xr
 
 from railradio import plotting
 from railradio.constants import SPEED_OF_LIGHT_M_S
-from railradio.nr.keys import toa_floor_m
+from railradio.nr.keys import SPECS, toa_floor_m
 from railradio.nr.numerology import SAMPLE_RATE_HZ
 
 INTEGER_SAMPLE_FLOOR_M = SPEED_OF_LIGHT_M_S / SAMPLE_RATE_HZ / np.sqrt(12)
 """σ of a uniform ±c/(2F_s) range quantization error (0.35 m)."""
 
 MEASUREMENTS_LABEL = {"aod": "AOD", "toa": "TOA", "aod_toa": "AOD+TOA"}
+
+
+SOURCE_STYLE = {"marker": "x", "color": "black", "linestyle": "none", "markersize": 6, "zorder": 5}
+"""How the source's published values are drawn on our curves."""
+
+
+DATA_LABELS = {
+    "others_random": "others at random beams",
+    "all_train": "all beamed at the train",
+    "serving_only": "serving cell only",
+    "none": "none (PSS, SSS only)",
+}
+"""Readable names of the map's data assumptions (``nr.map.data``; another name is shown with
+its underscores as spaces)."""
+
+_MT_CELL = re.compile(r"^mt(\d+)_(.+)$")
+_TPL_CELL = re.compile(r"^tpl_(.+)_sel_(.+)$")
+
+
+def cell_label(name: str) -> str:
+    """A map cell's name as a figure or table shows it: ``mt32_others_random`` ->
+    ``M_T = 32, data: others at random beams``; ``tpl_sss_sel_peak`` -> ``template SSS,
+    selection: peak``.
+
+    Parameters
+    ----------
+    name : str
+        The cell's name (:func:`railradio.nr.reproduction_map.cells`).
+
+    Returns
+    -------
+    str
+        The label (the name itself when it follows neither pattern).
+    """
+    if m := _MT_CELL.match(name):
+        data = DATA_LABELS.get(m.group(2), m.group(2).replace("_", " "))
+        return f"M_T = {m.group(1)}, data: {data}"
+    if m := _TPL_CELL.match(name):
+        tpl = m.group(1).upper().replace("_", "+")
+        return f"template {tpl}, selection: {m.group(2).replace('_', '-')}"
+    return name
+
+
+def _source_quantiles(prefix: str) -> list[tuple[float, float]]:
+    """The source's quantile claims on a position-error CDF, (error m, CDF level), from the
+    key-number specs (:data:`railradio.nr.keys.SPECS`: p95, p99 and the share below 1 m)."""
+    pts = []
+    for name, level in (("err_m.p95", 0.95), ("err_m.p99", 0.99)):
+        if (v := SPECS.get(f"{prefix}.{name}", (None,) * 4)[2]) is not None:
+            pts.append((float(v), level))
+    if (v := SPECS.get(f"{prefix}.frac_submeter", (None,) * 4)[2]) is not None:
+        pts.append((1.0, float(v)))
+    return pts
 
 
 def _cdf(ax, values, **kw):
@@ -52,7 +107,7 @@ def plot_burst_correlation(samples: xr.Dataset, pdf: str, png: str) -> None:
     Parameters
     ----------
     samples : xarray.Dataset
-        A :func:`railradio.nr.simulate.simulate_epochs` dataset with ``corr_sample`` (dims
+        A :func:`railradio.nr.epochs.simulate_epochs` dataset with ``corr_sample`` (dims
         ``cand``, ``block``, ``lag``) and ``corr_sample_epoch``.
     pdf : str
         Path of the PDF figure.
@@ -71,7 +126,8 @@ def plot_burst_correlation(samples: xr.Dataset, pdf: str, png: str) -> None:
 
 def plot_measurement_cdf(tracks: list[xr.Dataset], pdf: str, png: str) -> None:
     """CDFs of the measured RRHs' |AOD error| [deg] and |TOA range error| [m], one curve per
-    receiver, pooled over the realizations, with the half-sample range c/(2F_s) marked.
+    receiver, pooled over the realizations, with the half-sample range c/(2F_s) and the
+    source's 95th percentiles (×) marked.
 
     Parameters
     ----------
@@ -88,6 +144,8 @@ def plot_measurement_cdf(tracks: list[xr.Dataset], pdf: str, png: str) -> None:
         rng = np.concatenate([np.abs(t["range_err"].sel(receiver=rx).values.ravel()) for t in tracks])
         _cdf(a1, aod, label=str(rx), color=f"C{i}")
         _cdf(a2, rng, label=str(rx), color=f"C{i}")
+    for ax, key in ((a1, "meas.aod_err_deg.p95"), (a2, "meas.toa_err_m.p95")):
+        ax.plot([SPECS[key][2]], [0.95], label="source: 95th percentile", **SOURCE_STYLE)
     a1.set_xscale("log")
     a2.set_xscale("log")
     a1.set_xlabel("|AOD error| [deg]")
@@ -103,7 +161,8 @@ def plot_position_cdf(
 ) -> None:
     """CDFs of the 2-D position error [m] after ``skip_s``, one panel per receiver: the EKF of
     each measurement set, the gated AOD+TOA EKF, the snapshot LS fix, the integer-sample σ and
-    (with ``bounds``) the PCRB prediction.
+    (with ``bounds``) the PCRB prediction; the source's quantile claims for its EKF (×: p95,
+    p99, the share below 1 m).
 
     Parameters
     ----------
@@ -139,6 +198,8 @@ def plot_position_cdf(
             pc = np.concatenate([b["pcrb"].values[b["t"].values >= skip_s] for b in bounds])
             _cdf(ax, pc, label="PCRB prediction (measured error levels)", **plotting.BOUND_STYLE)
         ax.axvline(INTEGER_SAMPLE_FLOOR_M, color="grey", linestyle=":", linewidth=1.0, label="integer-sample σ")
+        src = _source_quantiles("track.aod_toa")
+        ax.plot(*zip(*src, strict=True), label="source: EKF AOD+TOA (p95, p99, share < 1 m)", **SOURCE_STYLE)
         ax.set_xscale("log")
         ax.set_xlim(1e-2, 1e4)  # diverged tracks leave the axis: their CDF stays below 1
         ax.set_xlabel("2-D position error [m]")
@@ -260,7 +321,8 @@ def plot_sweeps(numbers: dict, sweeps: dict, sync_sigma_s: dict, pdf: str, png: 
     the integer-sample floor (widened by the RRH clock offsets where a case has them), the
     share of TOAs within 5 m (outliers: another RRH's peak or a false alarm) and the gated
     EKF AOD+TOA mean error, per receiver (key numbers ``sens.nr.<case>.<receiver>.*``); the
-    sweep's reference point (the base settings) circled.
+    sweep's reference point (the base settings) circled; a track lost in a case (no mean
+    error: its ``lost_frac``) marked ▵ at the top of its panel.
 
     Parameters
     ----------
@@ -285,6 +347,7 @@ def plot_sweeps(numbers: dict, sweeps: dict, sync_sigma_s: dict, pdf: str, png: 
         ("track.aod_toa_gated.err_m.mean", "gated EKF mean error [m]", True),
     )
     n = len(sweeps)
+    lost_drawn = False
     fig, axes = plotting.figure(nrows=len(rows), ncols=n, figsize=(1.9 * n + 0.6, 6.0), squeeze=False, sharey="row")
     for j, (name, sw) in enumerate(sweeps.items()):
         x = np.arange(len(sw["cases"]))
@@ -299,6 +362,20 @@ def plot_sweeps(numbers: dict, sweeps: dict, sync_sigma_s: dict, pdf: str, png: 
                     ]
                 )
                 ax.plot(x, vals, marker="o", color=f"C{i}", label=f"{rx} receiver")
+                lost = [numbers.get(f"sens.nr.{c}.{rx}.{metric}", {}).get("lost_frac") or 0.0 for c in sw["cases"]]
+                for xk, share, v in zip(x, lost, vals, strict=True):
+                    if share > 0 and not np.isfinite(v):  # no error to plot: the track was lost
+                        ax.plot(
+                            xk,
+                            0.96,
+                            marker="^",
+                            markerfacecolor="none",
+                            color=f"C{i}",
+                            linestyle="none",
+                            transform=ax.get_xaxis_transform(),
+                            label="track lost (no mean error)" if not lost_drawn else None,
+                        )
+                        lost_drawn = True
                 if ref in sw["cases"]:
                     k = sw["cases"].index(ref)
                     ax.plot(x[k], vals[k], marker="o", markersize=9, markerfacecolor="none", color="black")
@@ -316,7 +393,11 @@ def plot_sweeps(numbers: dict, sweeps: dict, sync_sigma_s: dict, pdf: str, png: 
                 ax.set_xlabel(sw["label"], fontsize=7)
             if j == 0:
                 ax.set_ylabel(label, fontsize=7)
-    axes[0][0].legend(fontsize=6)
+    handles = {}
+    for ax in axes.ravel():  # the lost marker may sit in another panel than the first
+        for h, lab in zip(*ax.get_legend_handles_labels(), strict=True):
+            handles.setdefault(lab, h)
+    axes[0][0].legend(list(handles.values()), list(handles), fontsize=6)
     plotting.save(fig, pdf, png)
 
 
@@ -354,7 +435,7 @@ def plot_reproduction_map(numbers: dict, receivers: dict[str, list[str]], pdf: s
     height = 0.3 * max(n_rows) + 2.0
     fig, axes = plotting.figure(
         ncols=len(names),
-        figsize=(4.6 * len(names), height),
+        figsize=(6.4 * len(names), height),
         squeeze=False,
         gridspec_kw={"width_ratios": [1] * len(names)},
     )
@@ -380,7 +461,7 @@ def plot_reproduction_map(numbers: dict, receivers: dict[str, list[str]], pdf: s
         ax.set_xticks(np.arange(len(CLAIMS)) + 0.5)
         ax.set_xticklabels([c.label for c in CLAIMS.values()], rotation=45, ha="right", fontsize=7)
         ax.set_yticks(np.arange(len(rows)) + 0.5)
-        ax.set_yticklabels(rows, fontsize=7)
+        ax.set_yticklabels([cell_label(c) for c in rows], fontsize=6.5)
         ax.tick_params(length=0)
         ax.grid(False)
         ax.set_title("source's receiver (no gate)" if rx == "source" else f"our receiver ({rx}, gated)", fontsize=9)
@@ -392,7 +473,7 @@ def plot_reproduction_map(numbers: dict, receivers: dict[str, list[str]], pdf: s
         frameon=False,
         bbox_to_anchor=(0.5, 0.0),
     )
-    fig.subplots_adjust(bottom=1.5 / height, top=1 - 0.35 / height, wspace=0.45)
+    fig.subplots_adjust(left=0.14, bottom=1.5 / height, top=1 - 0.35 / height, wspace=0.75)
     plotting.save(fig, pdf, png)
 
 

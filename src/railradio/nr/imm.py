@@ -412,7 +412,7 @@ def track_filters(
     Parameters
     ----------
     ds : xarray.Dataset
-        One receiver's estimates (:func:`railradio.nr.simulate.simulate_epochs` selected at one
+        One receiver's estimates (:func:`railradio.nr.epochs.simulate_epochs` selected at one
         ``receiver``): ``rrh``, ``aod_hat`` [rad], ``toa_hat`` [s] and the ``strength`` variable, dims
         (``epoch``, ``cand``); ``train_panel_x`` [m] for the panels' lever arm.
     rrh_x : numpy.ndarray

@@ -240,7 +240,7 @@ def shard_paths(cell: str, real: str, all_cells: dict[str, dict], main_cfg: dict
     list of str
         Paths of the estimate shards (netCDF), shard order.
     """
-    from railradio.nr.simulate import shard_epochs
+    from railradio.nr.epochs import shard_epochs, shard_period
 
     if real == "cal":
         return [f"results/nr/map/{calibration_owner(cell, all_cells)}/estimates/cal/s0.nc"]
@@ -252,7 +252,9 @@ def shard_paths(cell: str, real: str, all_cells: dict[str, dict], main_cfg: dict
     return [
         f"results/nr/estimates/r0/s{k}.nc"
         for k in range(n_sh)
-        if (lambda e: e.size > 0 and e[0] < end and e[-1] >= first)(shard_epochs(n_main_epochs, n_sh, k))
+        if (lambda e: e.size > 0 and e[0] < end and e[-1] >= first)(
+            shard_epochs(n_main_epochs, n_sh, k, shard_period(main_cfg))
+        )
     ]
 
 

@@ -44,7 +44,7 @@ def read_shards(paths: Sequence[str]) -> xr.Dataset:
     Returns
     -------
     xarray.Dataset
-        The realization's :func:`railradio.nr.simulate.simulate_epochs` dataset over all the
+        The realization's :func:`railradio.nr.epochs.simulate_epochs` dataset over all the
         shards' epochs.
     """
     return xr.concat(

@@ -1,11 +1,14 @@
-"""Per-epoch simulation of the nr study: channel, received burst, per-cell estimates.
+"""The nr study's scenario and its reference epoch path: channel, received burst, per-cell
+estimates.
 
-One call of :func:`simulate_epochs` handles any set of epochs (a shard of the track); every
-random draw is keyed by (realization, epoch) or (realization, RRH), and the receiver's
-state restarts at fixed acquisition epochs, so the result of an epoch does not depend on
-the shard it falls in. Synthesis (truth -> burst, :class:`Synthesis`) and estimation
-(burst -> measurements, :class:`Estimator`) are separate: the estimator never receives the
-truth.
+:class:`Scenario` holds one realization's settings (:func:`scenario_from_config` builds it
+from the config). Synthesis (truth -> burst, :class:`Synthesis`) and estimation (burst ->
+measurements, :class:`Estimator`) are separate: the estimator never receives the truth.
+Every random draw is keyed by (realization, epoch) or (realization, RRH), and the receiver's
+state restarts at fixed acquisition epochs. The study runs these through the burst engine
+(:mod:`railradio.nr.engine`, :func:`railradio.nr.epochs.simulate_epochs`), which gives their
+decisions on the same draws; the classes here are the reference that the engine, the
+fidelity target and the tests are held to.
 """
 
 from __future__ import annotations
@@ -15,7 +18,6 @@ from dataclasses import dataclass, field
 from functools import cached_property
 
 import numpy as np
-import xarray as xr
 
 from railradio.constants import SPEED_OF_LIGHT_M_S
 from railradio.nr.antenna import RrhArray, TrainArray
@@ -23,7 +25,6 @@ from railradio.nr.band_edges import BandEdges
 from railradio.nr.cellsearch import CellSearch, CellSearchConfig, correlation_key, ss_rsrp_db, warmup_start
 from railradio.nr.channel import tdl_profile
 from railradio.nr.correlator import Correlator
-from railradio.nr.estimates_dataset import EpochRecord, estimates_dataset
 from railradio.nr.geometry import Deployment, Trajectory
 from railradio.nr.link import RadioParams, ShadowingMap, link_budget
 from railradio.nr.numerology import SAMPLE_RATE_HZ
@@ -393,64 +394,6 @@ class Estimator:
         return out
 
 
-def simulate_epochs(
-    scn: Scenario, epochs: np.ndarray, seed: int, key: tuple[int, ...], keep_corr_epochs: tuple[int, ...] = ()
-) -> xr.Dataset:
-    """Simulate the given epochs of one realization.
-
-    Synthesis (:class:`Synthesis`, truth -> burst) and estimation (:class:`Estimator`,
-    burst -> measurements) are separate; the truth of each epoch is kept only to score.
-    Epochs since the last fixed acquisition epoch before each requested one are replayed
-    first (:func:`railradio.nr.cellsearch.warmup_start`), so an epoch's result does not
-    depend on which other epochs are requested.
-
-    Parameters
-    ----------
-    scn : Scenario
-        The scenario.
-    epochs : array_like of int
-        Epoch indices (t = epoch · dt, dt = ``scn.trajectory.dt_s`` in s); strictly increasing.
-    seed, key : int, tuple of int
-        Config seed and the realization's spawn key.
-    keep_corr_epochs : tuple of int
-        Epochs whose per-block correlation functions are kept (for inspection; only the
-        first of them is stored, as ``corr_sample``).
-
-    Returns
-    -------
-    xarray.Dataset
-        Dimensions ``epoch`` × ``cand`` (the receiver's neighbour list, its anchor cell
-        first): truth (position, speed, acceleration; per candidate 3-D distance, AOD,
-        delay, received power) and estimates (candidate list, SS-RSRP, detections, AOD,
-        TOA, combined peak), the latter per ``receiver``: e.g. ``toa_hat`` [s] and ``aod_hat``
-        [rad] with dims (``receiver``, ``epoch``, ``cand``); ``toa_true`` [s], ``aod_true`` [rad],
-        ``ss_rsrp`` and ``rx_power`` per (``epoch``, ``cand``); ``x_true`` [m], ``v_true`` [m/s],
-        ``a_true`` [m/s²], ``t`` [s], ``sir_best`` [dB] per ``epoch``.
-
-    Raises
-    ------
-    ValueError
-        When ``epochs`` is not strictly increasing, or (from :class:`Synthesis` /
-        :class:`Estimator`) when a decimation setting does not divide the front end's.
-    """
-    epochs = np.asarray(epochs, dtype=np.int64)
-    if np.any(np.diff(epochs) <= 0):
-        raise ValueError("epochs must be strictly increasing")
-    dep = scn.deployment
-    synth = Synthesis(scn, seed, key)
-    est = Estimator(scn)
-    n_c = min(scn.cell_search.n_neighbours, dep.n_rrh)
-    rec = EpochRecord.empty(len(est.receivers), epochs.size, n_c)
-    for i, e in enumerate(epochs):
-        for w in range(est.start(int(e)), int(e)):  # warm-up: the cell search's state at e
-            b = synth(w)
-            est(w, b.z, b.s_min, report=False)
-        b = synth(int(e))
-        m = est(int(e), b.z, b.s_min, keep_corr=int(e) in keep_corr_epochs)
-        rec.record(i, int(e), b, m, dep)
-    return estimates_dataset(scn, epochs, [name for name, _, _ in est.receivers], rec)
-
-
 def scenario_from_config(c: dict) -> Scenario:
     """Build the :class:`Scenario` from the ``nr`` section of the workflow config.
 
@@ -551,31 +494,3 @@ def _trajectory(phases, dt_s, v0_m_s: float = 0.0) -> Trajectory:
     """A :class:`Trajectory` from config phases ``[[duration s, acceleration m/s²], ...]``
     and a start speed [m/s]."""
     return Trajectory(tuple(tuple(map(float, p)) for p in phases), float(dt_s), v0_m_s=float(v0_m_s))
-
-
-def shard_epochs(n_epochs: int, n_shards: int, shard: int) -> np.ndarray:
-    """Epoch indices of one shard: contiguous, near-equal blocks.
-
-    Parameters
-    ----------
-    n_epochs : int
-        Epochs of the whole run.
-    n_shards : int
-        Number of shards.
-    shard : int
-        Shard index, in ``0..n_shards - 1``.
-
-    Returns
-    -------
-    numpy.ndarray
-        The shard's epoch indices (int, increasing).
-
-    Raises
-    ------
-    ValueError
-        When ``shard`` is outside ``0..n_shards - 1``.
-    """
-    if not 0 <= shard < n_shards:
-        raise ValueError(f"shard must be in 0..{n_shards - 1}, got {shard!r}")
-    edges = np.linspace(0, n_epochs, n_shards + 1).round().astype(int)
-    return np.arange(edges[shard], edges[shard + 1])

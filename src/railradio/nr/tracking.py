@@ -195,7 +195,7 @@ def track(
     snapshot: bool = True,
     lever_arm: bool = True,
 ) -> dict[str, NDArray]:
-    """Track one realization from a :func:`railradio.nr.simulate.simulate_epochs` dataset.
+    """Track one realization from a :func:`railradio.nr.epochs.simulate_epochs` dataset.
 
     The first epoch with measurements gives the initial state (snapshot LS position, at
     rest: the source's trajectory starts from standstill) and P0 (its covariance; speed and
@@ -205,7 +205,7 @@ def track(
     Parameters
     ----------
     ds : xarray.Dataset
-        One receiver's estimates (a :func:`railradio.nr.simulate.simulate_epochs` dataset
+        One receiver's estimates (a :func:`railradio.nr.epochs.simulate_epochs` dataset
         selected at one ``receiver``): ``aod_hat`` [rad], ``toa_hat`` [s], their truths
         ``aod_true``, ``toa_true``, and the strength variables, dims (``epoch``, ``cand``).
         Also ``rrh`` (candidate RRH indices) and, for the panels' lever arm, ``train_panel_x`` [m].

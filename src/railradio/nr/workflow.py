@@ -3,8 +3,19 @@ fingerprint: a change here re-runs nothing by itself)."""
 
 from __future__ import annotations
 
-SIM_KEYS = ("trajectory", "deployment", "radio", "antenna", "channel", "receiver", "extra_receivers", "traffic")
-"""The sections of the ``nr`` config that define the simulated bursts."""
+SIM_KEYS = (
+    "trajectory",
+    "deployment",
+    "radio",
+    "antenna",
+    "channel",
+    "receiver",
+    "extra_receivers",
+    "traffic",
+    "cell_search",
+)
+"""The sections of the ``nr`` config that define the simulated bursts and the estimates made of
+them (the cell search names the measured RRHs)."""
 
 
 def sim_config(c: dict) -> dict:

@@ -4,7 +4,8 @@ import numpy as np
 
 from railradio.io import write_dataset
 from railradio.nr.cellsearch import warmup_start
-from railradio.nr.simulate import Synthesis, scenario_from_config, simulate_epochs
+from railradio.nr.epochs import simulate_epochs
+from railradio.nr.simulate import Synthesis, scenario_from_config
 from railradio.rng import spawn_key
 from railradio.workflow import setup_script
 

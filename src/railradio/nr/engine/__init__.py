@@ -1,7 +1,8 @@
-"""The nr burst engine (being built): each correlation computed once for every receiver of an
-epoch, and the receiver's front end in one spectral pass. Not yet in the pipeline: the study
-runs :mod:`railradio.nr.simulate`; ``make bench`` and :mod:`railradio.nr.engine.equivalence`
-measure this engine against it on the same bursts.
+"""The nr burst engine: each correlation computed once for every receiver of an epoch, and
+the receiver's front end in one spectral pass. The study runs it
+(:func:`railradio.nr.epochs.simulate_epochs`); :mod:`railradio.nr.engine.equivalence`,
+``make bench`` and the fidelity target (:func:`railradio.nr.fidelity.check_production`) hold
+it to the reference path of :mod:`railradio.nr.simulate` on the same bursts.
 """
 
 from railradio.nr.engine.correlation import SharedCorrelation

@@ -1,6 +1,7 @@
-"""Binomial confidence intervals for the Monte Carlo rates, with clustered trials.
+"""Binomial confidence intervals for Monte Carlo rates, with clustered trials (the handover,
+chain and nr fidelity studies' rates).
 
-The N nodes of one train cross the same shadowing field, so the N·R node handovers of R
+In the handover study, the N nodes of one train cross the same shadowing field, so the N·R node handovers of R
 runs are not independent.  A rate's interval uses the effective number of trials
 n_eff = p(1 − p)/Var(p̂), Var(p̂) from the spread of the per-run rates (between-cluster
 variance), bounded to [R, N·R]; with no event (or all events) n_eff = R.
