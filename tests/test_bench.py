@@ -47,7 +47,7 @@ def test_bench_nr_smoke(tmp_path):
         "exact_spill_cost_ratio",
         "exact_path_ms.band_edges",
         "band_edges_vs_band",
-        "burst_ms.study.total",
+        "burst_ms.reference.total",
         "burst_ms.engine.total",
         "engine_speedup",
         "engine_speedup_receivers",
