@@ -214,6 +214,10 @@ class Execution:
     gap_db: np.ndarray  # true RSRP_s − RSRP_t at completion_x_m [dB]
     delay_all_s: np.ndarray  # command (or earlier RLF) to completion incl. re-establishment [s]
     t_detect_s: np.ndarray  # failure detection after the first command [s] (NaN: success)
+    kind: np.ndarray | None = None  # stages rule: outcome class (railradio.handover.stages codes)
+    stage: np.ndarray | None = None  # stages rule: the stage that failed (STAGE_* codes)
+    occasions: np.ndarray | None = None  # stages rule: PRACH occasions used
+    t310_at_command: np.ndarray | None = None  # stages rule: the serving link's T310 ran at the command
 
 
 def rlf_window_samples(ex, period_s: float) -> tuple[int, int]:
@@ -307,6 +311,51 @@ def target_ok(ctx: BlockContext, run: np.ndarray, hb_m: np.ndarray) -> np.ndarra
     return np.mean(sinr_db(r_t, r_s, rd), axis=1) >= rd.q_out_db
 
 
+def link_monitor(ctx: BlockContext):
+    """Both links' radio-link monitoring on the block's indication grid
+    (:class:`railradio.handover.stages.LinkMonitor`, cached per block)."""
+    from railradio.handover.stages import LinkMonitor
+
+    sc = ctx.scn
+    cfg = sc.execution.rlm(sc.radio)
+    key = ("monitor", cfg)
+    if key not in ctx._cache:
+        x = rlm_positions_m(ctx.kin, cfg.indication_s)
+        ctx._cache[key] = LinkMonitor(x, ctx.true_rsrp_dbm, ctx.n_runs, sc.radio, cfg)
+    return ctx._cache[key]
+
+
+def execute_stages(ctx: BlockContext, run: np.ndarray, hb_m: np.ndarray) -> Execution:
+    """Handovers commanded at true positions ``hb_m`` under the ``stages`` rule
+    (:func:`railradio.handover.stages.execute_stages`): one attempt; a failed handover is
+    recovered by re-establishment ``reestablish_s`` after the failure is detected.
+    ``delay_s`` is command to completion (successes), ``delay_all_s`` that or, for a failure,
+    the time from the command (or the earlier radio-link failure) to re-establishment."""
+    from railradio.handover.stages import execute_stages as stages
+
+    ex = ctx.scn.execution
+    v = ctx.kin.speed_m_s
+    hb = np.asarray(hb_m, dtype=float)
+    out = stages(link_monitor(ctx), ex.stage_times(), run, hb, v)
+    delay = np.where(out.success, (out.completion_x_m - hb) / v, np.nan)
+    delay_all = np.where(out.success, delay, ex.reestablish_s + np.maximum(np.nan_to_num(out.t_detect_s), 0.0))
+    he = np.where(np.isfinite(out.completion_x_m), out.completion_x_m, hb + v * ex.t0_s)
+    r_s, r_t = ctx.true_rsrp_dbm(run, he)
+    return Execution(
+        np.ones(hb.size, dtype=np.int64),
+        out.success,
+        he,
+        delay,
+        r_s - r_t,
+        delay_all,
+        out.t_detect_s,
+        out.kind,
+        out.stage,
+        out.occasions,
+        out.t310_at_command,
+    )
+
+
 def execute(ctx: BlockContext, run: np.ndarray, hb_m: np.ndarray, retry_allowed) -> Execution:
     """Execute handovers commanded at true positions ``hb_m`` (flat arrays, one per crossing).
 
@@ -323,6 +372,8 @@ def execute(ctx: BlockContext, run: np.ndarray, hb_m: np.ndarray, retry_allowed)
     """
     sc = ctx.scn
     ex = sc.execution
+    if ex.failure_rule == "stages":
+        return execute_stages(ctx, run, hb_m)
     v = ctx.kin.speed_m_s
     n = hb_m.shape[0]
     attempts = np.zeros(n, dtype=np.int64)

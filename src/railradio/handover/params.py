@@ -182,7 +182,13 @@ class Execution:
         a handover back to the previous cell within this time of completion is a
         ping-pong [TR 36.839's minimum time of stay, 1 s].
     failure_rule
-        when an attempt fails.  ``rlm`` (the default, the 3GPP procedures): radio-link
+        when a handover fails.  ``stages`` (the default): the procedure's failure stages,
+        each on its own link (:mod:`railradio.handover.stages`: the command lost while the
+        serving link's T310 runs, access at the PRACH occasions while T304 runs, radio-link
+        failure on the new link shortly after completion; outcomes too late / too early /
+        other, TS 36.300 §22.4.2.2, TR 36.839 §5.2.1); one attempt, a failure goes to
+        re-establishment (``max_attempts``, ``tz_s`` and ``retry`` apply to the other rules).
+        ``rlm`` (the earlier 3GPP-based rule, a case): radio-link
         monitoring (:mod:`railradio.handover.rlm`: indications every ``rlm_indication_s``
         along the train's path from the start of the crossing, out-of-sync when the
         ``rlf_eval_s`` mean of the serving SINR is below Q_out, in-sync when the
@@ -202,6 +208,21 @@ class Execution:
     rlm_indication_s, rlm_qin_eval_s, rlm_n310, rlm_n311
         ``rlm`` rule: interval between indications (TS 36.213 §4.2.1: 10 ms), Qin
         evaluation period (TS 36.133 §7.6: 100 ms), N310 and N311 (TS 36.331 §9.2.5: 1, 1).
+    report_delay_s
+        measurement report to the command's reception: the network's handover preparation
+        (every rule; the joint decision aims its band at completion ``report_delay_s + t0_s``
+        after its decision).
+    rrc_processing_s
+        ``stages``: command reception to the first PRACH occasion (TS 36.331 §11.2: 15 ms
+        for an RRCConnectionReconfiguration with mobility); the rest of ``t0_s`` is the random
+        access and path switch after a successful occasion.
+    ra_period_s
+        ``stages``: between two PRACH occasions (one per 10 ms radio frame).
+    t304_s
+        ``stages``: T304, the time access may take from the command (TS 36.331 §6.3.2).
+    monitor_s
+        ``stages``: a T310 started on the new link within this time of completion that
+        expires is a radio-link failure shortly after the handover (TS 36.300 §22.4.2.2).
     reestablish_s
         recovery after a failed handover (every attempt failed): RRC connection
         re-establishment (TS 36.331 §5.3.7) completes this long after the failure is
@@ -217,7 +238,7 @@ class Execution:
     max_attempts: int = 2
     retry: str = "common"
     pingpong_window_s: float = 1.0
-    failure_rule: str = "rlm"
+    failure_rule: str = "stages"
     rlf_t310_s: float = 1.0
     rlf_eval_s: float = 0.2
     rlm_indication_s: float = 0.010
@@ -225,6 +246,11 @@ class Execution:
     rlm_n310: int = 1
     rlm_n311: int = 1
     reestablish_s: float = 0.240
+    report_delay_s: float = 0.050
+    rrc_processing_s: float = 0.015
+    ra_period_s: float = 0.010
+    t304_s: float = 0.500
+    monitor_s: float = 1.0
 
     def __post_init__(self) -> None:
         _check("t0_s", self.t0_s, 0.0, 1.0)
@@ -234,7 +260,12 @@ class Execution:
         _choice("retry", self.retry, ("common", "joint_band"))
         _check("pingpong_window_s", self.pingpong_window_s, 0.0, 60.0)
         _check("reestablish_s", self.reestablish_s, 0.0, 10.0)
-        _choice("failure_rule", self.failure_rule, ("instant", "rlf", "rlm"))
+        _choice("failure_rule", self.failure_rule, ("instant", "rlf", "rlm", "stages"))
+        _check("report_delay_s", self.report_delay_s, 0.0, 1.0)
+        _check("rrc_processing_s", self.rrc_processing_s, 0.0, self.t0_s)
+        _check("ra_period_s", self.ra_period_s, 0.0, 0.1, lo_open=True)
+        _check("t304_s", self.t304_s, self.rrc_processing_s, 10.0)
+        _check("monitor_s", self.monitor_s, 0.0, 60.0)
         _check("rlf_t310_s", self.rlf_t310_s, 0.0, 10.0)
         _check("rlf_eval_s", self.rlf_eval_s, 0.0, 2.0, lo_open=True)
         _check("rlm_indication_s", self.rlm_indication_s, 0.0, 1.0, lo_open=True)
@@ -243,6 +274,20 @@ class Execution:
             v = getattr(self, name)
             if not isinstance(v, int) or not 1 <= v <= 20:
                 raise ValueError(f"{name} must be an integer in 1..20 (TS 36.331 §6.3.6), got {v!r}")
+
+    @property
+    def lead_s(self) -> float:
+        """Decision (report) to completion when everything goes first time: the report delay
+        plus T0 [s]."""
+        return self.report_delay_s + self.t0_s
+
+    def stage_times(self):
+        """The ``stages`` rule's times (:class:`railradio.handover.stages.StageTimes`)."""
+        from railradio.handover.stages import StageTimes
+
+        return StageTimes(
+            self.report_delay_s, self.rrc_processing_s, self.t0_s, self.ra_period_s, self.t304_s, self.monitor_s
+        )
 
     def rlm(self, radio: Radio) -> RlmConfig:
         """The ``rlm`` rule's constants, with Q_out and Q_in from ``radio``."""

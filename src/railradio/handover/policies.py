@@ -236,7 +236,8 @@ def head_band(ctx: BlockContext) -> Band:
     sg, srg = np.cumsum(gz, axis=1), np.cumsum(r * gz, axis=1)
     a_hat, n_hat = fit_from_sums(s1, sr, srr, sg, srg, jt, rd.pathloss_exponent)
     pl_e, pr_e = band_edges_m(gaph, a_hat, n_hat, rd)
-    pl, pr = pl_e - v * sc.execution.t0_s, pr_e - v * sc.execution.t0_s
+    # the command comes report_delay_s after the decision and completes T0 later
+    pl, pr = pl_e - v * sc.execution.lead_s, pr_e - v * sc.execution.lead_s
     xm = 0.5 * (pl + pr)
     trig = (s1 >= jt.min_fit_samples) & (xhat >= xm)
     k = first_true(trig, default=ctx.kin.n_samples - 1)
@@ -275,7 +276,7 @@ def joint_nodes(ctx: BlockContext, band: Band, weights: np.ndarray, method: str)
     gaps = joint_gaps(ctx)
     reg = joint_regressors(ctx)
     offs = ctx.kin.node_offsets_m
-    pr_retry = band.pr_m - v * (sc.execution.t0_s + sc.execution.tz_s)
+    pr_retry = band.pr_m - v * (sc.execution.lead_s + sc.execution.tz_s)
     k = np.zeros((n_a, b_n, n_n), dtype=np.intp)
     x_trig = np.zeros((n_a, b_n, n_n))
     dp = np.zeros((n_a, b_n, n_n))
@@ -343,7 +344,7 @@ class JointPolicy(Policy):
             # execution.retry = joint_band (the earlier joint-only rule, a case): one second
             # attempt, which must be executed (or completed) before PR (source eq. 9), judged
             # from the estimated position at the command plus v(T0 + TZ), serving link or not
-            est = xhat_cmd[sel] + v * (ex.t0_s + ex.tz_s) * a + back
+            est = xhat_cmd[sel] + v * ex.report_delay_s + v * (ex.t0_s + ex.tz_s) * a + back
             return (a < 2) & (est <= pr_flat[sel])
 
         retry = band_retry if ex.retry == "joint_band" else self._standard_retry(ctx)
@@ -409,13 +410,15 @@ def run_policy(policy: Policy, ctx: BlockContext) -> dict[str, tuple]:
     run = np.repeat(np.arange(b_n), n_n)
     node = np.tile(np.arange(n_n), b_n)
     k = cmd.k.ravel()
-    hb = kin.x_nodes_m[node, k]
+    # the decision (a measurement report) at sample k; the command reaches the node
+    # report_delay_s later
+    t_cmd = kin.t_s[k] + ctx.scn.execution.report_delay_s
+    hb = kin.speed_m_s * t_cmd - kin.node_offsets_m[node]
 
     def retry(a, serving_ok, hb_next_m):
         return cmd.retry(a, serving_ok, hb_next_m, slice(None))
 
     ex = execute(ctx, run, hb, retry)
-    t_cmd = kin.t_s[k]
     k_trig = (cmd.k if cmd.k_trigger is None else cmd.k_trigger).ravel()
     # trigger to completion, from the radio-link failure when that came before the trigger
     lead = t_cmd - kin.t_s[k_trig]
@@ -463,5 +466,27 @@ def run_policy(policy: Policy, ctx: BlockContext) -> dict[str, tuple]:
         ),
         "rsrp_gap_db": (("run", "node"), sh(ex.gap_db), "dB", "true RSRP-GAP serving - target at completion"),
     }
+    if ex.kind is not None:  # the stages rule
+        from railradio.handover.stages import KIND_NAMES
+
+        out["failure_kind"] = (
+            ("run", "node"),
+            sh(ex.kind),
+            "1",
+            "outcome: " + ", ".join(f"{c} {n}" for c, n in KIND_NAMES.items()) + " (TS 36.300 22.4.2.2)",
+        )
+        out["failure_stage"] = (
+            ("run", "node"),
+            sh(ex.stage),
+            "1",
+            "failed stage: 0 none, 1 command reception, 2 access under T304, 3 the new link",
+        )
+        out["ra_occasions"] = (("run", "node"), sh(ex.occasions).astype(np.int16), "1", "PRACH occasions used")
+        out["t310_at_command"] = (
+            ("run", "node"),
+            sh(ex.t310_at_command).astype(np.int8),
+            "1",
+            "1 if the serving link's T310 ran when the command came",
+        )
     out.update(cmd.extras)
     return out
