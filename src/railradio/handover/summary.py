@@ -18,7 +18,13 @@ import xarray as xr
 from railradio.stats import clustered_mean, clustered_rate
 
 RATES = ("success", "pingpong", "retried")
+STAGE_RATES = ("too_late", "too_early", "wrong_cell", "other_rlf", "t310_at_command")
+"""Per-handover shares of the ``stages`` rule's outcome classes (TS 36.300 §22.4.2.2) and of
+commands that came while the serving link's T310 ran (NaN under the other rules)."""
 MEANS = ("delay_ms", "delay_all_ms", "delay_trigger_ms", "rsrp_gap_db", "attempts")
+QUANTILES = {"interruption_ms_median": 0.5, "interruption_ms_p95": 0.95}
+"""Quantiles of the command-to-completion time over every handover (``delay_all``, a failed
+handover's re-establishment included): the interruption operators count."""
 
 
 def policy_metrics(ds: xr.Dataset, policy: str, level: float = 0.95) -> dict[str, float]:
@@ -67,6 +73,26 @@ def policy_metrics(ds: xr.Dataset, policy: str, level: float = 0.95) -> dict[str
                 f"{name}_neff": r["n_eff"],
             }
         )
+    if f"{policy}__failure_kind" in ds:
+        from railradio.handover.stages import OTHER_RLF, TOO_EARLY, TOO_LATE, WRONG_CELL
+
+        kind = ds[f"{policy}__failure_kind"].values
+        stage_events = {
+            "too_late": kind == TOO_LATE,
+            "too_early": kind == TOO_EARLY,
+            "wrong_cell": kind == WRONG_CELL,
+            "other_rlf": kind == OTHER_RLF,
+            "t310_at_command": ds[f"{policy}__t310_at_command"].values > 0,
+        }
+        for name, e in stage_events.items():
+            r = clustered_rate(np.asarray(e, dtype=float), level)
+            out.update({name: r["p"], f"{name}_se": r["se"], f"{name}_lo": r["lo"], f"{name}_hi": r["hi"]})
+            out[f"{name}_neff"] = r["n_eff"]
+    else:
+        for name in STAGE_RATES:
+            out.update({name + sfx: float("nan") for sfx in ("", "_se", "_lo", "_hi", "_neff")})
+    for name, q in QUANTILES.items():
+        out[name] = float(np.quantile(1e3 * v["delay_all_s"], q))
     out["n_handovers"] = float(v["success"].size)
     out["n_runs"] = float(v["success"].shape[0])
     for name, values in (
@@ -90,6 +116,13 @@ UNITS = {
     "delay_trigger_ms": ("ms", "mean trigger-to-completion time, all handovers"),
     "rsrp_gap_db": ("dB", "mean |RSRP-GAP| at completion"),
     "attempts": ("1", "mean execution attempts"),
+    "too_late": ("1", "too-late handovers: the serving side failed, re-established in the target"),
+    "too_early": ("1", "too-early handovers: access or the new link failed, re-established in the source"),
+    "wrong_cell": ("1", "handovers to a wrong cell (none can happen with two cells)"),
+    "other_rlf": ("1", "failures re-established in the cell that failed (not mobility failures)"),
+    "t310_at_command": ("1", "commands that came while the serving link's T310 ran"),
+    "interruption_ms_median": ("ms", "median command-to-completion time, all handovers"),
+    "interruption_ms_p95": ("ms", "95th percentile of the command-to-completion time, all handovers"),
     "n_handovers": ("1", "node handovers simulated"),
     "n_runs": ("1", "train crossings simulated"),
 }
