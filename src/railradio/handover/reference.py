@@ -254,6 +254,90 @@ class _Run:
         vals = [self.sinr(1, hb + self.v * ex.rlm_indication_s * j) for j in range(1, n + 1)]
         return sum(vals) / n >= rd.q_out_db
 
+    # --- the stages rule, step by step -------------------------------------------------
+    def _indications(self, link: int) -> tuple[list[float], list[bool], list[bool]]:
+        """Indication positions and the out-of-sync / in-sync indications of ``link`` (its
+        SINR window means by plain sums)."""
+        cfg = self.scn.execution.rlm(self.scn.radio)
+        step = self.v * cfg.indication_s
+        x_end = self.g_x0 + self.g_dx * (self.g_n - 1)
+        xs = [self.g_x0 + step * j for j in range(int(math.floor((x_end - self.g_x0) / step)) + 1)]
+        sinrs = [self.sinr(link, x) for x in xs]
+        n_out, n_in = cfg.samples(cfg.qout_eval_s), cfg.samples(cfg.qin_eval_s)
+        oos, ins = [], []
+        for j in range(len(xs)):
+            o = j + 1 >= n_out and sum(sinrs[j + 1 - n_out : j + 1]) / n_out < cfg.q_out_db
+            i = j + 1 >= n_in and sum(sinrs[j + 1 - n_in : j + 1]) / n_in > cfg.q_in_db
+            oos.append(o)
+            ins.append(i and not o)
+        return xs, oos, ins
+
+    def execute_stages(self, hb: float) -> tuple[bool, float, float, int]:
+        """The stages rule for a command reaching the node at ``hb``: (success, completion
+        position (NaN: none), failure detection after the command [s] (NaN: success),
+        outcome class of :mod:`railradio.handover.stages`), each stage read as the
+        procedure runs."""
+        ex, rd = self.scn.execution, self.scn.radio
+        cfg = ex.rlm(rd)
+        if not hasattr(self, "_ind"):
+            self._ind = (self._indications(0), self._indications(1))
+        (xs, oos, ins), (_, oos_t, ins_t) = self._ind
+        step = xs[1] - xs[0]
+        # stage 2: T310 of the serving link, from the start of the crossing to the command
+        start, c_o, c_i, t310, x_rlf = None, 0, 0, False, math.inf
+        for j, x in enumerate(xs):
+            if x > hb + 1e-9 * step:
+                break
+            if start is None:
+                c_o = c_o + 1 if oos[j] else 0
+                if c_o >= cfg.n310:
+                    start, c_i = j, 0
+            else:
+                c_i = c_i + 1 if ins[j] else 0
+                if c_i >= cfg.n311:
+                    start, c_o = None, 0
+            t310 = start is not None
+            if start is not None and j - start >= cfg.t310_indications:
+                x_rlf = x
+                break
+        if t310 or x_rlf <= hb:
+            t_det = min((x_rlf - hb) / self.v, 0.0)
+            return False, math.nan, t_det, self._kind(hb + self.v * t_det, late=True)
+        # stage 3: PRACH occasions while T304 runs
+        n_occ = int(math.floor((ex.t304_s - ex.rrc_processing_s) / ex.ra_period_s + 1e-9)) + 1
+        for i in range(n_occ):
+            t = ex.rrc_processing_s + ex.ra_period_s * i
+            if self.sinr(1, hb + self.v * t) >= rd.q_out_db:
+                x_done = hb + self.v * (t + ex.t0_s - ex.rrc_processing_s)
+                break
+        else:
+            return False, math.nan, ex.t304_s, self._kind(hb + self.v * ex.t304_s, late=False)
+        # stage 4: the new link afresh from completion
+        j_done = math.ceil((x_done - xs[0]) / step - 1e-9)
+        j_last = j_done + round(ex.monitor_s / cfg.indication_s)
+        start, c_o, c_i = None, 0, 0
+        for j in range(max(j_done + cfg.samples(cfg.qout_eval_s) - 1, 0), len(xs)):
+            if start is None:
+                if j > j_last:
+                    break
+                c_o = c_o + 1 if oos_t[j] else 0
+                if c_o >= cfg.n310:
+                    start, c_i = j, 0
+            else:
+                c_i = c_i + 1 if ins_t[j] else 0
+                if c_i >= cfg.n311:
+                    start, c_o = None, 0
+            if start is not None and j - start >= cfg.t310_indications:
+                return False, x_done, (xs[j] - hb) / self.v, self._kind(xs[j], late=False)
+        return True, x_done, math.nan, 0
+
+    def _kind(self, x_fail: float, late: bool) -> int:
+        """Too late (1) / too early (2) / other (4) by the stronger cell at ``x_fail``."""
+        to_target = self.true_rsrp(1, x_fail) > self.true_rsrp(0, x_fail)
+        if late:
+            return 1 if to_target else 4
+        return 4 if to_target else 2
+
     def execute(self, hb: float, retry_ok) -> tuple[int, bool, float, float]:
         """(attempts, success, completion position, time of completion after the first
         command — a failure's detection plus re-establishment) from a first command at hb.
@@ -297,10 +381,18 @@ class _Run:
 
 def _outcome(run: _Run, i: int, k_cmd: int, retry_ok, returns, k_trig: int | None = None) -> dict:
     ex = run.scn.execution
-    hb = run.x_true(i, k_cmd)
-    attempts, ok, he, t_done_rel = run.execute(hb, retry_ok)
-    delay = attempts * ex.t0_s + (attempts - 1) * ex.tz_s if ok else math.nan
-    t_done = k_cmd * run.tm + (delay if ok else 0.0)
+    hb = run.x_true(i, k_cmd) + run.v * ex.report_delay_s  # the command, report_delay_s after the decision
+    kind = None
+    if ex.failure_rule == "stages":
+        attempts, (ok, x_done, t_det, kind) = 1, run.execute_stages(hb)
+        he = x_done if ok or not math.isnan(x_done) else hb + run.v * ex.t0_s
+        delay = (x_done - hb) / run.v if ok else math.nan
+        t_done_rel = delay if ok else t_det + ex.reestablish_s
+        t_fail_stages = t_det
+    else:
+        attempts, ok, he, t_done_rel = run.execute(hb, retry_ok)
+        delay = attempts * ex.t0_s + (attempts - 1) * ex.tz_s if ok else math.nan
+    t_done = k_cmd * run.tm + ex.report_delay_s + (delay if ok else 0.0)
     pp = False
     if ok:
         k = math.ceil(t_done / run.tm - 1e-9)
@@ -309,8 +401,8 @@ def _outcome(run: _Run, i: int, k_cmd: int, retry_ok, returns, k_trig: int | Non
     k_trig = k_cmd if k_trig is None else k_trig
     # the interruption starts at the first command or trigger, or at an earlier radio-link
     # failure (the completion minus the re-establishment time is the failure's detection)
-    t_fail = t_done_rel - ex.reestablish_s
-    lead = (k_cmd - k_trig) * run.tm
+    t_fail = t_fail_stages if kind is not None and not ok else t_done_rel - ex.reestablish_s
+    lead = (k_cmd - k_trig) * run.tm + ex.report_delay_s
     start_all = 0.0 if ok else min(0.0, t_fail)
     start_trig = -lead if ok else min(-lead, t_fail)
     return {
@@ -324,6 +416,7 @@ def _outcome(run: _Run, i: int, k_cmd: int, retry_ok, returns, k_trig: int | Non
         "rsrp_gap_db": gap,
         "delay_all_s": t_done_rel - start_all,
         "delay_trigger_s": t_done_rel - start_trig,
+        **({"failure_kind": kind} if kind is not None else {}),
     }
 
 
@@ -439,7 +532,7 @@ def _joint(run: _Run) -> list[dict]:
         q = 10 ** (gaph / (10 * n_hat))
         r = 10 ** (-a_hat / (10 * n_hat))
         pl_e, pr_e = L / (1 + q * r), L * q / (q + r)
-        return pl_e - v * ex.t0_s, pr_e - v * ex.t0_s
+        return pl_e - v * ex.lead_s, pr_e - v * ex.lead_s
 
     freg = _filtered_regressor(run, reg, a_l3)
     k_head, fit = _head_fit(run, freg, gap, band)
@@ -505,7 +598,7 @@ def _node_commands(run: _Run, freg: list[list[float]], gap, reg, k_head: int, fi
     def inv(g):
         return L / (1 + 10 ** ((g - a_hat) / (10 * n_hat)))
 
-    pr_retry = pr - v * (ex.t0_s + ex.tz_s)
+    pr_retry = pr - v * (ex.lead_s + ex.tz_s)
     w_all = [jt.alpha * (1 - jt.alpha) ** k for k in range(jt.m)]
     devs, ks, xs = [], [], []
     for i in range(tr.n_nodes):
@@ -554,7 +647,7 @@ def _joint_outcomes(run: _Run, ks: list[int], pr: float) -> list[dict]:
         def retry_ok(a, s_ok, hb, x_cmd_hat=x_cmd_hat, back=back):
             if ex.retry == "common":
                 return s_ok and a < ex.max_attempts
-            return a < 2 and x_cmd_hat + v * (ex.t0_s + ex.tz_s) * a + back <= pr
+            return a < 2 and x_cmd_hat + v * ex.report_delay_s + v * (ex.t0_s + ex.tz_s) * a + back <= pr
 
         out.append(_outcome(run, i, ks[i], retry_ok, lambda i, k0, t: False))
     return out
