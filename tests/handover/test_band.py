@@ -112,13 +112,13 @@ def test_position_correction_piecewise():
 
 
 def test_first_attempt_bound_closed_form_against_sampling():
-    """Φ(9/8.49) − Φ(−11/8.49) = 0.758 at the defaults, against sampled gaps through the full
+    """Φ(9/8.49) − Φ(−11/8.49) = 0.758 at σ = 6 dB, against sampled gaps through the full
     SINR rule (noise included) at X_c."""
     from railradio.handover.bounds import first_attempt_success_at_centre, gap_window_db
     from railradio.handover.params import Radio
     from railradio.handover.radio import mean_rsrp_dbm, sinr_db
 
-    rd = Radio()
+    rd = Radio(shadow_sigma_db=6.0)
     lo, hi = gap_window_db(rd)
     assert lo == pytest.approx(-11.01, abs=0.01) and hi == pytest.approx(9.01, abs=0.01)
     p = first_attempt_success_at_centre(rd)

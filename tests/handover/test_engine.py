@@ -17,7 +17,7 @@ from railradio.handover.radio import mean_rsrp_dbm
 from railradio.handover.reference import simulate_reference
 from railradio.handover.train import kinematics
 
-ALL = ("joint", "a3", "distance")
+ALL = ("joint", "a3", "a3_rail", "distance")
 COMPARED = (
     "command_x_m",
     "attempts",
@@ -50,6 +50,8 @@ def _scn(**joint):
         ),
         (380.0, replace(_scn(), execution=replace(EX, retry="joint_band"))),
         (120.0, replace(_scn(), execution=replace(EX, t304_s=0.1, monitor_s=3.0, report_delay_s=0.0, rlf_t310_s=0.3))),
+        (300.0, replace(_scn(), radio=replace(Scenario().radio, fading="rayleigh", q_out_db=-4.0, q_in_db=-2.0))),
+        (200.0, replace(_scn(), radio=replace(Scenario().radio, fading="none"))),
         (460.0, _scn(band_fit="offset", measurements="raw", gaph_rule="narrow")),
         (
             250.0,
@@ -99,7 +101,7 @@ def test_vectorized_engine_equals_the_per_step_loop(speed, scn):
 
 def _quiet(**radio):
     base = Scenario().with_weights(3, 0.5)
-    rd = replace(base.radio, shadow_sigma_db=0.0, meas_sigma_db=0.0, offset_m=0.01, **radio)
+    rd = replace(base.radio, shadow_sigma_db=0.0, meas_sigma_db=0.0, offset_m=0.01, antenna_hpbw_deg=None, **radio)
     return replace(base, radio=rd, train=replace(base.train, gnss_sigma_m=0.0))
 
 
@@ -233,15 +235,15 @@ def test_rlf_rule_fails_only_after_a_t310_run_of_out_of_sync():
 @pytest.mark.parametrize("speed", [100.0, 250.0, 350.0, 500.0])
 @pytest.mark.parametrize("m", [1, 3])
 def test_noise_free_joint_handover_completes_at_zero_rsrp_gap(speed, m):
-    """Without shadowing, measurement noise or position error (the default geometry, 30 m
-    offset, and the k = 4 L3 filter), the joint decision's handover *completes* at the point
+    """Without shadowing, measurement noise, position error or antenna pattern (the default
+    geometry, 30 m offset, and the k = 4 L3 filter), the joint decision's handover *completes* at the point
     where the true mean RSRP gap is zero, within the one-sample quantization of its command,
     and its execution starts v·T0 before that (the band is shifted back by v·(report delay +
     T0), source eq. 2 with the network's report-to-command delay)."""
     base = Scenario().with_weights(m, 0.5)
     scn = replace(
         base,
-        radio=replace(base.radio, shadow_sigma_db=0.0, meas_sigma_db=0.0),
+        radio=replace(base.radio, shadow_sigma_db=0.0, meas_sigma_db=0.0, antenna_hpbw_deg=None),
         train=replace(base.train, gnss_sigma_m=0.0),
     )
     kin = kinematics(scn, speed)

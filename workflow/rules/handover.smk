@@ -20,6 +20,7 @@ HO_FIGURES = {
     "handover_rsrp_gap_vs_speed": "results/handover/summary.nc",
     "handover_delay_vs_speed": "results/handover/summary.nc",
     "handover_interruption_vs_speed": "results/handover/summary.nc",
+    "handover_stages_vs_speed": "results/handover/summary.nc",
     "handover_sensitivity": "results/handover/sensitivity.nc",
 }
 

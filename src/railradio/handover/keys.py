@@ -18,6 +18,21 @@ from railradio.handover.cost import one_se_settings
 from railradio.keynumbers import KeySpec
 
 POLICIES = ("joint", "a3", "distance")
+"""The source's three policies (its claims compare these)."""
+ALL_POLICIES = (*POLICIES, "a3_rail")
+"""Every policy of the study: the source's three and A3 as railways tune it."""
+STAGE_SPEEDS = (100, 350, 500)
+"""Speeds [km/h] of the failure-stage keys (the sweep's ends and the source's 350)."""
+STAGE_METRICS = {
+    "success": ("1", "handover success (completions over commands)", 4),
+    "too_late": ("1", "share of handovers too late (the serving side failed; re-established in the target)", 4),
+    "too_early": ("1", "share of handovers too early (access or the new link failed; re-established in the source)", 4),
+    "other_rlf": ("1", "share of failures re-established in the cell that failed (not mobility failures)", 4),
+    "t310_at_command": ("1", "share of commands that came while the serving link's T310 ran", 4),
+    "interruption_ms_median": ("ms", "median interruption (command to completion, re-establishment included)", 3),
+    "interruption_ms_p95": ("ms", "95th percentile of the interruption (command to completion)", 3),
+}
+"""The failure-stage keys per policy and speed (``handover.<policy>.<metric>.v<speed>``)."""
 
 
 def _spec(name, unit, desc, src=None, rel=None, digits=3):
@@ -158,6 +173,25 @@ SPECS = {
             )
             for pol in ("joint", "a3", "distance")
             for v in (100, 250, 350)
+        ],
+        *[
+            _spec(f"handover.{pol}.{metric}.v{v}", unit, f"{pol}: {desc} at {v} km/h", digits=digits)
+            for pol in ALL_POLICIES
+            for v in STAGE_SPEEDS
+            for metric, (unit, desc, digits) in STAGE_METRICS.items()
+            if f"handover.{pol}.{metric}.v{v}"
+            not in {
+                f"handover.{p}.success.v{w}" for p in POLICIES for w in (100, 350)
+            }  # those are above, with the source's values
+        ],
+        *[
+            _spec(
+                f"handover.{pol}.too_late.rise_100_500",
+                "1",
+                f"{pol}: too-late share at 500 km/h minus at 100 km/h (same shadowing fields at every speed)",
+                digits=4,
+            )
+            for pol in ALL_POLICIES
         ],
         _spec("handover.gaph_db", "dB", "handover threshold GapH(sigma0)"),
         _spec(
@@ -390,6 +424,18 @@ def key_numbers(
                 name = f"handover.{pol}.{metric}.v{v:g}"
                 if name in SPECS and v in speeds:
                     put(name, _pick(summary, pol, metric, v), _pick(summary, pol, f"{metric}_se", v))
+    for pol in (p for p in ALL_POLICIES if p in summary["policy"].values):
+        for metric in STAGE_METRICS:
+            for v in STAGE_SPEEDS:
+                name = f"handover.{pol}.{metric}.v{v}"
+                if name in out or float(v) not in speeds or not np.isfinite(_pick(summary, pol, metric, v)):
+                    continue
+                se = _pick(summary, pol, f"{metric}_se", v) if f"{metric}_se" in summary else None
+                put(name, _pick(summary, pol, metric, v), se)
+        if {100.0, 500.0} <= set(speeds) and np.isfinite(_pick(summary, pol, "too_late", 500)):
+            rise = _pick(summary, pol, "too_late", 500) - _pick(summary, pol, "too_late", 100)
+            se = np.hypot(_pick(summary, pol, "too_late_se", 500), _pick(summary, pol, "too_late_se", 100))
+            put(f"handover.{pol}.too_late.rise_100_500", rise, float(se))
     hs = [s for s in speeds if 300 <= s <= 380]
     if hs:
         vals = [_pick(summary, "joint", "success", s) for s in hs]

@@ -24,6 +24,9 @@ STREAMS = {"sweep": (0, 1), "cost": (2, 3)}
 """Spawn-key stream IDs (field, noise) of the evaluation runs and of the separate cost-grid
 runs (the weights are never selected on the runs they are evaluated on)."""
 
+FADING_SUBSTREAM = 1
+"""Sub-ID appended to a block's noise key for its fast fading (:meth:`Draws.fading`)."""
+
 
 @dataclass(frozen=True)
 class Draws:
@@ -32,10 +35,24 @@ class Draws:
     field_white: np.ndarray  # [B, 2, G]   shadowing field of both links along the track
     meas_white: np.ndarray  # [B, N, 2, K] measurement error per node, link, sample
     gnss_white: np.ndarray  # [B, K]       GNSS/INS error process
+    fading_key: tuple | None = None  # (seed, spawn key) of the fast fading at the PRACH occasions
 
     @property
     def n_runs(self) -> int:
         return self.field_white.shape[0]
+
+    def fading(self, n_occasions: int) -> tuple[np.ndarray, np.ndarray]:
+        """The fast-fading draws of the block's handovers at ``n_occasions`` PRACH occasions
+        (:mod:`railradio.handover.fading`): standard normals [B, N, 2, n_occasions, 2]
+        (link; real, imaginary) and the LOS phases in turns [B, N, 2], from their own
+        stream (the other draws do not depend on it)."""
+        if self.fading_key is None:
+            raise ValueError("these draws carry no fading_key (made without draw_block)")
+        rng = make_rng(*self.fading_key)
+        b_n, n_n = self.meas_white.shape[:2]
+        white = rng.standard_normal((b_n, n_n, 2, int(n_occasions), 2))
+        phase0 = rng.random((b_n, n_n, 2))
+        return white, phase0
 
 
 def block_keys(speed_kmh: float, block: int, stream: str = "sweep") -> tuple[tuple[int, ...], tuple[int, ...]]:
@@ -97,7 +114,7 @@ def draw_block(
     field_white = rf.standard_normal((n_runs, 2, kin.grid.n), dtype=np.float32)
     meas_white = rn.standard_normal((n_runs, n_nodes, 2, kin.n_samples), dtype=np.float32)
     gnss_white = rn.standard_normal((n_runs, kin.n_samples), dtype=np.float32)
-    return Draws(field_white, meas_white, gnss_white)
+    return Draws(field_white, meas_white, gnss_white, (int(seed), (*key_noise, FADING_SUBSTREAM)))
 
 
 @dataclass
@@ -111,6 +128,7 @@ class BlockContext:
     filt_dbm: np.ndarray  # [B, N, 2, K] L3-filtered F
     gnss_err_m: np.ndarray  # [B, K]
     l3_a: float
+    draws: Draws | None = None  # the block's draws (the fast fading is drawn from them on demand)
     _cache: dict = field(default_factory=dict)
 
     @property
@@ -154,7 +172,7 @@ class BlockContext:
         return np.clip(idx, 0, k_n - 1)
 
 
-def build_context(scn: Scenario, kin: Kinematics, draws: Draws) -> BlockContext:
+def build_context(scn: Scenario, kin: Kinematics, draws: Draws, zeta_db: np.ndarray | None = None) -> BlockContext:
     """Shadowing, measurements, L3 filter and the position input of one block.
 
     Parameters
@@ -166,6 +184,9 @@ def build_context(scn: Scenario, kin: Kinematics, draws: Draws) -> BlockContext:
         :func:`railradio.handover.train.kinematics`).
     draws : Draws
         Standard normals of the block (from :func:`draw_block` with the same ``kin``).
+    zeta_db : numpy.ndarray, optional
+        A shadowing field [dB] [B, 2, G] on ``kin.grid`` to use instead of the one drawn (a
+        hand-made field for tests; positive = extra loss).
 
     Returns
     -------
@@ -187,7 +208,12 @@ def build_context(scn: Scenario, kin: Kinematics, draws: Draws) -> BlockContext:
             f"draws do not match the scenario: meas_white {draws.meas_white.shape}, "
             f"expected [B, {n_nodes}, 2, {kin.n_samples}]"
         )
-    zeta = shadowing_fields(draws.field_white, kin.grid, rd)  # [B, 2, G]
+    if zeta_db is None:
+        zeta = shadowing_fields(draws.field_white, kin.grid, rd)  # [B, 2, G]
+    else:
+        zeta = np.asarray(zeta_db, dtype=float)
+        if zeta.shape != (draws.n_runs, 2, kin.grid.n):
+            raise ValueError(f"zeta_db must be [B, 2, G] = [{draws.n_runs}, 2, {kin.grid.n}], got {zeta.shape}")
     idx = kin.grid.index(kin.x_nodes_m)  # [N, K]
     p_s, p_t = mean_rsrp_dbm(kin.x_nodes_m, rd)  # [N, K]
     mean = np.stack([p_s, p_t], axis=1)  # [N, 2, K]
@@ -197,7 +223,7 @@ def build_context(scn: Scenario, kin: Kinematics, draws: Draws) -> BlockContext:
     meas += rd.meas_sigma_db * draws.meas_white.astype(float)
     a = l3_coefficient_at(rd.l3_k, rd.meas_period_s, rd.l3_reference_period_s)
     filt = l3_filter(meas, a)
-    return BlockContext(scn, kin, zeta, meas, filt, gnss_error_m(draws.gnss_white, scn), a)
+    return BlockContext(scn, kin, zeta, meas, filt, gnss_error_m(draws.gnss_white, scn), a, draws)
 
 
 # --- execution (reconstruction eq. 3 and 8) --------------------------------------------
@@ -325,7 +351,38 @@ def link_monitor(ctx: BlockContext):
     return ctx._cache[key]
 
 
-def execute_stages(ctx: BlockContext, run: np.ndarray, hb_m: np.ndarray) -> Execution:
+def access_fading_db(ctx: BlockContext, run: np.ndarray, node: np.ndarray, hb_m: np.ndarray):
+    """Fast-fading power gains [dB] of the serving and target link at the PRACH occasions of
+    handovers (``run``, ``node``) commanded at ``hb_m``: two arrays [n, occasions], or
+    ``None`` when ``radio.fading`` is ``none`` (:mod:`railradio.handover.fading`; the LOS
+    Doppler's angle taken at the command position)."""
+    from railradio.handover.fading import doppler_hz, power_gains_db
+
+    rd, ex = ctx.scn.radio, ctx.scn.execution
+    if rd.fading == "none":
+        return None
+    st = ex.stage_times()
+    key = ("fading", st.n_occasions)
+    if key not in ctx._cache:
+        if ctx.draws is None:
+            raise ValueError("radio.fading needs the block's draws in the context (build_context)")
+        ctx._cache[key] = ctx.draws.fading(st.n_occasions)
+    white, phase0 = ctx._cache[key]
+    hb = np.asarray(hb_m, dtype=float)
+    cos = np.stack(
+        [
+            (rd.x_serving_m - hb) / np.hypot(rd.x_serving_m - hb, rd.offset_m),
+            (rd.x_target_m - hb) / np.hypot(rd.x_target_m - hb, rd.offset_m),
+        ],
+        axis=1,
+    )
+    k_db = None if rd.fading == "rayleigh" else rd.fading_k_db
+    f_d = doppler_hz(ctx.kin.speed_m_s, rd.carrier_hz)
+    g = power_gains_db(white[run, node], phase0[run, node], k_db, f_d, st.ra_period_s, cos, st.rrc_processing_s)
+    return g[:, 0], g[:, 1]
+
+
+def execute_stages(ctx: BlockContext, run: np.ndarray, hb_m: np.ndarray, node: np.ndarray | None = None) -> Execution:
     """Handovers commanded at true positions ``hb_m`` under the ``stages`` rule
     (:func:`railradio.handover.stages.execute_stages`): one attempt; a failed handover is
     recovered by re-establishment ``reestablish_s`` after the failure is detected.
@@ -336,7 +393,12 @@ def execute_stages(ctx: BlockContext, run: np.ndarray, hb_m: np.ndarray) -> Exec
     ex = ctx.scn.execution
     v = ctx.kin.speed_m_s
     hb = np.asarray(hb_m, dtype=float)
-    out = stages(link_monitor(ctx), ex.stage_times(), run, hb, v)
+    if node is None:  # the engine's layout: crossing-major, every node of every crossing
+        if hb.size != ctx.n_runs * ctx.n_nodes:
+            raise ValueError("node must be given unless the handovers are every node of every crossing")
+        node = np.tile(np.arange(ctx.n_nodes), ctx.n_runs)
+    fading = access_fading_db(ctx, np.asarray(run), np.asarray(node), hb)
+    out = stages(link_monitor(ctx), ex.stage_times(), run, hb, v, fading)
     delay = np.where(out.success, (out.completion_x_m - hb) / v, np.nan)
     delay_all = np.where(out.success, delay, ex.reestablish_s + np.maximum(np.nan_to_num(out.t_detect_s), 0.0))
     he = np.where(np.isfinite(out.completion_x_m), out.completion_x_m, hb + v * ex.t0_s)
@@ -356,7 +418,7 @@ def execute_stages(ctx: BlockContext, run: np.ndarray, hb_m: np.ndarray) -> Exec
     )
 
 
-def execute(ctx: BlockContext, run: np.ndarray, hb_m: np.ndarray, retry_allowed) -> Execution:
+def execute(ctx: BlockContext, run: np.ndarray, hb_m: np.ndarray, retry_allowed, node=None) -> Execution:
     """Execute handovers commanded at true positions ``hb_m`` (flat arrays, one per crossing).
 
     Attempt a succeeds iff the serving link holds at Hb_a (:func:`serving_ok`) and access
@@ -373,7 +435,7 @@ def execute(ctx: BlockContext, run: np.ndarray, hb_m: np.ndarray, retry_allowed)
     sc = ctx.scn
     ex = sc.execution
     if ex.failure_rule == "stages":
-        return execute_stages(ctx, run, hb_m)
+        return execute_stages(ctx, run, hb_m, node)
     v = ctx.kin.speed_m_s
     n = hb_m.shape[0]
     attempts = np.zeros(n, dtype=np.int64)

@@ -54,7 +54,9 @@ class Radio:
     pathloss_exponent
         n [source: 2–6, mountain scenario; 3.5 ours].
     shadow_sigma_db, shadow_corr_m
-        σ of the shadowing ζ and its decorrelation distance (AR(1) in distance) [ours].
+        σ of the shadowing ζ and its decorrelation distance (AR(1) in distance): 4 dB and
+        40 m, WINNER II D1.1.2 scenario D2a (a base station to a relay on a high-speed train,
+        rural LOS, Table 4-5) [WINNER II].
     shadow_cross_corr
         correlation of the two links' shadowing [ours: 0].
     shadow_grid_m
@@ -72,6 +74,14 @@ class Radio:
         η, the other cell's load (interference weight) [ours].
     q_out_db, q_in_db
         SINR thresholds of the serving link at the command and the target at access [ours].
+    antenna_hpbw_deg, antenna_max_loss_db
+        the RRHs' antennas point along the track, one each way (railway practice): TR 38.901
+        Table 7.3-1's pattern, 65° half-power beamwidth, 30 dB floor [3GPP]; ``tx_power_dbm``
+        is the EIRP on boresight; ``None``: omnidirectional.
+    fading, fading_k_db
+        fast fading where one look decides (the PRACH occasions of the ``stages`` rule,
+        :mod:`railradio.handover.fading`): ``rician`` with K-factor ``fading_k_db``
+        [3GPP TR 38.901 Table 7.5-6, RMa LOS μ_K = 7 dB], ``rayleigh``, or ``none``.
     """
 
     spacing_m: float = 1500.0
@@ -82,8 +92,8 @@ class Radio:
     noise_figure_db: float = 7.0
     ref_distance_m: float = 100.0
     pathloss_exponent: float = 3.5
-    shadow_sigma_db: float = 6.0
-    shadow_corr_m: float = 50.0
+    shadow_sigma_db: float = 4.0
+    shadow_corr_m: float = 40.0
     shadow_cross_corr: float = 0.0
     shadow_grid_m: float = 0.5
     meas_sigma_db: float = 1.5
@@ -93,6 +103,10 @@ class Radio:
     load_factor: float = 0.5
     q_out_db: float = -8.0
     q_in_db: float = -6.0
+    fading: str = "rician"
+    fading_k_db: float = 7.0
+    antenna_hpbw_deg: float | None = 65.0
+    antenna_max_loss_db: float = 30.0
 
     def __post_init__(self) -> None:
         _check("spacing_m", self.spacing_m, 10.0, 1e5)
@@ -115,6 +129,11 @@ class Radio:
         _check("load_factor", self.load_factor, 0.0, 1.0)
         _check("q_out_db", self.q_out_db, -30.0, 30.0)
         _check("q_in_db", self.q_in_db, -30.0, 30.0)
+        _choice("fading", self.fading, ("none", "rayleigh", "rician"))
+        _check("fading_k_db", self.fading_k_db, -30.0, 40.0)
+        if self.antenna_hpbw_deg is not None:
+            _check("antenna_hpbw_deg", self.antenna_hpbw_deg, 1.0, 180.0)
+        _check("antenna_max_loss_db", self.antenna_max_loss_db, 0.0, 60.0)
 
     @property
     def x_serving_m(self) -> float:
@@ -370,16 +389,41 @@ class Joint:
 
 @dataclass(frozen=True)
 class A3:
-    """The A3 event baseline (TS 36.331 §5.5.4.4) [3GPP]: hysteresis, TTT, offsets."""
+    """The A3 event (TS 36.331 §5.5.4.4) [3GPP]: hysteresis, TTT, offset, and optionally its
+    own L3 filter coefficient.
+
+    hysteresis_db, ttt_s, offset_db
+        Hys, TimeToTrigger and the offset of A3-1 read as Mn − Hys > Mp + ``offset_db``:
+        a3-Offset minus the target's cell individual offset Ocn (a CIO of c dB toward the
+        target is ``offset_db`` = −c).
+    l3_k
+        filterCoefficient k of the measurements this event reads (``None``: ``radio.l3_k``).
+    """
 
     hysteresis_db: float = 3.0
     ttt_s: float = 0.16
     offset_db: float = 0.0
+    l3_k: int | None = None
 
     def __post_init__(self) -> None:
         _check("hysteresis_db", self.hysteresis_db, 0.0, 15.0)
         _check("ttt_s", self.ttt_s, 0.0, 5.12)
         _check("offset_db", self.offset_db, -15.0, 15.0)
+        if self.l3_k is not None and (
+            not isinstance(self.l3_k, int) or isinstance(self.l3_k, bool) or not 0 <= self.l3_k <= 19
+        ):
+            raise ValueError(f"l3_k must be null or an integer in 0..19 (TS 36.331), got {self.l3_k!r}")
+
+
+RAIL_A3 = A3(hysteresis_db=1.0, ttt_s=0.064, offset_db=-2.0, l3_k=1)
+"""A3 as a railway network tunes it (the ``a3_rail`` policy) [ours: no operator publishes
+its values; the rule, fixed before any result: every setting at the reactive end that the
+TS 36.331 value sets and the railway practice of short triggers allow]: filterCoefficient
+k = 1 (a = 0.84 at 200 ms, the shortest memory above none), TimeToTrigger 64 ms (the
+TS 36.331 value inside the 40–100 ms railways use), Hys 1 dB, and a cell individual
+offset of 2 dB toward the next cell along the line (``offset_db`` = −2 dB: the target needs
+2 dB less to trigger). The neighbour list is one-way (only the next cell), which the
+two-cell model has by construction."""
 
 
 @dataclass(frozen=True)
@@ -399,6 +443,8 @@ class Scenario:
         cost grid's argmin is set with :meth:`with_weights`).
     a3 : A3
         The A3 event baseline.
+    a3_rail : A3
+        A3 as railways tune it (:data:`RAIL_A3`), the ``a3_rail`` policy.
     """
 
     radio: Radio = field(default_factory=Radio)
@@ -406,6 +452,7 @@ class Scenario:
     execution: Execution = field(default_factory=Execution)
     joint: Joint = field(default_factory=Joint)
     a3: A3 = field(default_factory=A3)
+    a3_rail: A3 = RAIL_A3
 
     def with_weights(self, m: int, alpha: float) -> Scenario:
         """The same scenario with the joint policy's (m, α) set.
@@ -433,7 +480,7 @@ class Scenario:
         return asdict(self)
 
 
-SIM_SECTIONS = ("radio", "train", "execution", "joint", "a3")
+SIM_SECTIONS = ("radio", "train", "execution", "joint", "a3", "a3_rail")
 """The sections of the config's ``handover`` section that make up a :class:`Scenario`."""
 
 
@@ -443,8 +490,9 @@ def scenario_from_config(cfg: dict[str, Any]) -> Scenario:
     Parameters
     ----------
     cfg : dict
-        Mapping with optional sub-mappings ``radio``, ``train``, ``execution``, ``joint``
-        and ``a3`` (:data:`SIM_SECTIONS`), each holding field values of the dataclass of the
+        Mapping with optional sub-mappings ``radio``, ``train``, ``execution``, ``joint``,
+        ``a3`` and ``a3_rail`` (:data:`SIM_SECTIONS`; ``a3_rail``'s missing keys keep
+        :data:`RAIL_A3`), each holding field values of the dataclass of the
         same name in its units (m, s, Hz, dB, dBm, 1); a missing section or key keeps the
         default.  ``joint.exponent_bounds`` may be a list.  Other keys of ``cfg`` are ignored.
 
@@ -473,6 +521,7 @@ def scenario_from_config(cfg: dict[str, Any]) -> Scenario:
         execution=sub(Execution, "execution"),
         joint=sub(Joint, "joint"),
         a3=sub(A3, "a3"),
+        a3_rail=replace(RAIL_A3, **cfg.get("a3_rail", {})),
     )
 
 

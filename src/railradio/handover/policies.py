@@ -31,7 +31,7 @@ from railradio.handover.band import (
     wslr_predict,
 )
 from railradio.handover.model import BlockContext, execute
-from railradio.handover.radio import l3_filter
+from railradio.handover.radio import l3_coefficient_at, l3_filter
 
 
 @dataclass
@@ -122,32 +122,67 @@ class A3Policy(Policy):
 
     name = "a3"
     label = "A3 event"
+    section = "a3"  # the Scenario field holding this policy's A3 parameters
+    one_way = False  # the new cell lists the previous one as a neighbour (returns possible)
+
+    def params(self, ctx: BlockContext):
+        return getattr(ctx.scn, self.section)
+
+    def _filtered(self, ctx: BlockContext) -> np.ndarray:
+        """The L3-filtered RSRP this event reads [B, N, 2, K]: the block's, or filtered with
+        the event's own filterCoefficient."""
+        k = self.params(ctx).l3_k
+        rd = ctx.scn.radio
+        if k is None or k == rd.l3_k:
+            return ctx.filt_dbm
+        key = ("l3", k)
+        if key not in ctx._cache:
+            a = l3_coefficient_at(k, rd.meas_period_s, rd.l3_reference_period_s)
+            ctx._cache[key] = l3_filter(ctx.meas_dbm, a)
+        return ctx._cache[key]
 
     def _entering(self, ctx: BlockContext, to_target: bool) -> np.ndarray:
         """A3 entering condition at every sample, toward the target (or back), [B, N, K]."""
-        key = f"a3_entering_{to_target}"
+        key = f"{self.section}_entering_{to_target}"
         if key not in ctx._cache:
-            if "a3_gap" not in ctx._cache:  # F_target - F_serving, contiguous
-                ctx._cache["a3_gap"] = ctx.filt_dbm[:, :, 1, :] - ctx.filt_dbm[:, :, 0, :]
-            d = ctx._cache["a3_gap"]
-            a3 = ctx.scn.a3
+            gkey = f"{self.section}_gap"
+            if gkey not in ctx._cache:  # F_target - F_serving, contiguous
+                f = self._filtered(ctx)
+                ctx._cache[gkey] = f[:, :, 1, :] - f[:, :, 0, :]
+            d = ctx._cache[gkey]
+            a3 = self.params(ctx)
             # Mn - Mp as one operand: (Mn - Mp) - Hys > Off, the same inequality
             ctx._cache[key] = a3_entering(d if to_target else -d, 0.0, a3.hysteresis_db, a3.offset_db)
         return ctx._cache[key]
 
     def command(self, ctx: BlockContext) -> Command:
-        n_ttt = ttt_samples(ctx.scn.a3.ttt_s, ctx.kin.period_s)
+        n_ttt = ttt_samples(self.params(ctx).ttt_s, ctx.kin.period_s)
         k = first_true(held_for(self._entering(ctx, True), n_ttt), default=ctx.kin.n_samples - 1)
         # the trigger: the first of the n_ttt samples whose entering condition held (the
         # start of the time-to-trigger that produced the report)
         return Command(k, self._standard_retry(ctx), k_trigger=np.maximum(k - (n_ttt - 1), 0))
 
     def returns(self, ctx, k_from, t_complete_s):
-        n_ttt = ttt_samples(ctx.scn.a3.ttt_s, ctx.kin.period_s)
+        if self.one_way:  # the previous cell is not a neighbour of the new one
+            return np.zeros(np.shape(k_from), dtype=bool)
+        n_ttt = ttt_samples(self.params(ctx).ttt_s, ctx.kin.period_s)
         idx, in_window = _window(ctx, k_from, t_complete_s)
         cond = np.take_along_axis(self._entering(ctx, False), idx, axis=-1)
         # the TTT timer starts after completion: count only samples from k_from on
         return np.any(in_window & held_for(cond, n_ttt), axis=-1)
+
+
+@register
+class RailA3Policy(A3Policy):
+    """A3 as railways tune it (``handover.a3_rail``, :data:`railradio.handover.params.RAIL_A3`):
+    its own filter coefficient, a short TTT, a small hysteresis, an offset toward the next
+    cell, and a one-way neighbour list (the new cell never lists the previous one, so A3
+    cannot send the train back)."""
+
+    name = "a3_rail"
+    label = "A3, railway-tuned"
+    section = "a3_rail"
+    one_way = True
 
 
 @register
@@ -418,7 +453,7 @@ def run_policy(policy: Policy, ctx: BlockContext) -> dict[str, tuple]:
     def retry(a, serving_ok, hb_next_m):
         return cmd.retry(a, serving_ok, hb_next_m, slice(None))
 
-    ex = execute(ctx, run, hb, retry)
+    ex = execute(ctx, run, hb, retry, node)
     k_trig = (cmd.k if cmd.k_trigger is None else cmd.k_trigger).ravel()
     # trigger to completion, from the radio-link failure when that came before the trigger
     lead = t_cmd - kin.t_s[k_trig]

@@ -43,10 +43,25 @@ def link_distances_m(x_m, radio: Radio) -> tuple[np.ndarray, np.ndarray]:
     return (np.hypot(x - radio.x_serving_m, radio.offset_m), np.hypot(x - radio.x_target_m, radio.offset_m))
 
 
+def pattern_loss_db(along_m, radio: Radio) -> np.ndarray:
+    """Loss of an RRH's antenna pointed along the track at a train ``along_m`` from it along
+    the track [dB] (≥ 0): TR 38.901 Table 7.3-1's horizontal pattern min(12 (φ/φ3dB)², A_max)
+    with φ = atan(h/|along|) off boresight (back-to-back antennas, one each way along the
+    line); 0 with ``antenna_hpbw_deg`` None (omnidirectional)."""
+    if radio.antenna_hpbw_deg is None:
+        return np.zeros(np.shape(along_m))
+    phi_deg = np.degrees(np.arctan2(radio.offset_m, np.abs(np.asarray(along_m, dtype=float))))
+    return np.minimum(12.0 * (phi_deg / radio.antenna_hpbw_deg) ** 2, radio.antenna_max_loss_db)
+
+
 def mean_rsrp_dbm(x_m, radio: Radio) -> tuple[np.ndarray, np.ndarray]:
-    """Mean received power P_tx − L(d) of the serving and target link at x [dBm]."""
-    d_s, d_t = link_distances_m(x_m, radio)
-    return radio.tx_power_dbm - path_loss_db(d_s, radio), radio.tx_power_dbm - path_loss_db(d_t, radio)
+    """Mean received power P_tx − L(d) − A(φ) of the serving and target link at x [dBm]
+    (P_tx the EIRP along the track, A the antenna's pattern loss, :func:`pattern_loss_db`)."""
+    x = np.asarray(x_m, dtype=float)
+    d_s, d_t = link_distances_m(x, radio)
+    a_s = pattern_loss_db(x - radio.x_serving_m, radio)
+    a_t = pattern_loss_db(x - radio.x_target_m, radio)
+    return radio.tx_power_dbm - path_loss_db(d_s, radio) - a_s, radio.tx_power_dbm - path_loss_db(d_t, radio) - a_t
 
 
 def noise_power_dbm(radio: Radio) -> float:

@@ -24,6 +24,7 @@ class _Run:
 
     def __init__(self, scn: Scenario, kin: Kinematics, draws: Draws, b: int) -> None:
         self.scn, self.kin = scn, kin
+        self.draws, self.b = draws, b
         rd, tr = scn.radio, scn.train
         self.v = kin.speed_m_s
         self.tm = rd.meas_period_s
@@ -144,7 +145,11 @@ class _Run:
         rd = self.scn.radio
         xj = 0.0 if j == 0 else rd.spacing_m
         d = math.hypot(x - xj, rd.offset_m)
-        return rd.tx_power_dbm - (self.l0 + 10 * rd.pathloss_exponent * math.log10(d / rd.ref_distance_m))
+        pattern = 0.0
+        if rd.antenna_hpbw_deg is not None:  # along the track, φ off boresight
+            phi = math.degrees(math.atan2(rd.offset_m, abs(x - xj)))
+            pattern = min(12 * (phi / rd.antenna_hpbw_deg) ** 2, rd.antenna_max_loss_db)
+        return rd.tx_power_dbm - (self.l0 + 10 * rd.pathloss_exponent * math.log10(d / rd.ref_distance_m)) - pattern
 
     def true_rsrp(self, j: int, x: float) -> float:
         """Local-mean received power of link ``j`` at ``x``: the mean power minus the shadowing ζ.
@@ -272,7 +277,35 @@ class _Run:
             ins.append(i and not o)
         return xs, oos, ins
 
-    def execute_stages(self, hb: float) -> tuple[bool, float, float, int]:
+    def fading_db(self, node: int, hb: float, n_occ: int) -> list[tuple[float, float]]:
+        """Fast-fading power gains [dB] (serving, target) at the ``n_occ`` PRACH occasions of
+        node ``node``'s handover commanded at ``hb``, occasion by occasion."""
+        from railradio.handover.fading import clarke_factor
+
+        rd, ex = self.scn.radio, self.scn.execution
+        if rd.fading == "none":
+            return [(0.0, 0.0)] * n_occ
+        if getattr(self, "_fade", (None,))[0] != n_occ:
+            self._fade = (n_occ, *self.draws.fading(n_occ))
+        _, white, phase0 = self._fade
+        f_d = self.v * rd.carrier_hz / SPEED_OF_LIGHT_M_S
+        lf = clarke_factor(n_occ, f_d, ex.ra_period_s)
+        k = None if rd.fading == "rayleigh" else 10 ** (rd.fading_k_db / 10)
+        out = [[0.0, 0.0] for _ in range(n_occ)]
+        for j, x_rrh in enumerate((rd.x_serving_m, rd.x_target_m)):
+            w = white[self.b, node, j]
+            z = [complex(float(w[m, 0]), float(w[m, 1])) / math.sqrt(2) for m in range(n_occ)]
+            cos = (x_rrh - hb) / math.hypot(x_rrh - hb, rd.offset_m)
+            for o in range(n_occ):
+                g = sum(float(lf[o, m]) * z[m] for m in range(o + 1))
+                if k is not None:
+                    t = ex.rrc_processing_s + ex.ra_period_s * o
+                    phi = 2 * math.pi * (float(phase0[self.b, node, j]) + f_d * cos * t)
+                    g = math.sqrt(k / (k + 1)) * complex(math.cos(phi), math.sin(phi)) + math.sqrt(1 / (k + 1)) * g
+                out[o][j] = 10 * math.log10(max(abs(g) ** 2, 1e-30))
+        return [tuple(o) for o in out]
+
+    def execute_stages(self, hb: float, node: int = 0) -> tuple[bool, float, float, int]:
         """The stages rule for a command reaching the node at ``hb``: (success, completion
         position (NaN: none), failure detection after the command [s] (NaN: success),
         outcome class of :mod:`railradio.handover.stages`), each stage read as the
@@ -305,9 +338,13 @@ class _Run:
             return False, math.nan, t_det, self._kind(hb + self.v * t_det, late=True)
         # stage 3: PRACH occasions while T304 runs
         n_occ = int(math.floor((ex.t304_s - ex.rrc_processing_s) / ex.ra_period_s + 1e-9)) + 1
+        fad = self.fading_db(node, hb, n_occ)
         for i in range(n_occ):
             t = ex.rrc_processing_s + ex.ra_period_s * i
-            if self.sinr(1, hb + self.v * t) >= rd.q_out_db:
+            x = hb + self.v * t
+            g_s, g_t = fad[i]
+            i_mw = rd.load_factor * 10 ** ((self.true_rsrp(0, x) + g_s) / 10) + self.noise_mw
+            if self.true_rsrp(1, x) + g_t - 10 * math.log10(i_mw) >= rd.q_out_db:
                 x_done = hb + self.v * (t + ex.t0_s - ex.rrc_processing_s)
                 break
         else:
@@ -384,7 +421,7 @@ def _outcome(run: _Run, i: int, k_cmd: int, retry_ok, returns, k_trig: int | Non
     hb = run.x_true(i, k_cmd) + run.v * ex.report_delay_s  # the command, report_delay_s after the decision
     kind = None
     if ex.failure_rule == "stages":
-        attempts, (ok, x_done, t_det, kind) = 1, run.execute_stages(hb)
+        attempts, (ok, x_done, t_det, kind) = 1, run.execute_stages(hb, i)
         he = x_done if ok or not math.isnan(x_done) else hb + run.v * ex.t0_s
         delay = (x_done - hb) / run.v if ok else math.nan
         t_done_rel = delay if ok else t_det + ex.reestablish_s
@@ -420,14 +457,22 @@ def _outcome(run: _Run, i: int, k_cmd: int, retry_ok, returns, k_trig: int | Non
     }
 
 
-def _a3(run: _Run) -> list[dict]:
+def _a3(run: _Run, section: str = "a3", one_way: bool = False) -> list[dict]:
     sc = run.scn
-    hys, off = sc.a3.hysteresis_db, sc.a3.offset_db
-    n_ttt = math.ceil(sc.a3.ttt_s / run.tm - 1e-9) + 1
+    p = getattr(sc, section)
+    hys, off = p.hysteresis_db, p.offset_db
+    n_ttt = math.ceil(p.ttt_s / run.tm - 1e-9) + 1
     ex = sc.execution
+    rd = sc.radio
     out = []
     for i in range(sc.train.n_nodes):
         f = run.filt[i]
+        if p.l3_k is not None and p.l3_k != rd.l3_k:  # the event's own filter, sample by sample
+            a = 1 - (1 - 1 / 2 ** (p.l3_k / 4)) ** (run.tm / rd.l3_reference_period_s)
+            f = [[], []]
+            for j in range(2):
+                for k, mm in enumerate(run.meas[i][j]):
+                    f[j].append(mm if k == 0 else (1 - a) * f[j][-1] + a * mm)
         count, k_cmd, k_trig = 0, run.k_n - 1, None
         for k in range(run.k_n):
             count = count + 1 if f[1][k] - hys > f[0][k] + off else 0  # A3-1, Mn = target
@@ -456,6 +501,8 @@ def _a3(run: _Run) -> list[dict]:
             bool
                 True if the node is commanded back to the previous cell within ``pingpong_window_s``.
             """
+            if one_way:  # the previous cell is not the new cell's neighbour
+                return False
             count = 0
             for k in range(k0, run.k_n):
                 if k * run.tm - t_done > ex.pingpong_window_s:
@@ -653,7 +700,12 @@ def _joint_outcomes(run: _Run, ks: list[int], pr: float) -> list[dict]:
     return out
 
 
-REFERENCE_POLICIES = {"joint": _joint, "a3": _a3, "distance": _distance}
+REFERENCE_POLICIES = {
+    "joint": _joint,
+    "a3": _a3,
+    "a3_rail": lambda run: _a3(run, "a3_rail", one_way=True),
+    "distance": _distance,
+}
 
 
 def simulate_reference(scn: Scenario, kin: Kinematics, draws: Draws, policies: tuple[str, ...]) -> dict:

@@ -16,9 +16,10 @@ from railradio.handover.params import SIM_SECTIONS, Scenario
 AFFECTS = {
     "joint": ("joint",),
     "a3": ("a3",),
-    "radio": ("joint", "a3", "distance"),
-    "train": ("joint", "a3", "distance"),
-    "execution": ("joint", "a3", "distance"),
+    "a3_rail": ("a3_rail",),
+    "radio": ("joint", "a3", "a3_rail", "distance"),
+    "train": ("joint", "a3", "a3_rail", "distance"),
+    "execution": ("joint", "a3", "a3_rail", "distance"),
 }
 """Policies a switch of each scenario section can change."""
 

@@ -11,8 +11,9 @@ A handover is a sequence of procedures, and each can fail on its own link:
    when that came first) and the UE re-establishes.
 3. **Execution under T304** (TS 36.331 §5.3.5.4): after ``rrc_processing_s`` the UE tries
    random access at every PRACH occasion, ``ra_period_s`` apart, while T304 (``t304_s``)
-   runs; access succeeds at the first occasion at which the target's SINR is at least Q_out
-   and completes ``t0_s − rrc_processing_s`` later (so T0 after the command when the first
+   runs; access succeeds at the first occasion at which the target's SINR, with fast fading
+   on both links (one look, :mod:`railradio.handover.fading`), is at least Q_out and
+   completes ``t0_s − rrc_processing_s`` later (so T0 after the command when the first
    occasion succeeds). T304 expiry is a handover failure (TS 36.331 §5.3.5.6).
 4. **Monitoring of the new link** (TS 36.300 §22.4.2.2): radio-link monitoring of the target
    starts afresh at completion (its windows filled from then on); a T310 started within
@@ -217,7 +218,9 @@ class LinkMonitor:
         return np.where(j < self.x_m.size, self.x_m[np.minimum(j, self.x_m.size - 1)], np.inf)
 
 
-def execute_stages(mon: LinkMonitor, st: StageTimes, run: NDArray, hb_m: NDArray, v_m_s: float) -> StageOutcome:
+def execute_stages(
+    mon: LinkMonitor, st: StageTimes, run: NDArray, hb_m: NDArray, v_m_s: float, fading_db=None
+) -> StageOutcome:
     """Stages 2–5 for handovers commanded at true positions ``hb_m`` (stage 1, the report
     delay, is in the command's position already).
 
@@ -233,6 +236,10 @@ def execute_stages(mon: LinkMonitor, st: StageTimes, run: NDArray, hb_m: NDArray
         True position of the node when the command reaches it [m].
     v_m_s : float
         Train speed [m/s].
+    fading_db : tuple of numpy.ndarray, optional
+        Fast-fading power gains [dB] of the serving and target link at each handover's PRACH
+        occasions, each [n, occasions] (:func:`railradio.handover.model.access_fading_db`);
+        ``None``: local means only.
 
     Returns
     -------
@@ -253,6 +260,8 @@ def execute_stages(mon: LinkMonitor, st: StageTimes, run: NDArray, hb_m: NDArray
     i_occ = np.arange(st.n_occasions)
     x_occ = hb[:, None] + v_m_s * (st.rrc_processing_s + st.ra_period_s * i_occ)[None, :]
     r_s, r_t = mon.means(run[:, None], x_occ)
+    if fading_db is not None:  # one look per occasion: fast fading on both links
+        r_s, r_t = r_s + fading_db[0], r_t + fading_db[1]
     ok = sinr_db(r_t, r_s, radio) >= radio.q_out_db
     first = np.where(ok.any(axis=1), np.argmax(ok, axis=1), -1)
     accessed = ~lost & (first >= 0)
