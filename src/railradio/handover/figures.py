@@ -188,6 +188,7 @@ def plot_stages_vs_speed(summary: xr.Dataset, pdf_path, png_path=None) -> None:
     plotting.log_axis(ax, "y")
     _decades(ax)
     ax.set_ylabel("failed handovers (1 − success)")
+    ax.set_title("every stage", fontsize="small")
     ax.legend(fontsize="x-small")
     for ax, name, ylabel in (
         (axes[0, 1], "too_late", "too late (serving side failed)"),
@@ -199,7 +200,8 @@ def plot_stages_vs_speed(summary: xr.Dataset, pdf_path, png_path=None) -> None:
         _rate_plot(ax, summary, name, log=True)
         plotting.log_axis(ax, "y")
         _decades(ax)
-        ax.set_ylabel(f"share: {ylabel}")
+        ax.set_ylabel("share of handovers")
+        ax.set_title(ylabel, fontsize="small")
     ax = axes[1, 1]
     v = summary["speed_kmh"].values
     for pol in summary["policy"].values:
@@ -219,8 +221,10 @@ def plot_stages_vs_speed(summary: xr.Dataset, pdf_path, png_path=None) -> None:
         )
     ax.plot([], [], color="grey", label="median")
     ax.plot([], [], color="grey", linestyle="--", label="95th percentile")
-    ax.set_yscale("log")
-    ax.set_ylabel("interruption: command to completion [ms]")
+    plotting.log_axis(ax, "y")
+    ax.set_ylim(20.0, 400.0)
+    ax.set_ylabel("interruption [ms]")
+    ax.set_title("command to completion, re-establishment included", fontsize="small")
     ax.legend(fontsize="x-small")
     for ax in axes[1]:
         ax.set_xlabel("train speed [km/h]")

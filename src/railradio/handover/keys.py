@@ -349,6 +349,24 @@ def sens_specs(sens: xr.Dataset) -> dict[str, KeySpec]:
     return out
 
 
+def _stage_keys(summary: xr.Dataset, speeds: list[float], out: dict, put) -> None:
+    """The failure-stage keys (:data:`STAGE_METRICS` at :data:`STAGE_SPEEDS`, per policy) and
+    each policy's too-late rise from 100 to 500 km/h (its standard error as if the two
+    speeds were independent: conservative, they share the shadowing fields)."""
+    for pol in (p for p in ALL_POLICIES if p in summary["policy"].values):
+        for metric in STAGE_METRICS:
+            for v in STAGE_SPEEDS:
+                name = f"handover.{pol}.{metric}.v{v}"
+                if name in out or float(v) not in speeds or not np.isfinite(_pick(summary, pol, metric, v)):
+                    continue
+                se = _pick(summary, pol, f"{metric}_se", v) if f"{metric}_se" in summary else None
+                put(name, _pick(summary, pol, metric, v), se)
+        if {100.0, 500.0} <= set(speeds) and np.isfinite(_pick(summary, pol, "too_late", 500)):
+            rise = _pick(summary, pol, "too_late", 500) - _pick(summary, pol, "too_late", 100)
+            se = np.hypot(_pick(summary, pol, "too_late_se", 500), _pick(summary, pol, "too_late_se", 100))
+            put(f"handover.{pol}.too_late.rise_100_500", rise, float(se))
+
+
 def key_numbers(
     summary: xr.Dataset, cost: xr.Dataset, sens: xr.Dataset, gaph_db: float, sigma0_db: float, wslr: str, radio=None
 ) -> dict[str, Any]:
@@ -424,18 +442,7 @@ def key_numbers(
                 name = f"handover.{pol}.{metric}.v{v:g}"
                 if name in SPECS and v in speeds:
                     put(name, _pick(summary, pol, metric, v), _pick(summary, pol, f"{metric}_se", v))
-    for pol in (p for p in ALL_POLICIES if p in summary["policy"].values):
-        for metric in STAGE_METRICS:
-            for v in STAGE_SPEEDS:
-                name = f"handover.{pol}.{metric}.v{v}"
-                if name in out or float(v) not in speeds or not np.isfinite(_pick(summary, pol, metric, v)):
-                    continue
-                se = _pick(summary, pol, f"{metric}_se", v) if f"{metric}_se" in summary else None
-                put(name, _pick(summary, pol, metric, v), se)
-        if {100.0, 500.0} <= set(speeds) and np.isfinite(_pick(summary, pol, "too_late", 500)):
-            rise = _pick(summary, pol, "too_late", 500) - _pick(summary, pol, "too_late", 100)
-            se = np.hypot(_pick(summary, pol, "too_late_se", 500), _pick(summary, pol, "too_late_se", 100))
-            put(f"handover.{pol}.too_late.rise_100_500", rise, float(se))
+    _stage_keys(summary, speeds, out, put)
     hs = [s for s in speeds if 300 <= s <= 380]
     if hs:
         vals = [_pick(summary, "joint", "success", s) for s in hs]

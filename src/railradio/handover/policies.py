@@ -411,6 +411,34 @@ class JointPolicy(Policy):
         return np.zeros(k_from.shape, dtype=bool)
 
 
+def _stage_outputs(ex, sh) -> dict[str, tuple]:
+    """The ``stages`` rule's per-handover outputs (outcome class, failed stage, PRACH
+    occasions, T310 at the command), shaped [B, N] by ``sh``."""
+    from railradio.handover.stages import KIND_NAMES
+
+    return {
+        "failure_kind": (
+            ("run", "node"),
+            sh(ex.kind),
+            "1",
+            "outcome: " + ", ".join(f"{c} {n}" for c, n in KIND_NAMES.items()) + " (TS 36.300 22.4.2.2)",
+        ),
+        "failure_stage": (
+            ("run", "node"),
+            sh(ex.stage),
+            "1",
+            "failed stage: 0 none, 1 command reception, 2 access under T304, 3 the new link",
+        ),
+        "ra_occasions": (("run", "node"), sh(ex.occasions).astype(np.int16), "1", "PRACH occasions used"),
+        "t310_at_command": (
+            ("run", "node"),
+            sh(ex.t310_at_command).astype(np.int8),
+            "1",
+            "1 if the serving link's T310 ran when the command came",
+        ),
+    }
+
+
 def run_policy(policy: Policy, ctx: BlockContext) -> dict[str, tuple]:
     """Command, execute and check ping-pong for every node crossing of the block.
 
@@ -502,26 +530,6 @@ def run_policy(policy: Policy, ctx: BlockContext) -> dict[str, tuple]:
         "rsrp_gap_db": (("run", "node"), sh(ex.gap_db), "dB", "true RSRP-GAP serving - target at completion"),
     }
     if ex.kind is not None:  # the stages rule
-        from railradio.handover.stages import KIND_NAMES
-
-        out["failure_kind"] = (
-            ("run", "node"),
-            sh(ex.kind),
-            "1",
-            "outcome: " + ", ".join(f"{c} {n}" for c, n in KIND_NAMES.items()) + " (TS 36.300 22.4.2.2)",
-        )
-        out["failure_stage"] = (
-            ("run", "node"),
-            sh(ex.stage),
-            "1",
-            "failed stage: 0 none, 1 command reception, 2 access under T304, 3 the new link",
-        )
-        out["ra_occasions"] = (("run", "node"), sh(ex.occasions).astype(np.int16), "1", "PRACH occasions used")
-        out["t310_at_command"] = (
-            ("run", "node"),
-            sh(ex.t310_at_command).astype(np.int8),
-            "1",
-            "1 if the serving link's T310 ran when the command came",
-        )
+        out.update(_stage_outputs(ex, sh))
     out.update(cmd.extras)
     return out
