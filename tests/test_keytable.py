@@ -72,3 +72,19 @@ def test_the_ci_run_writes_the_csv_beside_the_json(ci_run):
     numbers = json.loads((ci_run / "results/key_numbers.json").read_text(encoding="utf-8"))
     text = (ci_run / "results/key_numbers.csv").read_text(encoding="utf-8")
     assert text == to_csv(numbers)
+
+
+def test_study_summary_counts_keys_and_claims_per_study():
+    from railradio.keytable import study_summary, study_summary_latex
+
+    numbers = {
+        "fusion.a": {"value": 1.0, "mc_stderr": 0.0, "source_value": 2.0, "source_relation": "<"},
+        "fusion.b": {"value": 3.0, "mc_stderr": 0.0},
+        "handover.c": {"value": 3.0, "mc_stderr": 0.0, "source_value": 2.0, "source_relation": "<"},
+        "handover.d": {"value": 2.0, "mc_stderr": 1.0, "source_value": 2.5, "source_relation": ">"},
+    }
+    rows = {r["study"]: r for r in study_summary(numbers)}
+    assert rows["fusion"] == {"study": "fusion", "keys": 2, "claims": 1, "met": 1, "not met": 0, "undecided": 0}
+    assert rows["handover"] == {"study": "handover", "keys": 2, "claims": 2, "met": 0, "not met": 1, "undecided": 1}
+    tex = study_summary_latex(numbers)
+    assert tex.startswith("\\begin{tabular}") and "handover & 2 & 2 & 0 & 1 & 1" in tex

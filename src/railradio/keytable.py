@@ -133,6 +133,57 @@ def to_csv(numbers: Mapping[str, Mapping[str, Any]]) -> str:
     return buf.getvalue()
 
 
+VERDICT_GROUPS = {
+    "met": ("holds", "agrees"),
+    "not met": ("fails", "ours lower", "ours higher"),
+    "undecided": ("undecided", "no value"),
+}
+"""How the appendix's per-study summary groups the verdicts of :func:`verdict`."""
+
+
+def study_summary(numbers: Mapping[str, Mapping[str, Any]]) -> list[dict[str, Any]]:
+    """Per study, in order of first appearance: the number of keys, of keys with a source
+    value, and of those whose claim is met, not met or undecided (:data:`VERDICT_GROUPS`).
+
+    Parameters
+    ----------
+    numbers : mapping
+        Key name -> key-number entry (``value``, ``mc_stderr``, ``source_value``,
+        ``source_relation``).
+
+    Returns
+    -------
+    list of dict
+        ``study``, ``keys``, ``claims``, ``met``, ``not met``, ``undecided`` [1].
+    """
+    out: dict[str, dict[str, Any]] = {}
+    for key, e in numbers.items():
+        st = study_of(key)
+        row = out.setdefault(st, {"study": st, "keys": 0, "claims": 0, **dict.fromkeys(VERDICT_GROUPS, 0)})
+        row["keys"] += 1
+        v = verdict(e)
+        if not v:
+            continue
+        row["claims"] += 1
+        row[next(g for g, vs in VERDICT_GROUPS.items() if v in vs)] += 1
+    return list(out.values())
+
+
+def study_summary_latex(numbers: Mapping[str, Mapping[str, Any]]) -> str:
+    """:func:`study_summary` as a LaTeX (booktabs) table body in a ``tabular``."""
+    lines = [
+        r"\begin{tabular}{@{}lrrrrr@{}}",
+        r"\toprule",
+        r"study & key numbers & with a source value & met & not met & undecided\\",
+        r"\midrule",
+    ]
+    for r in study_summary(numbers):
+        cells = [r["study"], r["keys"], r["claims"], r["met"], r["not met"], r["undecided"]]
+        lines.append(" & ".join(str(c) for c in cells) + r" \\")
+    lines += [r"\bottomrule", r"\end{tabular}"]
+    return "\n".join(lines) + "\n"
+
+
 _CELL = re.compile(r"^(nr\.map\.)(?:mt\d+|tpl)_[^.]+\.")
 _CASE = re.compile(r"^((?:sens\.\w+|\w+\.sens)\.)[^.]+\.")
 

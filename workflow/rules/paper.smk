@@ -10,7 +10,7 @@ rule key_numbers:
         csv=report("results/key_numbers.csv", caption="../report/key_numbers_csv.rst", category="numbers"),
         tex="results/paper/numbers.tex",
         claims="results/paper/claims.tex",
-        all_numbers="results/paper/all_numbers.tex",
+        summary="results/paper/study_summary.tex",
         config="results/paper/config.tex",
         beside=report("results/paper/key_numbers_beside_source.html", caption="../report/key_numbers_beside.rst",
                       category="numbers"),
@@ -32,7 +32,7 @@ rule paper:
         tex="paper/main.tex",
         numbers="results/paper/numbers.tex",
         claims="results/paper/claims.tex",
-        all_numbers="results/paper/all_numbers.tex",
+        summary="results/paper/study_summary.tex",
         config="results/paper/config.tex",
         figures=[f for f in FIGURES if f.endswith(".pdf")],
     output:
