@@ -26,6 +26,8 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.special import j0
 
+from railradio.constants import SPEED_OF_LIGHT_M_S
+
 FADING_MODELS = ("none", "rayleigh", "rician")
 
 
@@ -100,6 +102,4 @@ def power_gains_db(
 
 def doppler_hz(speed_m_s: float, carrier_hz: float) -> float:
     """Maximum Doppler frequency f_D = v f_c / c [Hz]."""
-    from railradio.constants import SPEED_OF_LIGHT_M_S
-
     return speed_m_s * carrier_hz / SPEED_OF_LIGHT_M_S

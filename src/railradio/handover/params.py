@@ -34,6 +34,11 @@ def _check(
         raise ValueError(f"{name} must be {'<' if hi_open else '<='} {hi}, got {value!r}")
 
 
+def _check_l3_k(value) -> None:
+    if not isinstance(value, int) or isinstance(value, bool) or not 0 <= value <= 19:
+        raise ValueError(f"l3_k must be an integer in 0..19 (TS 36.331), got {value!r}")
+
+
 def _choice(name: str, value: str, allowed: tuple[str, ...]) -> None:
     if value not in allowed:
         raise ValueError(f"{name} must be one of {allowed}, got {value!r}")
@@ -123,8 +128,7 @@ class Radio:
         _check("shadow_grid_m", self.shadow_grid_m, 0.0, 10.0, lo_open=True)
         _check("meas_sigma_db", self.meas_sigma_db, 0.0, 20.0)
         _check("meas_period_s", self.meas_period_s, 0.0, 1.0, lo_open=True)
-        if not isinstance(self.l3_k, int) or isinstance(self.l3_k, bool) or not 0 <= self.l3_k <= 19:
-            raise ValueError(f"l3_k must be an integer in 0..19 (TS 36.331), got {self.l3_k!r}")
+        _check_l3_k(self.l3_k)
         _check("l3_reference_period_s", self.l3_reference_period_s, 0.0, 10.0, lo_open=True)
         _check("load_factor", self.load_factor, 0.0, 1.0)
         _check("q_out_db", self.q_out_db, -30.0, 30.0)
@@ -409,10 +413,8 @@ class A3:
         _check("hysteresis_db", self.hysteresis_db, 0.0, 15.0)
         _check("ttt_s", self.ttt_s, 0.0, 5.12)
         _check("offset_db", self.offset_db, -15.0, 15.0)
-        if self.l3_k is not None and (
-            not isinstance(self.l3_k, int) or isinstance(self.l3_k, bool) or not 0 <= self.l3_k <= 19
-        ):
-            raise ValueError(f"l3_k must be null or an integer in 0..19 (TS 36.331), got {self.l3_k!r}")
+        if self.l3_k is not None:
+            _check_l3_k(self.l3_k)
 
 
 RAIL_A3 = A3(hysteresis_db=1.0, ttt_s=0.064, offset_db=-2.0, l3_k=1)

@@ -222,17 +222,7 @@ class _Run:
         N310/N311/T310 procedure step by step."""
         if not hasattr(self, "_rlm_x"):
             cfg = self.scn.execution.rlm(self.scn.radio)
-            step = self.v * cfg.indication_s
-            x_end = self.g_x0 + self.g_dx * (self.g_n - 1)
-            xs = [self.g_x0 + step * j for j in range(int(math.floor((x_end - self.g_x0) / step)) + 1)]
-            sinrs = [self.sinr(0, x) for x in xs]
-            n_out, n_in = cfg.samples(cfg.qout_eval_s), cfg.samples(cfg.qin_eval_s)
-            oos, ins = [], []
-            for j in range(len(xs)):
-                o = j + 1 >= n_out and sum(sinrs[j + 1 - n_out : j + 1]) / n_out < cfg.q_out_db
-                i = j + 1 >= n_in and sum(sinrs[j + 1 - n_in : j + 1]) / n_in > cfg.q_in_db
-                oos.append(o)
-                ins.append(i and not o)
+            xs, oos, ins = self._indications(0)
             j_rlf = first_rlf_reference(oos, ins, cfg)
             self._rlm_x = xs[j_rlf] if j_rlf < len(xs) else math.inf
         return self._rlm_x
@@ -286,11 +276,10 @@ class _Run:
         rd, ex = self.scn.radio, self.scn.execution
         if rd.fading == "none":
             return [(0.0, 0.0)] * n_occ
-        if getattr(self, "_fade", (None,))[0] != n_occ:
-            self._fade = (n_occ, *self.draws.fading(n_occ))
-        _, white, phase0 = self._fade
         f_d = self.v * rd.carrier_hz / SPEED_OF_LIGHT_M_S
-        lf = clarke_factor(n_occ, f_d, ex.ra_period_s)
+        if getattr(self, "_fade", (None,))[0] != n_occ:
+            self._fade = (n_occ, *self.draws.fading(n_occ), clarke_factor(n_occ, f_d, ex.ra_period_s))
+        _, white, phase0, lf = self._fade
         k = None if rd.fading == "rayleigh" else 10 ** (rd.fading_k_db / 10)
         out = [[0.0, 0.0] for _ in range(n_occ)]
         for j, x_rrh in enumerate((rd.x_serving_m, rd.x_target_m)):

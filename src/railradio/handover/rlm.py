@@ -102,6 +102,22 @@ def indications(sinr_db: NDArray, cfg: RlmConfig) -> tuple[NDArray[np.bool_], ND
 
 
 @njit(cache=True, nogil=True)
+def t310_step(oos_j, ins_j, j, c_oos, c_in, start, n310, n311):  # pragma: no cover - compiled
+    """One indication j of TS 36.331 §5.3.11: N310 consecutive out-of-sync start T310 (its
+    start indication, −1 while stopped), N311 consecutive in-sync stop it. Returns the new
+    (out-of-sync count, in-sync count, start)."""
+    if start < 0:
+        c_oos = c_oos + 1 if oos_j else 0
+        if c_oos >= n310:
+            start, c_in = j, 0
+    else:
+        c_in = c_in + 1 if ins_j else 0
+        if c_in >= n311:
+            start, c_oos = -1, 0
+    return c_oos, c_in, start
+
+
+@njit(cache=True, nogil=True)
 def _first_rlf(oos, ins, n310, n311, n_t310):  # pragma: no cover - compiled
     rows, n_j = oos.shape
     out = np.full(rows, n_j, dtype=np.int64)
@@ -110,14 +126,7 @@ def _first_rlf(oos, ins, n310, n311, n_t310):  # pragma: no cover - compiled
         c_in = 0
         start = -1
         for j in range(n_j):
-            if start < 0:
-                c_oos = c_oos + 1 if oos[r, j] else 0
-                if c_oos >= n310:
-                    start, c_in = j, 0
-            else:
-                c_in = c_in + 1 if ins[r, j] else 0
-                if c_in >= n311:
-                    start, c_oos = -1, 0
+            c_oos, c_in, start = t310_step(oos[r, j], ins[r, j], j, c_oos, c_in, start, n310, n311)
             if start >= 0 and j - start >= n_t310:
                 out[r] = j
                 break

@@ -43,7 +43,7 @@ from numba import njit
 from numpy.typing import NDArray
 
 from railradio.handover.radio import sinr_db
-from railradio.handover.rlm import RlmConfig, indications
+from railradio.handover.rlm import RlmConfig, indications, t310_step
 
 SUCCESS, TOO_LATE, TOO_EARLY, WRONG_CELL, OTHER_RLF = 0, 1, 2, 3, 4
 """Outcome codes of one handover (``failure_kind``)."""
@@ -73,14 +73,7 @@ def _t310_running(oos, ins, n310, n311, n_t310):  # pragma: no cover - compiled
         c_in = 0
         start = -1
         for j in range(n_j):
-            if start < 0:
-                c_oos = c_oos + 1 if oos[r, j] else 0
-                if c_oos >= n310:
-                    start, c_in = j, 0
-            else:
-                c_in = c_in + 1 if ins[r, j] else 0
-                if c_in >= n311:
-                    start, c_oos = -1, 0
+            c_oos, c_in, start = t310_step(oos[r, j], ins[r, j], j, c_oos, c_in, start, n310, n311)
             running[r, j] = start >= 0
             if start >= 0 and j - start >= n_t310:
                 rlf[r] = j
@@ -104,16 +97,9 @@ def _rlf_after(oos, ins, row, j_first, j_last_start, n310, n311, n_t310):  # pra
         c_in = 0
         start = -1
         for j in range(max(j_first[q], 0), n_j):
-            if start < 0:
-                if j > j_last_start[q]:
-                    break
-                c_oos = c_oos + 1 if oos[r, j] else 0
-                if c_oos >= n310:
-                    start, c_in = j, 0
-            else:
-                c_in = c_in + 1 if ins[r, j] else 0
-                if c_in >= n311:
-                    start, c_oos = -1, 0
+            if start < 0 and j > j_last_start[q]:
+                break
+            c_oos, c_in, start = t310_step(oos[r, j], ins[r, j], j, c_oos, c_in, start, n310, n311)
             if start >= 0 and j - start >= n_t310:
                 out[q] = j
                 break
