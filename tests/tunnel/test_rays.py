@@ -10,7 +10,7 @@ from railradio.tunnel.channel import beat_length_m, coherent_gain_by_order, movi
 from railradio.tunnel.geometry import Cable, Tunnel
 from railradio.tunnel.key_specs import ENGINE_TOL_COHERENT_DB, ENGINE_TOL_MEAN_DB
 from railradio.tunnel.lifting import image_coherent_gain, lift, reflection_product, trace
-from railradio.tunnel.materials import CONCRETE_900MHZ
+from railradio.tunnel.materials import CONCRETE_900MHZ, eh11_attenuation_db_per_m
 from railradio.tunnel.rays import image_families, sbr_families
 
 LAM = SPEED_OF_LIGHT_M_S / 900e6
@@ -127,21 +127,46 @@ def test_chosen_order_converges_the_coherent_gain():
     assert 0 < order < 40 and worst_db[order] <= cfg["rays"]["convergence_field_db"] < worst_db[order - 1]
 
 
-def test_local_mean_far_from_a_slot_decays_at_the_eh11_attenuation():
+def test_local_mean_far_from_a_slot_decays_like_the_modal_sum():
     # the paper's tunnel and order: the coherent local mean between 1.5 and 5 km, averaged
-    # over one EH11-EH12 beat length, falls within -0.5/+1.0 dB/km of the EH11 attenuation
-    # (the least-attenuated mode sets the floor; the higher modes may add a little), and
-    # the order converged there; the incoherent ray-power sum (~1/d) would fail this
+    # over one EH11-EH12 beat length, falls at the rate of the lossy EH_mn modal sum for the
+    # same slot and receiver within 0.15 dB/km (measured: 3.63 vs 3.64), its window means
+    # within 0.5 dB of the modal ones, and not faster than EH11 alone (the least-attenuated
+    # mode sets the floor); the order converged there.  The incoherent ray-power sum (~1/d)
+    # would fail this
     import yaml
 
     from railradio.tunnel.engine_checks import far_decay
 
     cfg = yaml.safe_load(open("config/config.yaml"))["tunnel"]
     far = far_decay(cfg)
-    eh11 = far.attrs["eh11_db_per_km"]
-    assert eh11 - 0.5 <= far.attrs["slope_db_per_km"] <= eh11 + 1.0
+    assert abs(far.attrs["slope_db_per_km"] - far.attrs["modal_slope_db_per_km"]) <= 0.15
+    assert far.attrs["modal_max_diff_db"] <= 0.5
+    assert far.attrs["slope_db_per_km"] >= far.attrs["eh11_db_per_km"] - 0.05
     assert far.attrs["converged_order"] < cfg["rays"]["max_order"]
     assert 440.0 < far.attrs["beat_length_m"] < 470.0
+
+
+def test_modal_sum_is_the_image_sum_far_from_the_slot():
+    # beyond a few hundred metres every ray grazes (both Fresnel coefficients -> -1): the
+    # image sum becomes the lossy rectangle's modal sum on the same scale (lambda times the
+    # Green's function); measured at order 70: local means within 0.1 dB at 0.2, 1 and 3 km,
+    # the complex fields within 14 % RMS (Emslie's perturbative mode losses)
+    from railradio.tunnel.modes import rect_modal_gain, rect_mode_attenuation_np_per_m
+
+    fam = image_families(RECT, 70)
+    for lo in (200.0, 1000.0, 3000.0):
+        x = np.arange(lo, lo + 20.0, 0.05)
+        img = coherent_gain_by_order(fam, x, LAM, CONCRETE_900MHZ, "paraxial").sum(axis=0)
+        mod = rect_modal_gain(RECT, x, LAM, CONCRETE_900MHZ)
+        p_img, p_mod = np.mean(np.abs(img) ** 2), np.mean(np.abs(mod) ** 2)
+        assert abs(10 * np.log10(p_mod / p_img)) <= 0.3, lo
+        assert np.sqrt(np.mean(np.abs(img - mod) ** 2) / p_img) <= 0.2, lo
+    # EH11's loss is the materials module's (dB = 8.686 Np)
+    a11 = rect_mode_attenuation_np_per_m(1, 1, LAM, RECT.width_m, RECT.height_m, CONCRETE_900MHZ)
+    assert 8.686 * a11 == pytest.approx(eh11_attenuation_db_per_m(LAM, RECT.width_m, RECT.height_m), rel=1e-3)
+    with pytest.raises(ValueError, match="rectangular"):
+        rect_modal_gain(RECT.with_shape("circle"), x, LAM, CONCRETE_900MHZ)
 
 
 def test_interpolated_reflection_product_is_exact_where_the_table_runs():

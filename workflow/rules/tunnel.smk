@@ -125,7 +125,7 @@ rule tunnel_run:
         "results/tunnel/runs/{train}/{setup}.nc",
     params:
         cfg=lambda w: TUNNEL_CHANNEL
-        | {k: TUNNEL[k] for k in ("measurement", "trains", "positioning", "tracking", "realizations")},
+        | {k: TUNNEL[k] for k in ("measurement", "trains", "positioning", "tracking", "realizations", "cases")},
         seed=config["seed"],
     wildcard_constraints:
         train="metro|hst|freight",

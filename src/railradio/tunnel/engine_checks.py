@@ -12,6 +12,7 @@ import xarray as xr
 from railradio.tunnel.channel import beat_length_m, coherent_gain_by_order, offset_grid_m, received, tabulate
 from railradio.tunnel.lifting import lift
 from railradio.tunnel.materials import circular_attenuation_db_per_m, eh11_attenuation_db_per_m
+from railradio.tunnel.modes import rect_modal_gain
 from railradio.tunnel.rays import image_families
 from railradio.tunnel.study import cable_from_config, eps_from_config, families, local_mean_window, tunnel_from_config
 
@@ -49,7 +50,11 @@ def far_decay(cfg: dict[str, Any]) -> xr.Dataset:
         centre, offset from the slot) [m].  Attributes: ``beat_length_m`` [m],
         ``eh11_db_per_km`` (EH11 attenuation of the square) [dB/km], ``converged_order``
         (the first order whose window means are all within 0.1 dB of the highest order's)
-        and ``slope_db_per_km`` (the slope at the highest order) [dB/km].
+        ``slope_db_per_km`` (the slope at the highest order) [dB/km], ``modal_slope_db_per_km``
+        (the same slope of the EH_mn modal sum for this slot and receiver,
+        :func:`railradio.tunnel.modes.rect_modal_gain`) [dB/km] and ``modal_max_diff_db``
+        (the largest |rays - modes| window mean at the highest order) [dB]; the variable
+        ``modal_local_mean_db`` [centre_m] holds the modal window means.
 
     Raises
     ------
@@ -69,6 +74,8 @@ def far_decay(cfg: dict[str, Any]) -> xr.Dataset:
     p = np.abs(cum) ** 2
     lm_db = _window_means_db(x, p, centres, lb)
     slope = -np.polyfit(centres / 1e3, lm_db.T, 1)[0]  # [order] dB/km
+    modal_db = _window_means_db(x, np.abs(rect_modal_gain(tun, x, lam, eps)) ** 2, centres, lb)
+    modal_slope = -float(np.polyfit(centres / 1e3, modal_db, 1)[0])
     conv = np.all(np.abs(lm_db - lm_db[-1]) <= 0.1, axis=1)
     conv_order = int(np.argmax(conv))
     eh11 = eh11_attenuation_db_per_m(lam, tun.width_m, tun.height_m, eps) * 1e3
@@ -90,6 +97,14 @@ def far_decay(cfg: dict[str, Any]) -> xr.Dataset:
                 slope,
                 {"units": "dB/km", "long_name": "least-squares decay of local_mean_db over the centres"},
             ),
+            "modal_local_mean_db": (
+                "centre_m",
+                modal_db,
+                {
+                    "units": "dB",
+                    "long_name": "the same window means of the lossy EH_mn modal sum (railradio.tunnel.modes)",
+                },
+            ),
         },
         coords={
             "order": (
@@ -104,6 +119,8 @@ def far_decay(cfg: dict[str, Any]) -> xr.Dataset:
             "eh11_db_per_km": eh11,
             "converged_order": conv_order,
             "slope_db_per_km": float(slope[-1]),
+            "modal_slope_db_per_km": modal_slope,
+            "modal_max_diff_db": float(np.max(np.abs(lm_db[-1] - modal_db))),
         },
     )
 

@@ -60,13 +60,16 @@ def rssi_map(maps: dict[str, xr.Dataset], coverage_dbm: float, blind_dbm: float,
 
 def delay_spread(maps: dict[str, xr.Dataset], pdf, png) -> None:
     """Figure ``tunnel_delay_spread``: the RMS delay spread along the tunnel of every map
-    (left) and its distribution over the tunnel (right, CDF, logarithmic delay axis).
+    (left) and its distribution over the tunnel (right, CDF, logarithmic delay axis), every
+    arrival counted (solid) and, for the image map, with the measurement thresholds (25 and
+    30 dB below the profile's peak, dashed), beside the range of medians measured in a straight
+    tunnel at 6 GHz, antenna-fed (grey band, 5-10 ns; docs/model/tunnel.md §2.3).
 
     Parameters
     ----------
     maps : dict
         Table name -> map of :func:`railradio.tunnel.study.make_map` (``x_m``, ``delay_rms_s``
-        [s], plotted in ns).
+        [s], plotted in ns; ``delay_rms_thr<T>_s`` where present).
     pdf : str or os.PathLike
         Output PDF path.
     png : str or os.PathLike
@@ -82,7 +85,16 @@ def delay_spread(maps: dict[str, xr.Dataset], pdf, png) -> None:
         v = ds["delay_rms_s"].values * 1e9
         ax.plot(ds["x_m"], v, lw=0.6, label=name)
         s = np.sort(v)
-        ac.plot(s, np.arange(1, s.size + 1) / s.size, label=name)
+        ac.plot(s, np.arange(1, s.size + 1) / s.size, label=f"{name}, every arrival")
+    thr = [k for k in maps.get("image", xr.Dataset()).data_vars if k.startswith("delay_rms_thr")]
+    for i, k in enumerate(thr):
+        v = maps["image"][k].values * 1e9
+        lab = f"image, {k[len('delay_rms_thr') : -2]} dB threshold"
+        ax.plot(maps["image"]["x_m"], v, lw=0.6, ls="--", color=f"C{5 + i}", label=lab)
+        s = np.sort(v)
+        ac.plot(s, np.arange(1, s.size + 1) / s.size, ls="--", color=f"C{5 + i}", label=lab)
+    ac.axvspan(5.0, 10.0, color="0.85", zorder=0, label="measured medians, antenna-fed tunnel, 6 GHz")
+    ax.set_yscale("log")
     ax.set_xlabel("x [m]")
     ax.set_ylabel("RMS delay spread [ns]")
     ac.set_xlabel("RMS delay spread [ns]")
@@ -131,59 +143,68 @@ def _cdf(ax, v, **kw):
     ax.plot(s, np.arange(1, s.size + 1) / s.size, **kw)
 
 
-def position_error_cdf(runs: dict[tuple[str, str], xr.Dataset], pdf, png) -> None:
-    """Figure ``tunnel_position_error_cdf``: one panel per train type, the CDFs of the
-    position errors [m] (logarithmic axis, 2 m and 5 m marked): head and tail KF, rigid-train
-    KF, particle filter and head snapshot of the physical separable run, and the train-error
-    KF of the correlated delay-error, wideband and source-channel runs where present.
+def position_error_cdf(runs: dict[tuple[str, str], xr.Dataset], pdf, png, headline: str = "wideband") -> None:
+    """Figure ``tunnel_position_error_cdf``: one panel per train type, the CDFs of the KF
+    train error [m] pooled over the Monte Carlo realizations (logarithmic axis, 2 m and 5 m
+    marked): the headline receiver (bold), its head and tail and its rigid-train KF, the wideband cases (low speed,
+    velocity-factor tolerance, feed delays), the separable receiver (the source's assumption)
+    and its correlated delay errors, the source's channel; the source's 95 % values of the
+    train, head and tail as markers at 0.95.  A lost track (error above one slot spacing)
+    shows as the curve's plateau below 1 before the kilometre errors.
 
     Parameters
     ----------
     runs : dict
         (train, setup) -> run of :func:`railradio.tunnel.simulate.run_train`; needs
-        ``physical_separable`` for every train of :data:`TRAINS`, the other setups of
+        ``physical_<headline>`` for every train of :data:`TRAINS`, the other setups of
         :data:`railradio.tunnel.study.SETUPS` optional.
     pdf : str or os.PathLike
         Output PDF path.
     png : str or os.PathLike
         Output PNG path.
+    headline : {'wideband', 'separable'}
+        The receiver of the headline keys (config ``key_measurement``).
 
     Returns
     -------
     None
         The figure is written to ``pdf`` and ``png``.
     """
-    fig, axes = figure(ncols=3, figsize=(9.0, 3.3), sharey=True)
+    from railradio.tunnel.key_specs import SOURCE_P95
+
+    other = "separable" if headline == "wideband" else "wideband"
+    names = {"wideband": "wideband (one merged CIR)", "separable": "separable (source's assumption)"}
+    curves = (
+        (f"physical_{other}", "rep_err", f"train, {names[other]}", {"lw": 1.4, "color": "C3"}),
+        ("physical_wideband_slow", "rep_err", "train, wideband, low speed", {"ls": "--", "color": "C0"}),
+        ("physical_wideband_vf", "rep_err", "train, wideband, velocity factor +1 %", {"ls": "-.", "color": "C1"}),
+        ("physical_wideband_feed", "rep_err", "train, wideband, feeds within TAE", {"ls": ":", "color": "C2"}),
+        ("physical_separable_slot_bias", "rep_err", "train, separable, per-slot bias", {"ls": (0, (3, 1, 1, 1))}),
+        ("source_separable", "rep_err", "train, separable, source's channel", {"ls": (0, (1, 3)), "color": "grey"}),
+    )
+    fig, axes = figure(ncols=3, figsize=(9.0, 3.6), sharey=True)
     for ax, tr in zip(axes, TRAINS, strict=True):
-        ds = runs[(tr, "physical_separable")]
-        _cdf(ax, ds["kf_err_head"], label="head, KF (white delay errors [ours])")
-        _cdf(ax, ds["kf_err_tail"], label="tail, KF (white)")
-        for v, lab, st in (
-            ("physical_separable_ar1", "train, KF, AR(1) delay errors", (0, (5, 1))),
-            ("physical_separable_slot_bias", "train, KF, per-slot delay bias", (0, (3, 1, 1, 1))),
-        ):
-            if (tr, v) in runs:
-                _cdf(ax, runs[(tr, v)]["kf_err"], label=lab, ls=st, lw=1.4)
-        _cdf(ax, ds["rigid_err"], label="rigid train, KF")
-        _cdf(ax, ds["pf_err"], label="train, PF", ls=":")
-        _cdf(ax, ds["snapshot_err"].values[:, 0], label="head, snapshot", ls="--")
-        if (tr, "physical_wideband") in runs:
-            _cdf(
-                ax,
-                runs[(tr, "physical_wideband")]["kf_err"],
-                label="train, KF, wideband (errors from the channel)",
-                ls="-.",
-            )
-        if (tr, "source_separable") in runs:
-            _cdf(ax, runs[(tr, "source_separable")]["kf_err"], label="train, KF, source's channel", ls=(0, (1, 3)))
+        ds = runs[(tr, f"physical_{headline}")]
+        _cdf(ax, ds["rep_err"].values.ravel(), label=f"train, {names[headline]}", lw=2.2, color="k")
+        _cdf(ax, ds["rep_err_head"].values.ravel(), label="head, same", lw=0.8, color="0.45")
+        _cdf(ax, ds["rep_err_tail"].values.ravel(), label="tail, same", lw=0.8, color="0.45", ls="--")
+        if "rep_err_rigid" in ds:
+            _cdf(ax, ds["rep_err_rigid"].values.ravel(), label="rigid train (all receivers), same", lw=1.4, color="C4")
+        for setup, var, lab, kw in curves:
+            if (tr, setup) in runs:
+                _cdf(ax, runs[(tr, setup)][var].values.ravel(), label=lab, **kw)
+        tot, head, tail = SOURCE_P95[tr]
+        ax.plot([tot], [0.95], "k*", ms=8, label="source's 95 % value: train")
+        ax.plot([head, tail], [0.95, 0.95], "kv", ms=5, mfc="none", label="source's 95 %: head, tail")
         ax.set_xscale("log")
         ax.set_xlim(1e-2, 1e3)
-        ax.set_xlabel("error [m]")
+        ax.set_xlabel("KF error [m] (all realizations)")
         ax.set_title(f"{tr} ({ds.attrs['length_m']:g} m, {ds.attrs['speed_kmh']:g} km/h)", fontsize=8)
         for lim in (2.0, 5.0):
             ax.axvline(lim, color="k", lw=0.5, ls=":")
     axes[0].set_ylabel("CDF")
-    axes[-1].legend(fontsize=6, loc="lower right")
+    handles, labels = axes[0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="upper center", bbox_to_anchor=(0.5, 0.0), ncol=4, fontsize=6, frameon=False)
     save(fig, pdf, png)
 
 

@@ -7,7 +7,15 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from railradio.tunnel.key_specs import ENGINE_TOL_COHERENT_DB, ENGINE_TOL_MEAN_DB, SPECS, TRAINS, sens_spec
+from railradio.nr import loss
+from railradio.tunnel.key_specs import (
+    DELAY_SPREAD_THRESHOLDS_DB,
+    ENGINE_TOL_COHERENT_DB,
+    ENGINE_TOL_MEAN_DB,
+    SPECS,
+    TRAINS,
+    sens_spec,
+)
 
 
 def length_error_m(ds: xr.Dataset) -> np.ndarray:
@@ -87,35 +95,139 @@ def _p95(v) -> float:
     return np.nanpercentile(np.asarray(v), 95)
 
 
-def _run_keys(out: dict[str, Any], runs: dict[tuple[str, str], xr.Dataset]) -> list[xr.Dataset]:
-    """Every train's accuracy keys and the availabilities; returns the wideband runs."""
-    pooled, pooled_wb = [], []
+RECEIVERS = ("separable", "wideband")
+"""The two receivers whose runs every train has (``physical_<receiver>``)."""
+WIDEBAND_CASES = {
+    "wideband_slow": "physical_wideband_slow",
+    "wideband_vf": "physical_wideband_vf",
+    "wideband_feed": "physical_wideband_feed",
+}
+"""Key infix -> run setup of the wideband receiver's cases (:data:`railradio.tunnel.study.SETUPS`)."""
+
+
+START_S = 2.0
+"""Start-up of a filter [s]: it starts from one snapshot fix with the speed unknown by +-100 m/s,
+and its first epochs' errors are its convergence, not a loss (:func:`lost_epochs`)."""
+
+
+def lost_epochs(err_m: np.ndarray, slot_spacing_m: float, t_s: np.ndarray | None = None) -> np.ndarray:
+    """Epochs whose track is lost: after the start-up (``t_s`` >= :data:`START_S`), error above
+    one slot spacing (or NaN).  Beyond it the tracker follows another slot's delay or another
+    candidate (the wrong side of a feed, the wrong feed:
+    :func:`railradio.tunnel.wideband.ambiguity_wrong` uses the same bound), and the error says
+    where the track went, not how accurate the receiver is.  A kept track stays below ~20 m in
+    every run measured (the wideband receiver's worst: 19.5 m, feed-delay case), a lost one
+    is kilometres off.
+
+    Parameters
+    ----------
+    err_m : numpy.ndarray
+        Position errors [m], [..., epoch].
+    slot_spacing_m : float
+        Slot spacing [m]; positive.
+    t_s : numpy.ndarray or None
+        Epoch times since the filter's start [s], [epoch]; None: every epoch is scored.
+
+    Returns
+    -------
+    numpy.ndarray of bool
+        True where lost, the shape of ``err_m``.
+
+    Raises
+    ------
+    ValueError
+        When ``slot_spacing_m`` is not positive.
+    """
+    if not slot_spacing_m > 0:
+        raise ValueError(f"slot_spacing_m must be positive, got {slot_spacing_m!r}")
+    lost = ~(np.asarray(err_m, dtype=float) <= slot_spacing_m)
+    return lost if t_s is None else lost & (np.asarray(t_s) >= START_S)
+
+
+def _pooled(out: dict[str, Any], name: str, ds: xr.Dataset | None, var: str = "rep_err", spacing: float = 20.0) -> None:
+    """The pooled 95th percentile of ``var`` [realization, epoch] with its Monte Carlo error,
+    null (with the lost share beside it) when the track is lost in 1 % of the epochs or more
+    (:data:`railradio.nr.loss.LOST_FRAC_MAX`, the project's rule)."""
+    if ds is None:
+        _put(out, name, None)
+        return
+    rep = ds[var].values
+    value, se = pooled_p95(rep)
+    lost = float(np.mean(lost_epochs(rep, spacing, ds["time_s"].values)))
+    acc = loss.accuracy(value, lost)
+    out[name] = SPECS[name].entry(acc, se if acc is not None else None, lost)
+
+
+def _track_keys(out: dict[str, Any], prefix: str, ds: xr.Dataset | None, spacing: float) -> None:
+    """Over the epochs after the start-up (:data:`START_S`): ``<prefix>.lost_frac`` (share of
+    lost epochs, with its Monte Carlo error), ``<prefix>.time_to_loss_s`` (mean over the
+    realizations that lose the track of their first lost epoch) and
+    ``<prefix>.tracked.err_m.p95`` (over the epochs not lost, with the spread of the
+    realizations' own percentiles)."""
+    if ds is None:
+        for k in ("lost_frac", "time_to_loss_s", "tracked.err_m.p95"):
+            _put(out, f"{prefix}.{k}", None)
+        return
+    t = ds["time_s"].values
+    scored = t >= START_S
+    rep, t = ds["rep_err"].values[:, scored], t[scored]
+    lost = lost_epochs(rep, spacing)
+    per = lost.mean(axis=1)
+    se = float(np.std(per, ddof=1) / np.sqrt(per.size)) if per.size > 1 else None
+    _put(out, f"{prefix}.lost_frac", float(lost.mean()), se)
+    firsts = [float(t[np.argmax(row)]) for row in lost if row.any()]
+    _put(out, f"{prefix}.time_to_loss_s", float(np.mean(firsts)) if firsts else None)
+    kept = [np.percentile(row[~m], 95) for row, m in zip(rep, lost, strict=True) if (~m).any()]
+    kept_se = float(np.std(kept, ddof=1) / np.sqrt(len(kept))) if len(kept) > 1 else None
+    _put(out, f"{prefix}.tracked.err_m.p95", float(np.percentile(rep[~lost], 95)) if (~lost).any() else None, kept_se)
+
+
+def _run_keys(
+    out: dict[str, Any], runs: dict[tuple[str, str], xr.Dataset], headline: str, spacing: float
+) -> list[xr.Dataset]:
+    """Every train's accuracy keys and the availabilities: the headline receiver's under the
+    plain names, both receivers' under ``<receiver>``, the wideband cases and the separable
+    receiver's variants, each track's lost share (an error above one slot spacing,
+    :func:`lost_epochs`); returns the wideband cruise runs."""
+    pooled = {r: [] for r in RECEIVERS}
+    pooled_wb = []
     for tr in TRAINS:
-        ds = runs[(tr, "physical_separable")]
-        _put(out, f"tunnel.{tr}.err_m.p95", *pooled_p95(ds["rep_err"].values))
-        _put(out, f"tunnel.{tr}.head_err_m.p95", *pooled_p95(ds["rep_err_head"].values))
-        _put(out, f"tunnel.{tr}.tail_err_m.p95", *pooled_p95(ds["rep_err_tail"].values))
-        _put(out, f"tunnel.{tr}.rigid.err_m.p95", _p95(ds["rigid_err"]))
+        ds = runs[(tr, f"physical_{headline}")]
+        _pooled(out, f"tunnel.{tr}.err_m.p95", ds, spacing=spacing)
+        _pooled(out, f"tunnel.{tr}.head_err_m.p95", ds, "rep_err_head", spacing)
+        _pooled(out, f"tunnel.{tr}.tail_err_m.p95", ds, "rep_err_tail", spacing)
+        _track_keys(out, f"tunnel.{tr}", ds, spacing)
+        if "rep_err_rigid" in ds:
+            _pooled(out, f"tunnel.{tr}.rigid.err_m.p95", ds, "rep_err_rigid", spacing)
+        for est in ("pf",) if "rep_err_rigid" in ds else ("rigid", "pf"):
+            e = ds[f"{est}_err"].values
+            lost = float(np.mean(lost_epochs(e, spacing, ds["time_s"].values)))
+            out[f"tunnel.{tr}.{est}.err_m.p95"] = SPECS[f"tunnel.{tr}.{est}.err_m.p95"].entry(
+                loss.accuracy(_p95(e), lost), None, lost
+            )
         _put(out, f"tunnel.{tr}.length_err_m.p95", _p95(length_error_m(ds)))
-        _put(out, f"tunnel.{tr}.pf.err_m.p95", _p95(ds["pf_err"]))
         _put(out, f"tunnel.{tr}.snapshot.err_m.p95", _p95(ds["snapshot_err"].values[:, 0]))
-        _put(out, f"tunnel.{tr}.rssi.err_m.p95", _p95(ds["snapshot_rssi_err"].values[:, 0]))
-        pooled.append(ds["rep_err"].values)
+        for rec in RECEIVERS:
+            r = runs.get((tr, f"physical_{rec}"))
+            _pooled(out, f"tunnel.{tr}.{rec}.err_m.p95", r, spacing=spacing)
+            _track_keys(out, f"tunnel.{tr}.{rec}", r, spacing)
+            if r is not None:
+                pooled[rec].append(r["rep_err"].values)
+        sep = runs.get((tr, "physical_separable"))
+        _put(out, f"tunnel.{tr}.rssi.err_m.p95", None if sep is None else _p95(sep["snapshot_rssi_err"].values[:, 0]))
         for v, k in (("physical_separable_ar1", "ar1"), ("physical_separable_slot_bias", "slot_bias")):
-            r = runs.get((tr, v))
-            _put(out, f"tunnel.{tr}.{k}.err_m.p95", *((None, None) if r is None else pooled_p95(r["rep_err"].values)))
-        wb = runs.get((tr, "physical_wideband"))
-        _put(out, f"tunnel.{tr}.wideband.err_m.p95", None if wb is None else _p95(wb["kf_err"]))
-        if wb is not None:
-            pooled_wb.append(wb)
-        sd = runs.get((tr, "source_separable"))
-        _put(
-            out,
-            f"tunnel.{tr}.source_channel.err_m.p95",
-            *((None, None) if sd is None else pooled_p95(sd["rep_err"].values)),
-        )
-    _put(out, "tunnel.availability.err_lt_5m", *pooled_share(pooled, 5.0))
-    _put(out, "tunnel.availability.err_lt_2m", *pooled_share(pooled, 2.0))
+            _pooled(out, f"tunnel.{tr}.{k}.err_m.p95", runs.get((tr, v)), spacing=spacing)
+        _pooled(out, f"tunnel.{tr}.source_channel.err_m.p95", runs.get((tr, "source_separable")), spacing=spacing)
+        for k, setup in WIDEBAND_CASES.items():
+            _pooled(out, f"tunnel.{tr}.{k}.err_m.p95", runs.get((tr, setup)), spacing=spacing)
+            _track_keys(out, f"tunnel.{tr}.{k}", runs.get((tr, setup)), spacing)
+        if (tr, "physical_wideband") in runs:
+            pooled_wb.append(runs[(tr, "physical_wideband")])
+    for lim in (5, 2):
+        _put(out, f"tunnel.availability.err_lt_{lim}m", *pooled_share(pooled[headline], float(lim)))
+        for rec in RECEIVERS:
+            share = pooled_share(pooled[rec], float(lim)) if pooled[rec] else (None, None)
+            _put(out, f"tunnel.availability.{rec}.err_lt_{lim}m", *share)
     return pooled_wb
 
 
@@ -136,7 +248,6 @@ def _wideband_keys(out: dict[str, Any], pooled_wb: list[xr.Dataset]) -> None:
         for k in ("delay_error_ns.robust_sigma", "delay_error_ns.p99", "delay_error.lag1_autocorr"):
             _put(out, f"tunnel.wideband.{k}", None)
     cat = (lambda v: np.concatenate([w[v].values.ravel() for w in pooled_wb])) if pooled_wb else None
-    _put(out, "tunnel.availability.wideband.err_lt_5m", np.mean(cat("kf_err") < 5.0) if cat else None)
     _put(out, "tunnel.wideband.ambiguity_wrong_frac", np.mean(cat("ambiguity_wrong")) if cat else None)
     _put(out, "tunnel.wideband.snapshot.err_m.p95", _p95(cat("snapshot_err")) if cat else None)
     _put(
@@ -168,6 +279,12 @@ def _map_keys(
     _put(out, "tunnel.blind_spot_frac.source_model", blind(maps["source"]))
     _put(out, "tunnel.delay_spread_ns.median", np.median(maps["image"]["delay_rms_s"].values) * 1e9)
     _put(out, "tunnel.delay_spread_ns.median.source_model", np.median(maps["source"]["delay_rms_s"].values) * 1e9)
+    for thr in DELAY_SPREAD_THRESHOLDS_DB:
+        for name, suffix in (("image", ""), ("source", ".source_model")):
+            v = maps[name].get(f"delay_rms_thr{thr:g}_s")
+            _put(out, f"tunnel.delay_spread_ns.thr{thr:g}.median{suffix}", None if v is None else np.median(v) * 1e9)
+        v = maps["image"].get(f"delay_rms_thr{thr:g}_s")
+        _put(out, f"tunnel.delay_spread_ns.thr{thr:g}.p90", None if v is None else np.percentile(v, 90) * 1e9)
     _put(out, "tunnel.rssi_dbm.median", np.median(maps["image"]["rssi_mean_dbm"].values))
     _put(out, "tunnel.rssi_dbm.median.source_model", np.median(maps["source"]["rssi_mean_dbm"].values))
     _put(out, "tunnel.rays.order", tables["image"].attrs["reflection_order"])
@@ -188,7 +305,8 @@ def _hst_and_lining_keys(
     hst = runs[("hst", "physical_separable")]
     e = hst["snapshot"].values[:, 0] - hst["x_rx_true"].values[:, 0]
     _put(out, "tunnel.hst.cep_m", 0.59 * np.std(e))
-    _put(out, "tunnel.hst.snapshot.err_m.p50", np.median(np.abs(e)))
+    _put(out, "tunnel.hst.separable.snapshot.err_m.p50", np.median(np.abs(e)))
+    _put(out, "tunnel.hst.separable.snapshot.err_m.p95", np.percentile(np.abs(e), 95))
     _put(out, "tunnel.hst.gdop_source.median", np.median(hst["gdop_source"].values[:, 0]))
     _put(out, "tunnel.hst.gdop_tdoa.median", np.median(hst["gdop_tdoa"].values[:, 0]))
     _put(out, "tunnel.fresnel.normal_loss_db", reflection_loss_db(fresnel_te(1.0, eps)))
@@ -204,6 +322,8 @@ def _table_keys(out: dict[str, Any], tables: dict[str, xr.Dataset], engines: xr.
     off = t["offset_m"].values
     _put(out, "tunnel.rays.local_mean_slope_db_per_km.1500_5000", engines.attrs["far_slope_db_per_km"])
     _put(out, "tunnel.rays.far_converged_order", engines.attrs["far_converged_order"])
+    _put(out, "tunnel.rays.modal_slope_db_per_km.1500_5000", engines.attrs.get("far_modal_slope_db_per_km"))
+    _put(out, "tunnel.rays.modal_max_diff_db", engines.attrs.get("far_modal_max_diff_db"))
     _put(out, "tunnel.rays.beat_length_m", engines.attrs["far_beat_length_m"])
     _put(out, "tunnel.rays.sbr_circle.local_mean_slope_db_per_km", engines.attrs["far_circle_slope_db_per_km"])
     _put(out, "tunnel.rays.circle_eh11_db_per_km", engines.attrs["far_circle_eh11_db_per_km"])
@@ -244,6 +364,13 @@ def _sensitivity_keys(
             "tunnel.sens.slot_side_wall.delay_spread_ns.median",
             np.median(side_wall_map["delay_rms_s"].values) * 1e9,
         )
+        for thr in DELAY_SPREAD_THRESHOLDS_DB:
+            v = side_wall_map.get(f"delay_rms_thr{thr:g}_s")
+            _put(
+                out,
+                f"tunnel.sens.slot_side_wall.delay_spread_ns.thr{thr:g}.median",
+                None if v is None else np.median(v) * 1e9,
+            )
         _put(out, "tunnel.sens.slot_side_wall.rssi_dbm.median", np.median(side_wall_map["rssi_mean_dbm"].values))
         _put(out, "tunnel.sens.slot_side_wall.cross_distance_m", side_wall_map.attrs["cross_distance_m"])
     for tr, sd in (sens or {}).items():
@@ -267,6 +394,8 @@ def key_numbers(
     sens: dict[str, xr.Dataset] | None = None,
     peak_bias: xr.Dataset | None = None,
     side_wall_map: xr.Dataset | None = None,
+    headline: str = "wideband",
+    slot_spacing_m: float = 20.0,
 ) -> dict[str, Any]:
     """The key numbers ``tunnel.*`` (:data:`SPECS`, with the sensitivity cases' keys of
     :func:`sens_spec`) from the study's intermediates, beside the source's design targets.
@@ -275,9 +404,9 @@ def key_numbers(
     ----------
     runs : dict
         (train, setup) -> run of :func:`railradio.tunnel.simulate.run_train`; needs
-        ``physical_separable`` for every train of :data:`TRAINS` (``hst`` also gives the CEP
-        and dilutions); the other setups of :data:`railradio.tunnel.study.SETUPS` are
-        optional (their keys null when missing).
+        ``physical_<headline>`` and ``physical_separable`` for every train of :data:`TRAINS`
+        (``hst``'s separable run also gives the CEP and dilutions); the other setups of
+        :data:`railradio.tunnel.study.SETUPS` are optional (their keys null when missing).
     maps : dict
         Table name -> map of :func:`railradio.tunnel.study.make_map`; needs ``image``,
         ``sbr`` and ``source``.
@@ -305,6 +434,11 @@ def key_numbers(
         The peak-bias cases of :func:`railradio.tunnel.peak_bias.make_peak_bias`; None: not reported.
     side_wall_map : xarray.Dataset or None
         The map of the side-wall table (:func:`railradio.tunnel.study.make_map`); None: not reported.
+    headline : {'wideband', 'separable'}
+        The receiver of the headline keys (``tunnel.<train>.err_m.p95`` ..., the
+        availabilities): the config's ``key_measurement``.
+    slot_spacing_m : float
+        Slot spacing [m]: a track is lost where its error exceeds it (:func:`lost_epochs`).
 
     Returns
     -------
@@ -316,10 +450,12 @@ def key_numbers(
     Raises
     ------
     ValueError
-        When a key's value is not finite.
+        When a key's value is not finite, or ``headline`` is not a receiver.
     """
+    if headline not in RECEIVERS:
+        raise ValueError(f"headline must be one of {RECEIVERS}, got {headline!r}")
     out: dict[str, Any] = {}
-    pooled_wb = _run_keys(out, runs)
+    pooled_wb = _run_keys(out, runs, headline, slot_spacing_m)
     _wideband_keys(out, pooled_wb)
     _map_keys(out, maps, tables, engines, coverage_dbm, blind_dbm, min_rays)
     _hst_and_lining_keys(out, runs, wavelength_m, side_m, eps)

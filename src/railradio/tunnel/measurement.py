@@ -107,6 +107,32 @@ def shadow_field(
     return sigma_db * lfilter([1.0], [1.0, -rho], w, axis=1)
 
 
+def field_at(field: np.ndarray, slots: np.ndarray, x_m: np.ndarray, step_m: float = 1.0) -> np.ndarray:
+    """A per-slot field along the tunnel (:func:`shadow_field`) read at receiver positions,
+    linearly interpolated on its grid.
+
+    Parameters
+    ----------
+    field : numpy.ndarray
+        The field [slot, x on a ``step_m`` grid from 0].
+    slots : numpy.ndarray
+        Slot indices (int), any shape broadcastable with ``x_m``.
+    x_m : numpy.ndarray
+        Receiver positions [m] (clipped to the grid).
+    step_m : float
+        Grid step of ``field`` [m].
+
+    Returns
+    -------
+    numpy.ndarray
+        The field at (slot, x), the broadcast shape of ``slots`` and ``x_m``.
+    """
+    pos = np.clip(x_m / step_m, 0, field.shape[1] - 1.000001)
+    i0 = pos.astype(np.int64)
+    fr = pos - i0
+    return field[slots, i0] * (1 - fr) + field[slots, i0 + 1] * fr
+
+
 def delay_error_field(
     rng: np.random.Generator, n_slots: int, length_m: float, mm: MeasurementModel
 ) -> np.ndarray | None:

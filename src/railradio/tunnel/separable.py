@@ -9,7 +9,7 @@ import xarray as xr
 from railradio.constants import SPEED_OF_LIGHT_M_S
 from railradio.tunnel.channel import offset_index, slot_powers, window_slots
 from railradio.tunnel.geometry import Cable, Tunnel
-from railradio.tunnel.measurement import MeasurementModel
+from railradio.tunnel.measurement import MeasurementModel, field_at
 from railradio.tunnel.positioning import (
     gain_to_offset_m,
     gdop_source,
@@ -19,13 +19,6 @@ from railradio.tunnel.positioning import (
     rssi_ls,
     tdoa_gauss_newton,
 )
-
-
-def _field_at(field: np.ndarray, slots: np.ndarray, x_m: np.ndarray, step_m: float = 1.0) -> np.ndarray:
-    pos = np.clip(x_m / step_m, 0, field.shape[1] - 1.000001)
-    i0 = pos.astype(np.int64)
-    fr = pos - i0
-    return field[slots, i0] * (1 - fr) + field[slots, i0 + 1] * fr
 
 
 def separable_measurements(
@@ -88,7 +81,7 @@ def separable_measurements(
         gain_db = 20.0 * np.log10(np.abs(table["taps"].values.sum(axis=1)))[idx]
     else:
         gain_db = 10.0 * np.log10(table["power_mean"].values)[idx]
-    rssi = pc_dbm[sl] + gain_db + _field_at(shadow, sl, x[:, None])
+    rssi = pc_dbm[sl] + gain_db + field_at(shadow, sl, x[:, None])
     rssi = np.where(ok & inside, rssi, -np.inf)
     order = np.argsort(-rssi, axis=1, kind="stable")[:, : mm.n_slots]
     pick = np.take_along_axis(sl, order, axis=1)
@@ -100,7 +93,7 @@ def separable_measurements(
     if delay_field is None:
         delay = delay + mm.delay_sigma_s * rng.standard_normal(pick.shape)
     else:
-        delay = delay + _field_at(delay_field, pick, np.broadcast_to(x[:, None], pick.shape))
+        delay = delay + field_at(delay_field, pick, np.broadcast_to(x[:, None], pick.shape))
     return {"slot": pick, "slot_x_m": xs[pick], "rssi_dbm": rssi, "cable_power_dbm": pc_dbm[pick], "delay_s": delay}
 
 

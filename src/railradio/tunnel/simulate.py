@@ -14,7 +14,8 @@ Measurement models (docs/model/tunnel.md §3, both reported):
   changes with position) or ``slot_bias`` (per slot one constant bias: a calibration error
   of the slot's delay); same sigma in all three.
 * ``wideband`` - what a receiver of bandwidth B actually sees: the sum of all slots'
-  rays (every slot of the table, :func:`railradio.tunnel.wideband.wideband_view`) with
+  rays (every slot of the table, :func:`railradio.tunnel.wideband.wideband_view`), each
+  slot's carrying the place's shadowing, with
   their cable delays (velocity factor v), sampled on ``n_tones`` tones across
   B with thermal noise, transformed to a channel impulse response; its strongest peak
   gives a delay that maps to the cable distance from the feed, x = x_feed +- v c (tau - h/c).
@@ -42,20 +43,14 @@ import numpy as np
 import xarray as xr
 
 from railradio.rng import make_rng, spawn_key
-from railradio.tunnel.filters import Tracks, track_fixes
+from railradio.tunnel.filters import track_fixes
 from railradio.tunnel.geometry import Cable, Tunnel
 from railradio.tunnel.measurement import MeasurementModel, delay_error_field, shadow_field
+from railradio.tunnel.run_data import add_errors, add_snapshot_errors, run_dataset, with_realizations
 from railradio.tunnel.separable import separable_fix, separable_measurements
 from railradio.tunnel.tracking import kf_track_batch, robust_variance
-from railradio.tunnel.wideband import (
-    ambiguity_wrong,
-    cable_model_delay_s,
-    resolve_ambiguity,
-    tone_response,
-    wideband_candidates,
-    wideband_delays,
-    wideband_view,
-)
+from railradio.tunnel.wideband import cable_model_delay_s, tone_response, wideband_candidates
+from railradio.tunnel.wideband_runs import CableModelError, wideband_fixes, wideband_kf_errors
 
 TRAIN_IDS = {"metro": 1, "hst": 2, "freight": 3}
 """Train type -> its number in the random-stream keys (``spawn_key('tunnel', ...)``; another name: 9)."""
@@ -69,6 +64,8 @@ PROPAGATION_MEASUREMENT_IDS = {
 """(propagation, measurement) -> its number in the random-stream keys (``spawn_key('tunnel', ...)``)."""
 SHADOW_KEY = {"evaluation": 100, "calibration": 101}
 DELAY_KEY = {"evaluation": 102, "calibration": 103}
+FEED_KEY = 104
+"""Random-stream key of the feeds' delay calibration errors (:class:`CableModelError`), per realization."""
 
 
 @dataclass(frozen=True)
@@ -151,38 +148,22 @@ def snapshot_fixes(
         n: np.full((n_e, k), np.nan)
         for n in ("fix", "fix_rssi", "sigma_tdoa", "gdop_source", "gdop_tdoa", "tau", "scale")
     }
-    res["candidates"] = None
-    cands = []
-    rngs = rng.spawn(k)
-    for j in range(k) if cols is None else cols:
-        if measurement == "separable":
-            meas = separable_measurements(
-                table, tunnel, cable, x_rx[:, j], shadow, rngs[j], mm, propagation, delay_field
-            )
-            xr_, xt, st, gs, gt = separable_fix(meas, table, tunnel, mm)
-            res["fix"][:, j], res["fix_rssi"][:, j], res["sigma_tdoa"][:, j] = xt, xr_, st
-            res["gdop_source"][:, j], res["gdop_tdoa"][:, j] = gs, gt
-            res["scale"][:, j] = gt
-        elif measurement == "wideband":
-            tau = wideband_delays(table, tunnel, cable, x_rx[:, j], rngs[j], wideband_view(table, mm), tones=tones)
-            c = wideband_candidates(tau, tunnel, cable, bias_s)
-            cands.append(c)
-            res["tau"][:, j] = tau
-            res["scale"][:, j] = 1.0
-        else:
-            raise ValueError(f"measurement must be one of {MEASUREMENTS}, got {measurement!r}")
-    if cands:
-        res["candidates"] = np.stack(cands, axis=1)  # [epoch, receiver, candidate]
+    if measurement == "wideband":
         if cols is not None and len(cols) != k:
             raise ValueError("the wideband ambiguity is resolved with all receivers: cols must be None")
-        res["head"], res["fix"] = resolve_ambiguity(
-            res["candidates"],
-            train.receiver_offsets_m,
-            cable.feed_spacing_m,
-            (0.0, cable.feed_spacing_m),
-            tunnel.slot_spacing_m,
-        )
-        res["ambiguity_wrong"] = ambiguity_wrong(res["candidates"], res["fix"], x_rx, tunnel.slot_spacing_m)
+        offs = train.receiver_offsets_m
+        res.update(wideband_fixes(table, tunnel, cable, offs, x_rx, mm, [shadow], [rng], tones, bias_s)[0])
+        return x_rx, res
+    if measurement != "separable":
+        raise ValueError(f"measurement must be one of {MEASUREMENTS}, got {measurement!r}")
+    res["candidates"] = None
+    rngs = rng.spawn(k)
+    for j in range(k) if cols is None else cols:
+        meas = separable_measurements(table, tunnel, cable, x_rx[:, j], shadow, rngs[j], mm, propagation, delay_field)
+        xr_, xt, st, gs, gt = separable_fix(meas, table, tunnel, mm)
+        res["fix"][:, j], res["fix_rssi"][:, j], res["sigma_tdoa"][:, j] = xt, xr_, st
+        res["gdop_source"][:, j], res["gdop_tdoa"][:, j] = gs, gt
+        res["scale"][:, j] = gt
     return x_rx, res
 
 
@@ -305,6 +286,7 @@ def run_train(
     tracking: dict,
     seed: int,
     realizations: int = 1,
+    cable_error: CableModelError | None = None,
 ) -> xr.Dataset:
     """Calibration run, then the evaluation run: snapshot fixes, KF on the head and on
     the tail receiver, rigid-train KF on all receivers, PF on head and tail; errors.
@@ -317,10 +299,11 @@ def run_train(
     truth); nothing is taken from the evaluation run, whose filters start from its first
     snapshot fix and whose ambiguity is resolved from its measurements.
 
-    Realization 0 is the full run (filterpy KF, rigid KF, PF); for a separable receiver,
-    realizations 1 .. R-1 repeat the head and tail KF with their own shadowing,
-    delay-error field and noise (:func:`kf_realizations`): ``rep_err*`` [realization,
-    epoch] hold all R for the pooled key numbers and their Monte Carlo spread.
+    Realization 0 is the full run (filterpy KF, rigid KF, PF); realizations 1 .. R-1 repeat
+    the head and tail KF with their own shadowing, delay-error field and noise (separable:
+    :func:`kf_realizations`; wideband: :func:`railradio.tunnel.wideband_runs.wideband_kf_errors`,
+    all realizations synthesized together): ``rep_err*`` [realization, epoch] hold all R
+    for the pooled key numbers and their Monte Carlo spread.
 
     Parameters
     ----------
@@ -347,8 +330,11 @@ def run_train(
     seed : int
         Root seed of the workflow.
     realizations : int
-        Number R of Monte Carlo realizations; >= 1 (more than 1 only adds KF runs of a
-        separable receiver).
+        Number R of Monte Carlo realizations; >= 1 (more than 1 only adds KF runs).
+    cable_error : CableModelError or None
+        How the wideband receiver's cable model differs from the installed cable (the
+        feeds' errors drawn per realization, the same for every train: they belong to the
+        place); None: no error.  The calibration run's model is exact.
 
     Returns
     -------
@@ -380,20 +366,40 @@ def run_train(
     tid = TRAIN_IDS.get(train.name, 9)
     tones = tone_response(table, mm) if measurement == "wideband" else None
     cal = _calibrate(table, tunnel, cable, train, mm, propagation, measurement, tracking, seed, tones)
-    ev = _evaluate(table, tunnel, cable, train, mm, propagation, measurement, tracking, seed, tones, cal.bias_s)
+    ev, reps = _evaluate(
+        table,
+        tunnel,
+        cable,
+        train,
+        mm,
+        (propagation, measurement),
+        tracking,
+        seed,
+        tones,
+        cal.bias_s,
+        realizations,
+        cable_error,
+    )
     tracks = track_fixes(
         ev.res, cal.r0_m2, tracking, train.receiver_offsets_m, make_rng(seed, spawn_key("tunnel", 400, tid, pm_id))
     )
-    ds = _run_dataset(ev, tracks, cal, tunnel, cable, train, propagation, measurement)
-    _add_errors(ds, ev.x_head, train.length_m)
+    ds = run_dataset(ev, tracks, cal, tunnel, cable, train, propagation, measurement)
+    add_errors(ds, ev.x_head, train.length_m)
     rep_h, rep_t = ds["kf_err_head"].values[None, :], ds["kf_err_tail"].values[None, :]
     if measurement == "separable" and realizations > 1:
         eh, et = kf_realizations(
             table, tunnel, cable, train, mm, propagation, tracking, seed, cal.r0_m2, range(1, realizations)
         )
         rep_h, rep_t = np.concatenate([rep_h, eh]), np.concatenate([rep_t, et])
-    ds = _with_realizations(ds, rep_h, rep_t)
-    _add_snapshot_errors(ds, ev, measurement)
+    rep_rigid = None
+    if measurement == "wideband":
+        rep_rigid = ds["rigid_err"].values[None, :]
+    if reps:
+        eh, et, er = wideband_kf_errors(reps, ev.x_rx, cal.r0_m2, tracking, train.receiver_offsets_m)
+        rep_h, rep_t = np.concatenate([rep_h, eh]), np.concatenate([rep_t, et])
+        rep_rigid = np.concatenate([rep_rigid, er])
+    ds = with_realizations(ds, rep_h, rep_t, rep_rigid)
+    add_snapshot_errors(ds, ev, measurement)
     return ds
 
 
@@ -460,141 +466,62 @@ class _Evaluation(NamedTuple):
 
 
 def _evaluate(
-    table, tunnel, cable, train, mm, propagation, measurement, tracking, seed, tones, bias_s: float
-) -> _Evaluation:
+    table,
+    tunnel,
+    cable,
+    train,
+    mm,
+    setup,
+    tracking,
+    seed,
+    tones,
+    bias_s: float,
+    realizations: int = 1,
+    cable_error=None,
+) -> tuple[_Evaluation, list[dict]]:
     """Every receiver's snapshot fixes on the evaluation run (its own shadowing, delay-error
-    field and noise; the wideband ambiguity resolved from its measurements)."""
-    shadow_eval, delay_eval = environment(seed, "evaluation", 0, tunnel, mm)
+    field and noise; the wideband ambiguity resolved from its measurements); for the wideband
+    receiver also realizations 1 .. R-1 (synthesized with realization 0), else none."""
+    propagation, measurement = setup
     t, x_head = epochs(tunnel, train, tracking["rate_hz"])
-    x_rx, res = snapshot_fixes(
+    if measurement != "wideband":
+        shadow_eval, delay_eval = environment(seed, "evaluation", 0, tunnel, mm)
+        x_rx, res = snapshot_fixes(
+            table,
+            tunnel,
+            cable,
+            train,
+            x_head,
+            mm,
+            propagation,
+            measurement,
+            shadow_eval,
+            _noise_rng(seed, train, propagation, measurement, 0),
+            tones,
+            bias_s,
+            delay_field=delay_eval,
+        )
+        return _Evaluation(t, x_head, x_rx, res), []
+    x_rx = x_head[:, None] - train.receiver_offsets_m[None, :]
+    n_feeds = cable.feed_x_m(tunnel.length_m).size
+    models = None
+    if cable_error is not None:
+        models = [
+            cable_error.receiver_model(cable, n_feeds, make_rng(seed, spawn_key("tunnel", FEED_KEY, r)))
+            for r in range(realizations)
+        ]
+    res_all = wideband_fixes(
         table,
         tunnel,
         cable,
-        train,
-        x_head,
+        train.receiver_offsets_m,
+        x_rx,
         mm,
-        propagation,
-        measurement,
-        shadow_eval,
-        _noise_rng(seed, train, propagation, measurement, 0),
+        [environment(seed, "evaluation", r, tunnel, mm)[0] for r in range(realizations)],
+        [_noise_rng(seed, train, propagation, measurement, r) for r in range(realizations)],
         tones,
         bias_s,
-        delay_field=delay_eval,
+        models,
     )
-    return _Evaluation(t, x_head, x_rx, res)
-
-
-def _run_dataset(
-    ev: _Evaluation,
-    tracks: Tracks,
-    cal: _Calibration,
-    tunnel: Tunnel,
-    cable: Cable,
-    train: Train,
-    propagation: str,
-    measurement: str,
-) -> xr.Dataset:
-    """The run's dataset: truth, snapshot fixes and their geometry, the tracks, the calibration."""
-    t, x_head, x_rx, res = ev
-    kf, kf_var, nis, rigid, pf = tracks.kf, tracks.kf_var, tracks.nis, tracks.rigid, tracks.pf
-    bias_s = cal.bias_s
-    offs = train.receiver_offsets_m
-    k = x_rx.shape[1]
-    m = {"units": "m"}
-    tr = ("time_s", "receiver")
-    return xr.Dataset(
-        {
-            "x_head_true": ("time_s", x_head, {**m, "long_name": "true head position"}),
-            "x_rx_true": (tr, x_rx, {**m, "long_name": "true receiver position"}),
-            "snapshot": (tr, res["fix"], {**m, "long_name": f"snapshot fix ({measurement})"}),
-            "snapshot_rssi": (tr, res["fix_rssi"], {**m, "long_name": "RSSI-ranging LS fix (separable only)"}),
-            "sigma_tdoa": (tr, res["sigma_tdoa"], {**m, "long_name": "TDOA fix standard deviation from its geometry"}),
-            "gdop_source": (
-                tr,
-                res["gdop_source"],
-                {"units": "1", "long_name": "GDOP, the source's 2-D formula (source 4.1.1)"},
-            ),
-            "gdop_tdoa": (
-                tr,
-                res["gdop_tdoa"],
-                {"units": "1", "long_name": "along-track TDOA dilution (sigma_x / c sigma_tau)"},
-            ),
-            "wideband_delay": (tr, res["tau"], {"units": "s", "long_name": "CIR peak delay (wideband only)"}),
-            "wideband_delay_error": (
-                tr,
-                res["tau"] - bias_s - cable_model_delay_s(x_rx, tunnel, cable),
-                {
-                    "units": "s",
-                    "long_name": "CIR peak delay minus the calibrated cable-point "
-                    "model delay at the true position (wideband only): the channel's delay error",
-                },
-            ),
-            "kf_head": ("time_s", kf[:, 0], {**m, "long_name": "Kalman-filtered head position (head receiver)"}),
-            "kf_tail": ("time_s", kf[:, 1], {**m, "long_name": "Kalman-filtered tail position (tail receiver)"}),
-            "kf_head_var": ("time_s", kf_var[:, 0], {"units": "m2", "long_name": "KF head position variance"}),
-            "kf_head_nis": ("time_s", nis[:, 0], {"units": "1", "long_name": "KF head normalized innovation squared"}),
-            "rigid_head": ("time_s", rigid, {**m, "long_name": "rigid-train KF head position (all receivers)"}),
-            "rigid_tail": ("time_s", rigid - train.length_m, {**m, "long_name": "rigid-train KF tail position"}),
-            "pf_head": ("time_s", pf[:, 0], {**m, "long_name": "particle-filter head position"}),
-            "pf_tail": ("time_s", pf[:, 1], {**m, "long_name": "particle-filter tail position"}),
-        },
-        coords={
-            "time_s": ("time_s", t, {"units": "s", "long_name": "time since the tail entered"}),
-            "receiver": ("receiver", np.arange(k), {"units": "1", "long_name": "receiver index from the head"}),
-            "receiver_offset_m": ("receiver", offs, {**m, "long_name": "receiver distance behind the head"}),
-        },
-        attrs={
-            "train": train.name,
-            "length_m": train.length_m,
-            "speed_kmh": train.speed_kmh,
-            "propagation": propagation,
-            "measurement": measurement,
-            "r0_m2": cal.r0_m2,
-            "wideband_bias_s": bias_s,
-        },
-    )
-
-
-def _add_errors(ds: xr.Dataset, x_head: np.ndarray, length_m: float) -> None:
-    """Head, tail and train errors of every estimator [epoch] [m] (source 4.4.3)."""
-    head, tail = x_head, x_head - length_m
-    m = {"units": "m"}
-    for est in ("kf", "rigid", "pf"):
-        eh = np.abs(ds[f"{est}_head"].values - head)
-        et = np.abs(ds[f"{est}_tail"].values - tail)
-        ds[f"{est}_err_head"] = ("time_s", eh, {**m, "long_name": f"{est} head error"})
-        ds[f"{est}_err_tail"] = ("time_s", et, {**m, "long_name": f"{est} tail error"})
-        ds[f"{est}_err"] = (
-            "time_s",
-            np.sqrt((eh**2 + et**2) / 2.0),
-            {**m, "long_name": f"{est} train error sqrt((e_head^2 + e_tail^2)/2) (source 4.4.3)"},
-        )
-
-
-def _with_realizations(ds: xr.Dataset, rep_h: np.ndarray, rep_t: np.ndarray) -> xr.Dataset:
-    """``ds`` with the head and tail KF errors of every Monte Carlo realization [realization,
-    epoch] [m] and their train error."""
-    m = {"units": "m"}
-    rt = ("realization", "time_s")
-    ds = ds.assign_coords(
-        realization=("realization", np.arange(rep_h.shape[0]), {"units": "1", "long_name": "Monte Carlo realization"})
-    )
-    ds["rep_err_head"] = (rt, rep_h, {**m, "long_name": "KF head error per realization"})
-    ds["rep_err_tail"] = (rt, rep_t, {**m, "long_name": "KF tail error per realization"})
-    ds["rep_err"] = (rt, np.sqrt((rep_h**2 + rep_t**2) / 2.0), {**m, "long_name": "KF train error per realization"})
-    return ds
-
-
-def _add_snapshot_errors(ds: xr.Dataset, ev: _Evaluation, measurement: str) -> None:
-    """The snapshot fixes' errors [epoch, receiver] [m] (wideband: also its wrong sides of the feed)."""
-    res, x_rx = ev.res, ev.x_rx
-    m = {"units": "m"}
-    tr = ("time_s", "receiver")
-    if measurement == "wideband":
-        ds["ambiguity_wrong"] = (
-            tr,
-            res["ambiguity_wrong"].astype(np.int8),
-            {"units": "1", "long_name": "1 where the snapshot fix took the wrong side of the feed (or feed)"},
-        )
-    ds["snapshot_err"] = (tr, np.abs(res["fix"] - x_rx), {**m, "long_name": "snapshot error"})
-    ds["snapshot_rssi_err"] = (tr, np.abs(res["fix_rssi"] - x_rx), {**m, "long_name": "RSSI-LS snapshot error"})
+    res = {n: np.full(x_rx.shape, np.nan) for n in ("fix_rssi", "sigma_tdoa", "gdop_source", "gdop_tdoa")}
+    return _Evaluation(t, x_head, x_rx, res | res_all[0]), res_all[1:]

@@ -3,6 +3,7 @@ slot-to-receiver tables, the maps along the tunnel (kept out of the scripts)."""
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Any
 
 import numpy as np
@@ -19,10 +20,12 @@ from railradio.tunnel.channel import (
     tabulate,
     window_samples,
 )
+from railradio.tunnel.delay_profile import delay_spread_note, received_spreads
 from railradio.tunnel.geometry import Cable, Tunnel
 from railradio.tunnel.measurement import MeasurementModel
 from railradio.tunnel.rays import Families, image_families, sbr_families
 from railradio.tunnel.simulate import Train
+from railradio.tunnel.wideband_runs import CableModelError
 
 TABLES = {
     "image": ("rect", "image", "physical"),
@@ -84,9 +87,16 @@ SETUPS = {
     "physical_separable_ar1": ("physical", "separable"),
     "physical_separable_slot_bias": ("physical", "separable"),
     "physical_wideband": ("physical", "wideband"),
+    "physical_wideband_slow": ("physical", "wideband"),
+    "physical_wideband_vf": ("physical", "wideband"),
+    "physical_wideband_feed": ("physical", "wideband"),
     "source_separable": ("source", "separable"),
 }
 """Run setup -> (propagation of the channel table, measurement model of the receiver)."""
+SETUP_SLOW = ("physical_wideband_slow",)
+"""Runs at ``cases.low_speed_kmh`` instead of the train's cruise speed; the same draws otherwise."""
+SETUP_CABLE_ERROR = {"physical_wideband_vf": "velocity_factor", "physical_wideband_feed": "feed_delay"}
+"""Wideband runs whose cable model is wrong by one stated installation error (``cases``)."""
 SETUP_DELAY_ERROR = {"physical_separable_ar1": "ar1", "physical_separable_slot_bias": "slot_bias"}
 """Runs of the separable receiver with a correlated delay error instead of the configured
 one (white, the source's reading [ours]); the same draws otherwise."""
@@ -241,6 +251,44 @@ def train_from_config(cfg: dict[str, Any], name: str) -> Train:
     """
     t = cfg["trains"][name]
     return Train(name, t["length_m"], t["speed_kmh"], cfg["positioning"]["n_receivers"])
+
+
+def run_setup(cfg: dict[str, Any], name: str, setup: str) -> tuple[Train, CableModelError | None]:
+    """The train and the receiver's cable-model error of run ``setup`` (:data:`SETUPS`).
+
+    Parameters
+    ----------
+    cfg : dict
+        The ``tunnel`` section of the configuration; ``cases`` holds ``low_speed_kmh``
+        [km/h], ``velocity_factor_rel`` [1] and ``feed_delay_max_ns`` [ns].
+    name : str
+        Train type (``metro``, ``hst``, ``freight``).
+    setup : str
+        Run setup, a key of :data:`SETUPS`.
+
+    Returns
+    -------
+    tuple
+        ``(train, cable_error)``: the train (at the low speed for :data:`SETUP_SLOW`), the
+        :class:`~railradio.tunnel.wideband_runs.CableModelError` of :data:`SETUP_CABLE_ERROR` or None.
+
+    Raises
+    ------
+    ValueError
+        When ``setup`` is not a key of :data:`SETUPS`.
+    """
+    if setup not in SETUPS:
+        raise ValueError(f"setup must be one of {sorted(SETUPS)}, got {setup!r}")
+    train = train_from_config(cfg, name)
+    cases = cfg["cases"]
+    if setup in SETUP_SLOW:
+        train = dataclasses.replace(train, speed_kmh=cases["low_speed_kmh"])
+    err = SETUP_CABLE_ERROR.get(setup)
+    if err == "velocity_factor":
+        return train, CableModelError(velocity_factor_rel=cases["velocity_factor_rel"])
+    if err == "feed_delay":
+        return train, CableModelError(feed_delay_max_s=cases["feed_delay_max_ns"] * 1e-9)
+    return train, None
 
 
 def families(cfg: dict[str, Any], shape: str, engine: str, order: int) -> Families:
@@ -505,7 +553,9 @@ def make_map(cfg: dict[str, Any], table: xr.Dataset, name: str) -> xr.Dataset:
         Over ``x_m`` (receiver position along the tunnel, every ``map_step_m`` [m]):
         ``rssi_coherent_dbm`` [dBm], ``rssi_mean_dbm`` (local mean; physical: the coherent
         power averaged over the table's local-mean window) [dBm], ``delay_rms_s`` [s],
-        ``n_strong_rays`` [1].  Attributes: ``table``, ``shape``, ``cross_distance_m`` [m].
+        ``n_strong_rays`` [1], ``delay_rms_thr<T>_s`` (the RMS delay spread with bins more
+        than T dB below the profile's peak dropped, for every T of
+        ``coverage.delay_spread_thresholds_db``) [s].  Attributes: ``table``, ``shape``, ``cross_distance_m`` [m].
     """
     shape = TABLES[name][0]
     tun = tunnel_from_config(cfg, shape)
@@ -513,6 +563,7 @@ def make_map(cfg: dict[str, Any], table: xr.Dataset, name: str) -> xr.Dataset:
     step = cfg["coverage"]["map_step_m"]
     x = np.arange(int(round(tun.length_m / step)) + 1) * step
     rec = received(table, tun, cab, x, strong_dbm=cfg["coverage"]["blind_spot_dbm"])
+    spreads = received_spreads(table, tun, cab, x, tuple(cfg["coverage"]["delay_spread_thresholds_db"]))
     lm_name = "RSSI, local mean (power sum over rays, source 2.4.3)"
     if table.attrs["propagation"] == "physical":  # what a receiver measures: the coherent field's power averaged
         w = table.attrs["local_mean_window_m"]
@@ -538,6 +589,11 @@ def make_map(cfg: dict[str, Any], table: xr.Dataset, name: str) -> xr.Dataset:
                 },
             ),
             "n_strong_rays": (dims, rec.n_strong_rays, {"units": "1", "long_name": "rays above the blind-spot level"}),
+            **{
+                f"delay_rms_thr{thr:g}_s": (dims, v, {"units": "s", "long_name": delay_spread_note(thr)})
+                for thr, v in spreads.items()
+                if thr is not None
+            },
         },
         coords={"x_m": (dims, x, {"units": "m", "long_name": "receiver position along the tunnel"})},
         attrs={"table": name, "shape": shape, "cross_distance_m": tun.cross_distance_m},

@@ -12,7 +12,7 @@ import xarray as xr
 from railradio.constants import SPEED_OF_LIGHT_M_S
 from railradio.tunnel.channel import offset_index, slot_powers, window_slots
 from railradio.tunnel.geometry import Cable, Tunnel
-from railradio.tunnel.measurement import MeasurementModel
+from railradio.tunnel.measurement import MeasurementModel, field_at
 
 BOLTZMANN_DBM_HZ = -174.0
 
@@ -49,18 +49,24 @@ def wideband_delays(
     tunnel: Tunnel,
     cable: Cable,
     x_rx_m: np.ndarray,
-    rng: np.random.Generator | None,
+    rng,
     mm: MeasurementModel,
     tones=None,
     chunk: int = 1024,
     oversample: int = 16,
     thermal_noise: bool = True,
+    shadow_db=None,
+    slot_delay_s: np.ndarray | None = None,
 ) -> np.ndarray:
     """Delay of the strongest peak of the band-limited CIR at each receiver position [s]:
     ``n_tones`` tones across the bandwidth, thermal noise kT F B (``rng``; none without
     ``thermal_noise``), zero-padded IFFT (``oversample`` times), parabolic refinement of the
     peak.  The parabola's own error on a single path is below
     2 pi^2 / (45 sqrt(3) B oversample^3) (see :func:`peak_interp_bound_s`).
+
+    Several Monte Carlo realizations of the place (each slot's shadowing) and of the noise
+    at the same positions are computed together: the slots' tone responses are gathered
+    once and every realization weighs them (one matrix product per receiver position).
 
     Parameters
     ----------
@@ -69,11 +75,12 @@ def wideband_delays(
     tunnel : Tunnel
         Slot positions and tunnel length.
     cable : Cable
-        Cable power, delay and carrier phase at each slot.
+        The installed cable: power, delay and carrier phase at each slot.
     x_rx_m : numpy.ndarray
         Receiver positions along the tunnel [m], 1-D [rx].
-    rng : numpy.random.Generator or None
-        Source of the thermal noise; may be None without ``thermal_noise``.
+    rng : numpy.random.Generator or None or sequence
+        Source of the thermal noise; may be None without ``thermal_noise``; a sequence of R
+        generators (or Nones) computes R realizations.
     mm : MeasurementModel
         ``n_tones``, ``bandwidth_hz`` [Hz], ``noise_figure_db`` [dB], ``window_m`` [m] (the
         slots within it of a receiver contribute; see :func:`wideband_view`).
@@ -85,14 +92,34 @@ def wideband_delays(
         Zero-padding factor of the IFFT.
     thermal_noise : bool
         Add thermal noise kT F B to every tone.
+    shadow_db : numpy.ndarray or None or sequence
+        Each slot's shadowing along the tunnel [slot, x on a 1 m grid] [dB]
+        (:func:`railradio.tunnel.measurement.shadow_field`), applied to the slot's
+        amplitude; one per realization when ``rng`` is a sequence; None: no shadowing.
+    slot_delay_s : numpy.ndarray or None
+        Extra delay of each slot's signal beyond the cable's nominal delay [slot] [s] (a
+        feed's delay calibration error); None: none.
 
     Returns
     -------
     numpy.ndarray
-        Delay of the strongest CIR peak [rx] [s], counted from the feeds (a path's delay is
-        its cable delay plus its radio delay); the IFFT's range is n_tones / bandwidth_hz.
+        Delay of the strongest CIR peak [rx] (or [realization, rx] when ``rng`` is a
+        sequence) [s], counted from the feeds (a path's delay is its cable delay plus its
+        radio delay); the IFFT's range is n_tones / bandwidth_hz.
+
+    Raises
+    ------
+    ValueError
+        When ``shadow_db`` is a sequence whose length differs from ``rng``'s.
     """
+    batched = isinstance(rng, (list, tuple))
+    rngs = list(rng) if batched else [rng]
+    shadows = list(shadow_db) if isinstance(shadow_db, (list, tuple)) else [shadow_db] * len(rngs)
+    if len(shadows) != len(rngs):
+        raise ValueError("shadow_db must hold one field per realization of rng")
     xs, pc_dbm, tc = slot_powers(tunnel, cable)
+    if slot_delay_s is not None:
+        tc = tc + np.asarray(slot_delay_s, dtype=float)
     amp_c = 10.0 ** ((pc_dbm - 30.0) / 20.0) * np.exp(-2j * math.pi * cable.frequency_hz * tc)
     f, resp = tones if tones is not None else tone_response(table, mm)
     cab_tones = amp_c[:, None] * np.exp(-2j * math.pi * tc[:, None] * f[None, :])  # [slot, tone]
@@ -100,26 +127,35 @@ def wideband_delays(
     noise_w = 10.0 ** ((BOLTZMANN_DBM_HZ + mm.noise_figure_db - 30.0) / 10.0) * mm.bandwidth_hz
     n_fft = f.size * oversample
     x_all = np.asarray(x_rx_m, dtype=float)
-    out = np.empty(x_all.size)
+    n_r = len(rngs)
+    out = np.empty((n_r, x_all.size))
     # receivers per pass: the [receiver, slot, tone] arrays stay near chunk x 20 x 64 elements
     chunk = max(16, chunk * 1280 // (f.size * (2 * int(mm.window_m // tunnel.slot_spacing_m) + 2)))
     for a in range(0, x_all.size, chunk):
         x = x_all[a : a + chunk]
         sl, ok = window_slots(tunnel, x, mm.window_m)
         idx, inside = offset_index(table, x[:, None] - xs[sl])
-        w = (ok & inside)[..., None]
-        cab = cab_tones[sl]
-        hf = np.sum(cab * resp[idx] * w, axis=1)
+        g = cab_tones[sl] * resp[idx] * (ok & inside)[..., None]  # [rx, slot, tone]
+        w = np.stack(
+            [np.ones(sl.shape) if s is None else 10.0 ** (field_at(s, sl, x[:, None]) / 20.0) for s in shadows]
+        )
+        # every realization weighs the same gathered responses: [rx, R, slot] @ [rx, slot, tone]
+        gr = g.view(np.float64).reshape(g.shape[0], g.shape[1], 2 * g.shape[2])
+        hf = np.matmul(np.ascontiguousarray(w.transpose(1, 0, 2)), gr).view(np.complex128)  # [rx, R, tone]
+        hf = np.ascontiguousarray(hf.transpose(1, 0, 2))  # [R, rx, tone]
         if thermal_noise:
-            hf += math.sqrt(noise_w / 2.0) * (rng.standard_normal(hf.shape) + 1j * rng.standard_normal(hf.shape))
-        cir = np.abs(np.fft.ifft(hf, n=n_fft, axis=1)) ** 2
+            for r, gen in enumerate(rngs):
+                hf[r] += math.sqrt(noise_w / 2.0) * (
+                    gen.standard_normal(hf.shape[1:]) + 1j * gen.standard_normal(hf.shape[1:])
+                )
+        cir = np.abs(np.fft.ifft(hf.reshape(-1, f.size), n=n_fft, axis=1)) ** 2
         k = np.argmax(cir, axis=1)
-        rows = np.arange(x.size)
+        rows = np.arange(cir.shape[0])
         y0, y1, y2 = cir[rows, (k - 1) % n_fft], cir[rows, k], cir[rows, (k + 1) % n_fft]
         den = y0 - 2 * y1 + y2
         frac = np.where(den < 0, 0.5 * (y0 - y2) / np.where(den < 0, den, -1.0), 0.0)
-        out[a : a + chunk] = (k + frac) / (n_fft * df)
-    return out
+        out[:, a : a + chunk] = ((k + frac) / (n_fft * df)).reshape(n_r, x.size)
+    return out if batched else out[0]
 
 
 def wideband_view(table: xr.Dataset, mm: MeasurementModel) -> MeasurementModel:
@@ -194,9 +230,16 @@ def cable_model_delay_s(x_m: np.ndarray, tunnel: Tunnel, cable: Cable) -> np.nda
     return cable.cable_delay_s(x_m, tunnel.length_m) + tunnel.cross_distance_m / SPEED_OF_LIGHT_M_S
 
 
-def wideband_candidates(tau_s: np.ndarray, tunnel: Tunnel, cable: Cable, bias_s: float = 0.0) -> np.ndarray:
-    """Cable ranging x = x_feed +- v c (tau - bias - h/c) for every feed [epoch, 2 n_feeds];
-    which one is right the tracker decides (nearest its prediction).
+def wideband_candidates(
+    tau_s: np.ndarray,
+    tunnel: Tunnel,
+    cable: Cable,
+    bias_s: float = 0.0,
+    velocity_factor: float | None = None,
+    feed_delay_s: np.ndarray | None = None,
+) -> np.ndarray:
+    """Cable ranging x = x_feed +- v c (tau - bias - d_feed - h/c) for every feed [epoch,
+    2 n_feeds]; which one is right the tracker decides (nearest its prediction).
 
     Parameters
     ----------
@@ -208,6 +251,11 @@ def wideband_candidates(tau_s: np.ndarray, tunnel: Tunnel, cable: Cable, bias_s:
         Feeds, feed spacing and velocity factor.
     bias_s : float
         Calibrated delay bias of the peak, subtracted first [s].
+    velocity_factor : float or None
+        The velocity factor v the receiver assumes; None: the cable's.
+    feed_delay_s : numpy.ndarray or None
+        The extra delay d_feed the receiver assumes for each feed [feed] [s] (its
+        calibration database; nonzero entries model calibration errors); None: zeros.
 
     Returns
     -------
@@ -215,16 +263,23 @@ def wideband_candidates(tau_s: np.ndarray, tunnel: Tunnel, cable: Cable, bias_s:
         Candidate positions [epoch, 2 n_feeds] [m]: x_feed - r for every feed, then
         x_feed + r, with the range r clipped to [0, feed_spacing_m / 2] and the positions to
         the tunnel.
+
+    Raises
+    ------
+    ValueError
+        When ``feed_delay_s`` has not one entry per feed or ``velocity_factor`` is not in (0, 1].
     """
     feeds = cable.feed_x_m(tunnel.length_m)
+    v = cable.velocity_factor if velocity_factor is None else velocity_factor
+    if not 0.0 < v <= 1.0:
+        raise ValueError(f"velocity_factor must be in (0, 1], got {v!r}")
+    d = np.zeros(feeds.size) if feed_delay_s is None else np.asarray(feed_delay_s, dtype=float)
+    if d.shape != feeds.shape:
+        raise ValueError(f"feed_delay_s must have one entry per feed ({feeds.size}), got shape {d.shape}")
     half = cable.feed_spacing_m / 2.0
-    r = (
-        cable.velocity_factor
-        * SPEED_OF_LIGHT_M_S
-        * (np.asarray(tau_s) - bias_s - tunnel.cross_distance_m / SPEED_OF_LIGHT_M_S)
-    )
-    r = np.clip(r, 0.0, half)
-    cand = np.concatenate([feeds[None, :] - r[:, None], feeds[None, :] + r[:, None]], axis=1)
+    tau = np.asarray(tau_s, dtype=float)[:, None] - d[None, :]  # [epoch, feed]
+    r = np.clip(v * SPEED_OF_LIGHT_M_S * (tau - bias_s - tunnel.cross_distance_m / SPEED_OF_LIGHT_M_S), 0.0, half)
+    cand = np.concatenate([feeds[None, :] - r, feeds[None, :] + r], axis=1)
     return np.clip(cand, 0.0, tunnel.length_m)
 
 

@@ -16,7 +16,7 @@ out = dict(zip(smk.params.names, zip(smk.output[0::2], smk.output[1::2], strict=
 f.rssi_map(maps, cov["threshold_dbm"], cov["blind_spot_dbm"], *out["tunnel_rssi_map"])
 f.delay_spread(maps, *out["tunnel_delay_spread"])
 f.gdop(runs[("hst", "physical_separable")], *out["tunnel_gdop"])
-f.position_error_cdf(runs, *out["tunnel_position_error_cdf"])
+f.position_error_cdf(runs, *out["tunnel_position_error_cdf"], headline=smk.params.cfg["key_measurement"])
 f.ray_engines(read_dataset(smk.input.engines), *out["tunnel_ray_engines"])
 f.source_vs_physical(
     tables,

@@ -28,5 +28,7 @@ write_json(
         sens=sens,
         peak_bias=read_dataset(smk.input.peak_bias),
         side_wall_map=read_dataset(smk.input.side_wall_map),
+        headline=smk.params.cfg["key_measurement"],
+        slot_spacing_m=smk.params.cfg["geometry"]["slot_spacing_m"],
     ),
 )

@@ -8,7 +8,7 @@ from railradio.tunnel.study import (
     SETUPS,
     cable_from_config,
     measurement_from_config,
-    train_from_config,
+    run_setup,
     tunnel_from_config,
 )
 from railradio.workflow import setup_script
@@ -19,7 +19,7 @@ cfg = smk.params.cfg
 prop, meas = SETUPS[smk.wildcards.setup]
 table = read_dataset(smk.input[0])
 tunnel = tunnel_from_config(cfg, table.attrs["shape"])
-train = train_from_config(cfg, smk.wildcards.train)
+train, cable_error = run_setup(cfg, smk.wildcards.train, smk.wildcards.setup)
 over = {"delay_error": SETUP_DELAY_ERROR[smk.wildcards.setup]} if smk.wildcards.setup in SETUP_DELAY_ERROR else {}
 ds = run_train(
     table,
@@ -32,6 +32,7 @@ ds = run_train(
     cfg["tracking"],
     smk.params.seed,
     realizations=cfg["realizations"],
+    cable_error=cable_error,
 )
 log.info("%s %s: KF p95 %.3f m", smk.wildcards.train, smk.wildcards.setup, float(ds["kf_err"].quantile(0.95)))
 write_dataset(
