@@ -2,30 +2,11 @@
 
 import numpy as np
 import pytest
-import yaml
 
-from railradio.config import deep_merge
 from railradio.tunnel.measurement import MeasurementModel, delay_error_field
 from railradio.tunnel.sensitivity import sensitivity_cases
 from railradio.tunnel.simulate import calibrate_separable, kf_realizations, run_train
-from railradio.tunnel.study import (
-    cable_from_config,
-    make_order,
-    make_table,
-    measurement_from_config,
-    train_from_config,
-    tunnel_from_config,
-)
-
-
-@pytest.fixture(scope="module")
-def ci():
-    with open("config/config.yaml") as f:
-        base = yaml.safe_load(f)
-    with open("config/ci.yaml") as f:
-        over = yaml.safe_load(f)
-    cfg = deep_merge(base, over)["tunnel"]
-    return cfg, make_table(cfg, "image", 7, make_order(cfg))
+from railradio.tunnel.study import cable_from_config, measurement_from_config, train_from_config, tunnel_from_config
 
 
 def test_delay_error_fields():

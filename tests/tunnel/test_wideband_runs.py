@@ -5,17 +5,13 @@ import dataclasses
 
 import numpy as np
 import pytest
-import yaml
 
-from railradio.config import deep_merge
 from railradio.rng import make_rng
 from railradio.tunnel.delay_profile import received_spreads, rms_spread_s
 from railradio.tunnel.measurement import shadow_field
 from railradio.tunnel.simulate import run_train
 from railradio.tunnel.study import (
     cable_from_config,
-    make_order,
-    make_table,
     measurement_from_config,
     run_setup,
     train_from_config,
@@ -23,16 +19,6 @@ from railradio.tunnel.study import (
 )
 from railradio.tunnel.wideband import tone_response, wideband_candidates, wideband_delays, wideband_view
 from railradio.tunnel.wideband_runs import CableModelError
-
-
-@pytest.fixture(scope="module")
-def ci():
-    with open("config/config.yaml") as f:
-        base = yaml.safe_load(f)
-    with open("config/ci.yaml") as f:
-        over = yaml.safe_load(f)
-    cfg = deep_merge(base, over)["tunnel"]
-    return cfg, make_table(cfg, "image", 7, make_order(cfg))
 
 
 def test_batched_realizations_equal_single_ones(ci):

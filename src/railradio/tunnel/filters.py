@@ -155,6 +155,24 @@ class Tracks:
     pf: np.ndarray
 
 
+def filter_input(res: dict, r0: float, tracking: dict) -> FilterInput:
+    """What every filter reads from snapshot fixes ``res`` (``fix``, ``scale`` [epoch, receiver],
+    ``candidates`` [epoch, receiver, candidate] or None): R_t = r0 s_t^2 [m^2], the motion
+    model of ``tracking`` (``rate_hz`` [Hz], ``accel_sigma_m_s2`` [m/s^2], ``max_speed_m_s``
+    [m/s]), and the start: the first snapshot fix with its variance (not the truth)."""
+    meas = res["candidates"] if res["candidates"] is not None else res["fix"][..., None]
+    r_t = r0 * res["scale"] ** 2
+    return FilterInput(
+        meas,
+        r_t,
+        1.0 / tracking["rate_hz"],
+        tracking["accel_sigma_m_s2"],
+        tracking["max_speed_m_s"],
+        res["fix"][0],
+        r_t[0],
+    )
+
+
 def track_fixes(res: dict, r0: float, tracking: dict, offsets_m: np.ndarray, rng_pf: np.random.Generator) -> Tracks:
     """KF on the head and on the tail receiver, rigid-train KF on all receivers (``offsets_m``
     behind the head), PF on head and tail, all from the snapshot fixes ``res`` of
@@ -187,20 +205,8 @@ def track_fixes(res: dict, r0: float, tracking: dict, offsets_m: np.ndarray, rng
     ValueError
         When a measurement variance is not positive or the tracking parameters are invalid.
     """
-    meas = res["candidates"] if res["candidates"] is not None else res["fix"][..., None]
-    r_t = r0 * res["scale"] ** 2
-    k = res["fix"].shape[1]
-    ends = (0, k - 1)
-    # every filter starts from the first snapshot fix with its variance (not the truth)
-    fi = FilterInput(
-        meas,
-        r_t,
-        1.0 / tracking["rate_hz"],
-        tracking["accel_sigma_m_s2"],
-        tracking["max_speed_m_s"],
-        res["fix"][0],
-        r_t[0],
-    )
+    fi = filter_input(res, r0, tracking)
+    ends = (0, res["fix"].shape[1] - 1)
     kf, kf_var, nis = head_tail_kf(fi, ends)
     rigid = rigid_train_kf(fi, offsets_m)
     return Tracks(kf, kf_var, nis, rigid, head_tail_pf(fi, ends, tracking["n_particles"], rng_pf))

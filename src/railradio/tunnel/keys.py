@@ -140,7 +140,7 @@ def lost_epochs(err_m: np.ndarray, slot_spacing_m: float, t_s: np.ndarray | None
     """
     if not slot_spacing_m > 0:
         raise ValueError(f"slot_spacing_m must be positive, got {slot_spacing_m!r}")
-    lost = ~(np.asarray(err_m, dtype=float) <= slot_spacing_m)
+    lost = loss.lost_mask(err_m, 2.0 * slot_spacing_m)  # the nr rule's mask at half its spacing
     return lost if t_s is None else lost & (np.asarray(t_s) >= START_S)
 
 

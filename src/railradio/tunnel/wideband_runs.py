@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from railradio.tunnel.filters import FilterInput, head_tail_kf, rigid_train_kf
+from railradio.tunnel.filters import filter_input, head_tail_kf, rigid_train_kf
 from railradio.tunnel.geometry import Cable, Tunnel
 from railradio.tunnel.wideband import (
     ambiguity_wrong,
@@ -177,16 +177,7 @@ def wideband_kf_errors(
     ends = (0, k - 1)
     eh, et, er = [], [], []
     for r in res:
-        r_t = r0_m2 * r["scale"] ** 2
-        fi = FilterInput(
-            r["candidates"],
-            r_t,
-            1.0 / tracking["rate_hz"],
-            tracking["accel_sigma_m_s2"],
-            tracking["max_speed_m_s"],
-            r["fix"][0],
-            r_t[0],
-        )
+        fi = filter_input(r, r0_m2, tracking)
         kf, _, _ = head_tail_kf(fi, ends)
         eh.append(np.abs(kf[:, 0] - x_rx[:, ends[0]]))
         et.append(np.abs(kf[:, 1] - x_rx[:, ends[1]]))
