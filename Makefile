@@ -4,12 +4,16 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 JOBS   ?= 2
-SNAKE  := $(BIN)/snakemake --workflow-profile workflow/profiles/default
+# workflow/Snakefile (Snakemake's standard layout): found from the repository root, with its
+# default profile workflow/profiles/default (2 cores, rerun triggers, greedy scheduler)
+SNAKE  := $(BIN)/snakemake
 # CONFIG=my.yaml: a config file stating only what changes, laid over config/config.yaml
 # (figures, numbers, paper, report; reproduce and expected keep their own scale)
 CONFIG ?=
 OVERRIDE := $(if $(CONFIG),--configfile $(CONFIG))
 RUFF_PATHS := src workflow tests benchmarks
+# snakefmt (pyproject.toml [tool.snakefmt]) finds workflow/Snakefile and workflow/rules/*.smk
+SMK_PATHS  := workflow
 export HDF5_USE_FILE_LOCKING := FALSE
 export MPLBACKEND := Agg
 
@@ -34,9 +38,10 @@ paper: $(STAMP)  ## results/paper/main.pdf (needs latexmk, see README)
 report: figures numbers  ## results/report.html
 	$(SNAKE) all --report results/report.html $(OVERRIDE)
 
-lint: $(STAMP)  ## ruff (lint and format, pyproject.toml) and Snakemake's linter
+lint: $(STAMP)  ## ruff (lint and format, pyproject.toml), snakefmt (the workflow's format) and Snakemake's linter
 	$(BIN)/ruff check $(RUFF_PATHS)
 	$(BIN)/ruff format --check $(RUFF_PATHS)
+	$(BIN)/snakefmt --check $(SMK_PATHS)
 	$(BIN)/snakemake --lint
 
 # Snakemake's linter and the paper-scale dry run are pytest's tests (tests/test_workflow.py:
@@ -44,6 +49,7 @@ lint: $(STAMP)  ## ruff (lint and format, pyproject.toml) and Snakemake's linter
 test: $(STAMP)  ## lint, dry runs, unit + integration tests, CI-scale pipeline, key numbers
 	$(BIN)/ruff check $(RUFF_PATHS)
 	$(BIN)/ruff format --check $(RUFF_PATHS)
+	$(BIN)/snakefmt --check $(SMK_PATHS)
 	$(BIN)/python -m pytest
 
 test-fast: $(STAMP)  ## unit tests only
@@ -61,8 +67,8 @@ reproduce: $(STAMP)  ## paper scale from nothing, compared with paper/numbers.js
 	$(BIN)/python -m railradio.keynumbers results/key_numbers.json paper/numbers.json
 
 expected: $(STAMP)  ## regenerate tests/expected/key_numbers_ci.json (CI scale, private dir)
-	d=$$(mktemp -d) && cp -r Snakefile workflow config paper src $$d/ && \
-	  (cd $$d && $(CURDIR)/$(BIN)/snakemake numbers -j$(JOBS) --workflow-profile workflow/profiles/default \
+	d=$$(mktemp -d) && cp -r workflow config paper src $$d/ && \
+	  (cd $$d && $(CURDIR)/$(BIN)/snakemake numbers -j$(JOBS) \
 	     --configfile config/ci.yaml -q rules) && \
 	  cp $$d/results/key_numbers.json tests/expected/key_numbers_ci.json && rm -rf $$d
 
@@ -72,12 +78,12 @@ publish: numbers  ## copy the paper-scale key numbers to paper/numbers.json and 
 
 records: $(STAMP)  ## the nr reproduction map and sensitivity cases at paper scale -> paper/{map,cases}_numbers.json (commit them)
 	$(SNAKE) records -j$(JOBS)
-	$(BIN)/python -m railradio.nr.records publish map results/nr/map/key_numbers.json
-	$(BIN)/python -m railradio.nr.records publish cases results/nr/cases/key_numbers.json
+	$(BIN)/python -m railradio.nr.study.records publish map results/nr/map/key_numbers.json
+	$(BIN)/python -m railradio.nr.study.records publish cases results/nr/cases/key_numbers.json
 
 fidelity: $(STAMP)  ## the nr shortcuts measured at paper scale (outside all) -> paper/fidelity_numbers.json (commit it)
 	$(SNAKE) fidelity -j$(JOBS)
-	$(BIN)/python -m railradio.nr.records publish fidelity results/nr/fidelity/key_numbers.json
+	$(BIN)/python -m railradio.nr.study.records publish fidelity results/nr/fidelity/key_numbers.json
 	cp results/nr/fidelity/nr_fidelity.png docs/gallery/
 
 GALLERY := fusion_rmse_vs_distance nr_position_error_cdf nr_sensitivity tunnel_position_error_cdf \

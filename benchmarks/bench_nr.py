@@ -6,12 +6,12 @@ candidate cell, one FFT correlation over the whole burst (2^20 points) split int
 SS-block windows. Project: the shipped config's path (synthesis at F_s/D_s, the front end's
 ideal filter to F_s/D, per-block windows on the F_s/D_c lag grid). Reports ms per epoch for
 each, their ratio, and the project's time shares; then what each shortcut's exact
-replacement costs per epoch (railradio.nr.fidelity, the same paths as the fidelity target;
+replacement costs per epoch (railradio.nr.study.fidelity, the same paths as the fidelity target;
 and the fast path's own exact spill, nr.channel.exact_spill, in shard-like runs), so that the
 choice of what to keep is measured; and the band's exact completion by its symbol edges
-(railradio.nr.band_edges: ``exact_path_ms.band_edges``, and ``band_edges_vs_band`` against
+(railradio.nr.synthesis.band_edges: ``exact_path_ms.band_edges``, and ``band_edges_vs_band`` against
 what the full band adds to the production's time); and one burst through the reference path
-(railradio.nr.simulate) against the burst engine the study runs (railradio.nr.engine:
+(railradio.nr.engine.simulate) against the burst engine the study runs (railradio.nr.engine:
 ``burst_ms.*``, ``engine_speedup``).
 
     python benchmarks/bench_nr.py --out results/benchmarks/nr_bench.json
@@ -32,21 +32,21 @@ import scipy.fft as sfft
 import yaml
 from _report import best_of, emit
 
-from railradio.nr.correlator import Correlator
-from railradio.nr.link import ShadowingMap, link_budget
-from railradio.nr.numerology import Numerology
-from railradio.nr.resample import project, upsample
-from railradio.nr.simulate import scenario_from_config
-from railradio.nr.ssb import qpsk_pool, reference_waveform
-from railradio.nr.synthesis import Synthesizer
+from railradio.nr.channel.link import ShadowingMap, link_budget
+from railradio.nr.engine.simulate import scenario_from_config
+from railradio.nr.receiver.correlator import Correlator
+from railradio.nr.receiver.frontend import project, upsample
+from railradio.nr.synthesis.synthesizer import Synthesizer
+from railradio.nr.waveform.numerology import Numerology
+from railradio.nr.waveform.ssb import qpsk_pool, reference_waveform
 from railradio.workflow import JOB_ENV
 
 # A shard-like run in a fresh process: consecutive epochs of realization r0 through
 # simulate_epochs (channel, synthesis, both receivers), as the nr_shard jobs run them.
 _SHARD_RUN = """
 import json, resource, sys, time, yaml
-from railradio.nr.epochs import simulate_epochs
-from railradio.nr.simulate import scenario_from_config
+from railradio.nr.engine.epochs import simulate_epochs
+from railradio.nr.engine.simulate import scenario_from_config
 from railradio.rng import spawn_key
 cfg = yaml.safe_load(open(sys.argv[1]))
 cfg["nr"]["channel"]["exact_spill"] = sys.argv[3] == "exact_spill"
@@ -95,7 +95,7 @@ def naive_correlation(z: np.ndarray, s_min: int, cfg, n_id1: np.ndarray, n_id2: 
 
 
 def burst_engine(config: str, n_epochs: int) -> dict:
-    """One burst through the reference path (railradio.nr.simulate: Synthesis with the
+    """One burst through the reference path (railradio.nr.engine.simulate: Synthesis with the
     band's edges and the front end, then the Estimator's cell search and both receivers,
     each correlating on its own) against the burst engine the study runs (railradio.nr.engine:
     SpectralSynthesis, the front end in one spectral pass onto the lag grid, and
@@ -104,7 +104,7 @@ def burst_engine(config: str, n_epochs: int) -> dict:
     epoch by epoch; process time per epoch, split into the burst (synthesis, edges, front
     end) and the receivers."""
     from railradio.nr.engine import SharedEstimator, SpectralSynthesis
-    from railradio.nr.simulate import Estimator, Synthesis
+    from railradio.nr.engine.simulate import Estimator, Synthesis
     from railradio.rng import spawn_key
 
     with open(config, encoding="utf-8") as fh:
@@ -263,12 +263,12 @@ def main() -> None:
 
 
 def exact_costs(config: str, n_epochs: int) -> dict:
-    """ms per epoch of every path of the fidelity target (railradio.nr.fidelity) on
+    """ms per epoch of every path of the fidelity target (railradio.nr.study.fidelity) on
     ``n_epochs`` epochs at cruise speed, and each against the production path's: what
     replacing a shortcut by its exact computation would cost."""
-    from railradio.nr.band_edges import BandEdges
-    from railradio.nr.fidelity import FidelityRun
-    from railradio.nr.workflow import receiver_selection
+    from railradio.nr.study.fidelity import FidelityRun
+    from railradio.nr.study.workflow import receiver_selection
+    from railradio.nr.synthesis.band_edges import BandEdges
     from railradio.rng import spawn_key
 
     with open(config, encoding="utf-8") as fh:
@@ -278,7 +278,7 @@ def exact_costs(config: str, n_epochs: int) -> dict:
     validate_config(cfg, load_schema("workflow/schemas/config.schema.yaml"))
     scn = scenario_from_config(cfg["nr"])
     run = FidelityRun(scn, cfg["seed"], spawn_key("nr", 0), receiver_selection(cfg["nr"]))
-    # the band's exact completion (railradio.nr.band_edges), against the full band it replaces
+    # the band's exact completion (railradio.nr.synthesis.band_edges), against the full band it replaces
     edges = BandEdges(run.fast, run.pool_ref, scn.receiver.decimation)
     secs: dict[str, float] = {}
     for k, e in enumerate(range(2500, 2501 + n_epochs)):

@@ -27,8 +27,9 @@ def rng() -> np.random.Generator:
 
 
 def copy_workflow(dest: Path) -> Path:
-    """A private copy of the workflow (Snakefile, rules, config, paper, library) in ``dest``."""
-    for name in ("Snakefile", "workflow", "config", "paper", "src"):
+    """A private copy of the workflow (workflow/: Snakefile, rules, profiles; config, paper,
+    library) in ``dest``."""
+    for name in ("workflow", "config", "paper", "src"):
         src = ROOT / name
         if src.is_dir():
             shutil.copytree(src, dest / name, ignore=shutil.ignore_patterns("__pycache__", "*.egg-info"))

@@ -157,7 +157,7 @@ def test_module_lookups_from_listings_match_the_file_system(tmp_path):
     modules; a module added later is found after clear_caches()."""
     root = ROOT / "src/railradio"
     names = {n for s in rule_scripts().values() for n in script_closure(s) if not n.startswith(("data/", "local/"))}
-    for n in sorted(names) + ["railradio.nr.no_such_module", "railradio.nr.ekf.run_ekf", "numpy.linalg"]:
+    for n in sorted(names) + ["railradio.nr.no_such_module", "railradio.nr.tracking.ekf.run_ekf", "numpy.linalg"]:
         base = root.joinpath(*n.split(".")[1:])
         fs = base / "__init__.py" if (base / "__init__.py").is_file() else base.with_suffix(".py")
         assert module_path(n, root) == (fs if n.startswith("railradio") and fs.is_file() else None), n
@@ -173,12 +173,12 @@ def test_module_lookups_from_listings_match_the_file_system(tmp_path):
 @pytest.mark.parametrize(
     ("module", "rules"),
     [  # modules each of these rules reaches only through another module or a helper script
-        ("railradio.nr.keys", {"nr_figures", "nr_imm_figure"}),
-        ("railradio.nr.bounds", {"nr_imm"}),
+        ("railradio.nr.study.keys", {"nr_figures", "nr_imm_figure"}),
+        ("railradio.nr.tracking.bounds", {"nr_imm"}),
         ("railradio.plotting", {"nr_imm_key_numbers"}),
-        ("railradio.nr.tracking", {"nr_case_track", "nr_case_calibrate", "nr_track", "nr_calibrate"}),
-        ("railradio.nr.ekf", {"nr_case_track", "nr_case_calibrate", "nr_track", "nr_calibrate"}),
-        ("railradio.nr.candidates", {"nr_case_track", "nr_case_calibrate", "nr_track", "nr_calibrate"}),
+        ("railradio.nr.tracking.track", {"nr_case_track", "nr_case_calibrate", "nr_track", "nr_calibrate"}),
+        ("railradio.nr.tracking.ekf", {"nr_case_track", "nr_case_calibrate", "nr_track", "nr_calibrate"}),
+        ("railradio.nr.tracking.candidates", {"nr_case_track", "nr_case_calibrate", "nr_track", "nr_calibrate"}),
     ],
 )
 def test_known_dependencies_are_found(module, rules):
@@ -198,8 +198,10 @@ def test_the_workflow_sets_each_rule_hash_from_its_script(tmp_path):
     """Every scripted rule of the loaded workflow carries ``code = script_code_hash(script)``
     (read from Snakemake's own rule objects after the Snakefile is parsed)."""
     wd = copy_workflow(tmp_path)
+    # a wrapper at the copy's root: the workflow's root must not come from the main
+    # Snakefile's directory (workflow.basedir), here the copy's root (common.smk: REPO_ROOT)
     (wd / "probe.smk").write_text(
-        'include: "Snakefile"\n'
+        'include: "workflow/Snakefile"\n'
         "import json as _json\n"
         "print('PROBE' + _json.dumps({r.name: [getattr(r.params, 'code', None), r.script]"
         " for r in workflow.rules}))\n"

@@ -6,6 +6,7 @@ from __future__ import annotations
 import csv
 import io
 import json
+import re
 
 import pytest
 
@@ -88,3 +89,34 @@ def test_study_summary_counts_keys_and_claims_per_study():
     assert rows["handover"] == {"study": "handover", "keys": 2, "claims": 2, "met": 0, "not met": 1, "undecided": 1}
     tex = study_summary_latex(numbers)
     assert tex.startswith("\\begin{tabular}") and "handover & 2 & 2 & 0 & 1 & 1" in tex
+
+
+def test_the_filterable_table_holds_every_key_and_loads_nothing():
+    from railradio.keyhtml import filterable_table, unpack_rows
+
+    numbers = {
+        "fusion.a": {"value": 1.23456, "unit": "m", "mc_stderr": 0.01, "source_value": 2.0, "source_relation": "<"},
+        "nr.b_<i>": {"value": None, "unit": "1", "description": "lost & found"},
+    }
+    page = filterable_table(numbers)
+    assert page.startswith("<!DOCTYPE html>") and "2 keys" in page
+    got = {r[0]: dict(zip(COLUMNS, r, strict=True)) for r in unpack_rows(page)}
+    assert set(got) == set(numbers)
+    assert got["fusion.a"]["value"] == "1.235" and got["fusion.a"]["verdict"] == "holds"
+    assert got["fusion.a"]["source_value"] == "2" and got["fusion.a"]["mc_stderr"] == "0.01000"
+    assert got["nr.b_<i>"]["value"] == "" and got["nr.b_<i>"]["description"] == "lost & found"
+    assert "nr.b_<i>" not in page  # packed, and shown as text (DataTable.render.text)
+    assert len(page) < 1_000_000  # the report embeds it as a data: URL, which Chromium caps at 2 MB
+    assert not re.search(r"<(?:script|link)[^>]+(?:src|href)=[\"']?https?:", page)  # offline: nothing fetched
+    with pytest.raises(ValueError, match="numbers"):
+        filterable_table({})
+
+
+@pytest.mark.slow
+def test_the_ci_run_writes_the_filterable_table(ci_run):
+    numbers = json.loads((ci_run / "results/key_numbers.json").read_text(encoding="utf-8"))
+    from railradio.keyhtml import unpack_rows
+
+    page = (ci_run / "results/paper/key_numbers_table.html").read_text(encoding="utf-8")
+    assert f"{len(numbers)} keys" in page
+    assert [r[0] for r in unpack_rows(page)] == sorted(numbers)

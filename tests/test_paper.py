@@ -51,7 +51,7 @@ def test_no_macro_key_is_built_from_parts():
 
 def test_no_published_nr_accuracy_exceeds_10_km():
     """A lost track is a lost share, never a mean error of 10^19 m."""
-    from railradio.nr.loss import ACCURACY_CAP_M
+    from railradio.nr.tracking.loss import ACCURACY_CAP_M
 
     published = json.loads((ROOT / "paper/numbers.json").read_text())
     bad = {

@@ -8,7 +8,7 @@ import pytest
 import yaml
 
 from railradio.config import load_schema, validate_config
-from railradio.nr.records import RECORDS
+from railradio.nr.study.records import RECORDS
 from railradio.published import Record
 
 from .conftest import ROOT

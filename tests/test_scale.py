@@ -63,7 +63,7 @@ def test_every_rule_has_measured_resources_in_the_slurm_profile():
     rules = set(derive.rules_in_workflow(ROOT))
     assert {"nr_shard", "fusion_point", "handover_shard", "tunnel_run", "paper"} <= rules
     # the Snakefile holds only targets (nothing to submit)
-    snakefile = (ROOT / "Snakefile").read_text()
+    snakefile = (ROOT / "workflow/Snakefile").read_text()
     assert not re.search(r"^\s+(script|shell|run|notebook|wrapper):", snakefile, flags=re.M)
     prof = _yaml(PROFILE / "config.yaml")
     assert prof["executor"] == "slurm" and prof["retries"] >= 1
@@ -99,7 +99,7 @@ def test_cluster_shards_are_valid_and_fit_the_work():
     shards = _yaml(PROFILE / "shards.yaml")
     cfg = deep_merge(_yaml(ROOT / "config/config.yaml"), shards)
     validate_config(cfg, load_schema(ROOT / "workflow/schemas/config.schema.yaml"))
-    from railradio.nr.simulate import scenario_from_config
+    from railradio.nr.engine.simulate import scenario_from_config
 
     n_epochs = scenario_from_config(cfg["nr"]).trajectory.n_epochs
     assert cfg["nr"]["n_shards"] <= n_epochs
@@ -176,7 +176,7 @@ def test_slurm_dry_run_gives_every_job_its_rule_resources_and_cluster_shards(tmp
 
 
 def test_nr_shards_cover_every_epoch_once():
-    from railradio.nr.epochs import shard_epochs
+    from railradio.nr.engine.epochs import shard_epochs
 
     for n_epochs in (7, 160, 2500, 5775):
         for n_shards in (1, 2, 3, 5, 12, 48, n_epochs):
@@ -191,12 +191,12 @@ def test_nr_shards_cover_every_epoch_once():
 
 
 def test_nr_epochs_identical_whatever_the_shards(tmp_path):
-    """Simulated shards written and read back as the workflow does (railradio.nr.runs.read_shards)
+    """Simulated shards written and read back as the workflow does (railradio.nr.study.runs.read_shards)
     give the same per-epoch outputs for 1, 2 and 3 shards."""
     from railradio.io import write_dataset
-    from railradio.nr.epochs import shard_epochs, simulate_epochs
-    from railradio.nr.runs import read_shards
-    from railradio.nr.simulate import scenario_from_config
+    from railradio.nr.engine.epochs import shard_epochs, simulate_epochs
+    from railradio.nr.engine.simulate import scenario_from_config
+    from railradio.nr.study.runs import read_shards
     from railradio.rng import spawn_key
 
     c = _ci("nr")

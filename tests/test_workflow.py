@@ -1,6 +1,6 @@
 """The pipeline end to end at CI scale, in a private copy of the workflow.
 
-Each test works in a temporary copy of Snakefile, workflow/, config/, paper/ and src/
+Each test works in a temporary copy of workflow/ (its Snakefile), config/, paper/ and src/
 (with PYTHONPATH pointing at the copy, so a test may edit library code without touching
 the repository).
 """
@@ -277,11 +277,11 @@ def test_only_affected_rules_rerun(ci_run, tmp_path):
     fig.write_text(original)
     # a library change re-runs every rule whose script reaches the module, and only those
     # (nr/keys.py: before the hashes were derived, nr_figures and nr_imm_figure stayed stale)
-    keys = wd / "src/railradio/nr/keys.py"
+    keys = wd / "src/railradio/nr/study/keys.py"
     keys.write_text(keys.read_text() + "\n_CHANGED = True\n")
     reasons = rerun_reasons(smk(wd, "all", "-n").stdout)
     outside_all = {"nr_fidelity", "nr_fidelity_shard"}  # target `fidelity` only: not in this dry run's DAG
-    want = {r for r, s in rule_scripts().items() if "railradio.nr.keys" in script_closure(s)} - outside_all
+    want = {r for r, s in rule_scripts().items() if "railradio.nr.study.keys" in script_closure(s)} - outside_all
     assert {"nr_figures", "nr_imm_figure", "nr_key_numbers"} <= want
     assert want <= set(reasons), sorted(want - set(reasons))  # every rule that runs nr/keys.py
     # (Snakemake names one reason per job: a rule downstream of another re-run may show that one)

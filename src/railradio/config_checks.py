@@ -11,10 +11,10 @@ rule, each naming its key, the value and what the other keys allow. Two kinds of
   around its base stations); their ``ValueError`` is reported under the section's key.
 
 The nr sensitivity cases are validated here too, each as the nr section with the case
-merged in (:func:`railradio.nr.cases.merged_cases`), under ``nr.sensitivity.cases.<case>``,
-and so are the cells of the nr reproduction map (:func:`railradio.nr.reproduction_map.cells`).
+merged in (:func:`railradio.nr.study.cases.merged_cases`), under ``nr.sensitivity.cases.<case>``,
+and so are the cells of the nr reproduction map (:func:`railradio.nr.study.reproduction_map.cells`).
 :func:`check_config` returns them (:class:`Checked`): the workflow plans its nr jobs from
-these (:func:`railradio.nr.plan.nr_plan`), so each is merged and validated once.
+these (:func:`railradio.nr.study.plan.nr_plan`), so each is merged and validated once.
 """
 
 from __future__ import annotations
@@ -26,7 +26,7 @@ from typing import Any
 import numpy as np
 
 from railradio.config import ConfigError, Validator
-from railradio.nr.numerology import CP_NORMAL, N_FFT, SAMPLE_RATE_HZ
+from railradio.nr.waveform.numerology import CP_NORMAL, N_FFT, SAMPLE_RATE_HZ
 
 Problem = tuple[str, Any, str]
 """(dotted key, its value, what the rule allows)."""
@@ -35,16 +35,16 @@ Problem = tuple[str, Any, str]
 @dataclass(frozen=True)
 class Checked:
     """The nr configs the checks merged and validated, handed to the workflow so that it
-    does not merge and validate them again (:func:`railradio.nr.plan.nr_plan` copies them).
+    does not merge and validate them again (:func:`railradio.nr.study.plan.nr_plan` copies them).
 
     Attributes
     ----------
     nr_cases : dict of str to dict
         Sensitivity case name -> the nr section with the case merged in, schema-valid with
-        the defaults filled (:func:`railradio.nr.cases.merged_cases`, config order).
+        the defaults filled (:func:`railradio.nr.study.cases.merged_cases`, config order).
     nr_map_cells : dict of str to dict
         Reproduction-map cell name -> its whole nr config, schema-valid
-        (:func:`railradio.nr.reproduction_map.cells`, map order).
+        (:func:`railradio.nr.study.reproduction_map.cells`, map order).
     """
 
     nr_cases: dict[str, dict[str, Any]]
@@ -104,10 +104,10 @@ def main_epochs(nr: Mapping[str, Any]) -> int | None:
     -------
     int or None
         Number of epochs of the run: the trajectory's, at most ``max_epochs`` when that is
-        set; None if :func:`railradio.nr.simulate.scenario_from_config` rejects the section
+        set; None if :func:`railradio.nr.engine.simulate.scenario_from_config` rejects the section
         (ValueError or KeyError).
     """
-    from railradio.nr.simulate import scenario_from_config
+    from railradio.nr.engine.simulate import scenario_from_config
 
     try:
         n_traj = scenario_from_config(dict(nr)).trajectory.n_epochs
@@ -138,7 +138,7 @@ def nr_problems(nr: Mapping[str, Any], root: str = "nr", main: bool = True) -> I
         are inconsistent as a whole) and what the rule allows.  If the study's scenario
         cannot be built from ``nr``, that is the only problem, under ``root``.
     """
-    from railradio.nr.simulate import calibration_trajectory, scenario_from_config
+    from railradio.nr.engine.simulate import calibration_trajectory, scenario_from_config
 
     try:
         scn = scenario_from_config(dict(nr))
@@ -231,7 +231,7 @@ def _prefixed(root: str, problems: Iterator[Problem]) -> Iterator[Problem]:
 
 
 def _nr(cfg: Mapping[str, Any], schema: Mapping[str, Any], built: dict[str, Any]) -> Iterator[Problem]:
-    from railradio.nr import cases as nr_cases
+    from railradio.nr.study import cases as nr_cases
 
     nr = cfg["nr"]
     yield from nr_problems(nr)
@@ -275,9 +275,9 @@ def _nr_map(
 ) -> Iterator[Problem]:
     """The reproduction map: a segment inside the main run, blocks that fit it, the main
     run's M_T among the mapped ones, every cell a valid nr config."""
-    from railradio.nr import reproduction_map as nr_map
-    from railradio.nr.keys import SKIP_S
-    from railradio.nr.simulate import calibration_trajectory
+    from railradio.nr.engine.simulate import calibration_trajectory
+    from railradio.nr.study import reproduction_map as nr_map
+    from railradio.nr.study.keys import SKIP_S
 
     mp = nr["map"]
     first, end = mp["segment"]
@@ -380,7 +380,7 @@ def _chain(cfg: Mapping[str, Any]) -> Iterator[Problem]:
         )
     yield from _probe("chain", lambda: params_from_config(dict(ch)))
     # the chain's nr input: epochs of the main run at the chain's speed
-    from railradio.nr.simulate import scenario_from_config
+    from railradio.nr.engine.simulate import scenario_from_config
 
     n_main = main_epochs(cfg["nr"])
     if n_main is not None:

@@ -12,7 +12,7 @@ produced them:
   (the script, every library module and data file it reaches, the pinned third-party
   versions), and per rule file, the SHA-256 of its tokens without comments (its params
   lambdas; :func:`railradio.codedeps.file_digest`), and of the library module computing
-  those params (:mod:`railradio.nr.plan`, its syntax tree);
+  those params (:mod:`railradio.nr.study.plan`, its syntax tree);
 * ``config``: the config sections the target reads.
 
 A record is *current* when both equal what is in the repository now. The key-number merge
@@ -49,7 +49,7 @@ class Record:
     rule_files : tuple of str
         Rule files (repository-relative) whose code is recorded too (default none): the
         ``.smk`` files whose params the target's jobs get (tokens without comments), and the
-        library modules that compute those params for them (e.g. ``railradio.nr.plan``;
+        library modules that compute those params for them (e.g. ``railradio.nr.study.plan``;
         :func:`railradio.codedeps.file_digest`).
     """
 

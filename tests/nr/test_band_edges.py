@@ -1,15 +1,16 @@
-"""The full band's symbol edges (railradio.nr.band_edges) against the full-rate burst."""
+"""The full band's symbol edges (railradio.nr.synthesis.band_edges) against the full-rate burst."""
 
 import numpy as np
 import pytest
 
-from railradio.nr.band_edges import BandEdges, kappa
-from railradio.nr.channel import tdl_profile
-from railradio.nr.numerology import SAMPLE_RATE_HZ
-from railradio.nr.receiver import ReceiverConfig
-from railradio.nr.resample import project
-from railradio.nr.ssb import qpsk_pool
-from railradio.nr.synthesis import Links, Synthesizer
+from railradio.nr.channel.link import Links
+from railradio.nr.channel.tdl import tdl_profile
+from railradio.nr.receiver.config import ReceiverConfig
+from railradio.nr.receiver.frontend import project
+from railradio.nr.synthesis.band_edges import BandEdges, kappa
+from railradio.nr.synthesis.synthesizer import Synthesizer
+from railradio.nr.waveform.numerology import SAMPLE_RATE_HZ
+from railradio.nr.waveform.ssb import qpsk_pool
 
 
 def _links(n: int, rng) -> Links:
@@ -104,12 +105,12 @@ def test_at_the_papers_interference_the_edges_complete_the_band():
     import yaml
 
     from railradio.config import load_schema, validate_config
-    from railradio.nr.fidelity import FidelityRun
-    from railradio.nr.fidelity_stats import changed
-    from railradio.nr.motion import burst_motion
-    from railradio.nr.resample import upsample
-    from railradio.nr.simulate import KEY_POOL, scenario_from_config
-    from railradio.nr.workflow import receiver_selection
+    from railradio.nr.channel.motion import burst_motion
+    from railradio.nr.engine.simulate import KEY_POOL, scenario_from_config
+    from railradio.nr.receiver.frontend import upsample
+    from railradio.nr.study.fidelity import FidelityRun
+    from railradio.nr.study.fidelity_stats import changed
+    from railradio.nr.study.workflow import receiver_selection
     from railradio.rng import make_rng, spawn_key
 
     root = __import__("pathlib").Path(__file__).resolve().parents[2]

@@ -7,11 +7,11 @@ import numpy as np
 import pytest
 import yaml
 
-from railradio.nr import epochs as epochs_mod
-from railradio.nr import simulate as sim
-from railradio.nr.cellsearch import CellSearch, CellSearchConfig, neighbour_list, ss_rsrp_db, warmup_start
-from railradio.nr.correlator import BlockCorrelation
-from railradio.nr.geometry import Deployment
+from railradio.nr.channel.geometry import Deployment
+from railradio.nr.engine import epochs as epochs_mod
+from railradio.nr.engine import simulate as sim
+from railradio.nr.receiver.cellsearch import CellSearch, CellSearchConfig, neighbour_list, ss_rsrp_db, warmup_start
+from railradio.nr.receiver.correlator import BlockCorrelation
 from railradio.rng import spawn_key
 
 from ..conftest import ROOT

@@ -5,7 +5,13 @@ import numpy as np
 import pytest
 from scipy import special, stats
 
-from railradio.nr.channel import breakpoint_distance_m, pathloss_umi_los_db, shadowing_field_db, sos_taps, tdl_profile
+from railradio.nr.channel.tdl import (
+    breakpoint_distance_m,
+    pathloss_umi_los_db,
+    shadowing_field_db,
+    sos_taps,
+    tdl_profile,
+)
 
 # TR 38.901 v17 Table 7.7.2-4, TDL-D, transcribed independently of the code:
 # (normalized delay, power dB); the first row is the LOS (specular) part of tap 1.

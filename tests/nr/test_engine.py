@@ -11,13 +11,15 @@ import pytest
 import scipy.fft as sfft
 import yaml
 
-from railradio.nr import kernels as study_kernels
-from railradio.nr.band_edges import BandEdges
-from railradio.nr.correlator import Correlator
-from railradio.nr.engine import SharedCorrelation, SharedEstimator, SpectralSynthesis, front_end, kernels
-from railradio.nr.numerology import SAMPLE_RATE_HZ
-from railradio.nr.resample import project, upsample
-from railradio.nr.simulate import Estimator, Synthesis, scenario_from_config
+from railradio.nr.engine import SharedEstimator, SpectralSynthesis
+from railradio.nr.engine.simulate import Estimator, Synthesis, scenario_from_config
+from railradio.nr.receiver import SharedCorrelation, front_end, kernels
+from railradio.nr.receiver import kernels as study_kernels
+from railradio.nr.receiver.correlator import Correlator
+from railradio.nr.receiver.frontend import project, upsample
+from railradio.nr.synthesis import kernels as synthesis_kernels
+from railradio.nr.synthesis.band_edges import BandEdges
+from railradio.nr.waveform.numerology import SAMPLE_RATE_HZ
 from railradio.rng import spawn_key
 
 from ..conftest import ROOT
@@ -146,5 +148,5 @@ def test_scatter_rows_adds_as_band_edges_scatter(rng):
     want = np.zeros((100, 3), np.complex128)
     BandEdges._scatter(_Holder(), want, base, 2, local)
     got = np.zeros((100, 3), np.complex128)
-    kernels.scatter_rows(got, base, 2, local)
+    synthesis_kernels.scatter_rows(got, base, 2, local)
     np.testing.assert_array_equal(got, want)

@@ -1,4 +1,4 @@
-"""The exact reference and the fidelity measurement (railradio.nr.reference, .resample,
+"""The exact reference and the fidelity measurement (railradio.nr.synthesis.reference, .resample,
 .motion, .fidelity): each piece against an independent computation."""
 
 import dataclasses
@@ -8,17 +8,18 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from railradio.nr import kernels
-from railradio.nr.channel import TdlProfile
-from railradio.nr.correlator import Correlator
-from railradio.nr.fidelity import check_production, sample_epochs
-from railradio.nr.fidelity_stats import changed
-from railradio.nr.numerology import SAMPLE_RATE_HZ
-from railradio.nr.receiver import ReceiverConfig
-from railradio.nr.reference import reference_received
-from railradio.nr.resample import project, upsample
-from railradio.nr.ssb import qpsk_pool
-from railradio.nr.synthesis import Links, Synthesizer
+from railradio.nr.channel.link import Links
+from railradio.nr.channel.tdl import TdlProfile
+from railradio.nr.receiver.config import ReceiverConfig
+from railradio.nr.receiver.correlator import Correlator
+from railradio.nr.receiver.frontend import project, upsample
+from railradio.nr.study.fidelity import check_production, sample_epochs
+from railradio.nr.study.fidelity_stats import changed
+from railradio.nr.synthesis import kernels
+from railradio.nr.synthesis.reference import reference_received
+from railradio.nr.synthesis.synthesizer import Synthesizer
+from railradio.nr.waveform.numerology import SAMPLE_RATE_HZ
+from railradio.nr.waveform.ssb import qpsk_pool
 
 ROOT = Path(__file__).resolve().parents[2]
 LOS_ONLY = TdlProfile("LOS", 1.0, 0.0, np.zeros(0), np.zeros(0))
@@ -137,7 +138,7 @@ def test_the_exact_spill_equals_the_exact_reference(decimation, tdl, delays, dat
     the paper's 20 ns (its taps up to 15 samples late at F_s/4) and TDL-A at 300 ns (up to
     170), fractional bulk delays, two links, and the SS blocks alone (``none``: the symbols
     between them empty); without it the same bursts differ by ≥ 10 % of their peak."""
-    from railradio.nr.channel import tdl_profile
+    from railradio.nr.channel.tdl import tdl_profile
 
     rng = np.random.default_rng(8)
     cfg = ReceiverConfig(decimation=decimation, n_blocks=8)
@@ -176,9 +177,9 @@ def test_the_exact_spill_equals_the_exact_reference(decimation, tdl, delays, dat
 
 def test_a_standing_train_moves_nothing():
     """With speed and acceleration zero the exact geometry equals the held one."""
-    from railradio.nr.antenna import RrhArray
-    from railradio.nr.geometry import Deployment
-    from railradio.nr.motion import BurstMotion
+    from railradio.nr.channel.antenna import RrhArray
+    from railradio.nr.channel.geometry import Deployment
+    from railradio.nr.channel.motion import BurstMotion
 
     rng = np.random.default_rng(5)
     cfg = ReceiverConfig(decimation=8, n_blocks=8)
@@ -285,8 +286,8 @@ def test_noise_only_false_alarms_agree_with_the_published_rate():
     import yaml
 
     from railradio.config import load_schema, validate_config
-    from railradio.nr.fidelity_detector import noise_false_alarms
-    from railradio.nr.simulate import scenario_from_config
+    from railradio.nr.engine.simulate import scenario_from_config
+    from railradio.nr.study.fidelity_detector import noise_false_alarms
 
     config = yaml.safe_load((ROOT / "config/config.yaml").read_text(encoding="utf-8"))
     validate_config(config, load_schema(ROOT / "workflow/schemas/config.schema.yaml"))
@@ -314,11 +315,11 @@ def test_at_the_papers_interference_the_production_path_keeps_our_decisions():
     import yaml
 
     from railradio.config import load_schema, validate_config
-    from railradio.nr.epochs import simulate_epochs
-    from railradio.nr.fidelity import FidelityRun
-    from railradio.nr.fidelity_stats import stack, toa_error_m
-    from railradio.nr.simulate import scenario_from_config
-    from railradio.nr.workflow import receiver_selection
+    from railradio.nr.engine.epochs import simulate_epochs
+    from railradio.nr.engine.simulate import scenario_from_config
+    from railradio.nr.study.fidelity import FidelityRun
+    from railradio.nr.study.fidelity_stats import stack, toa_error_m
+    from railradio.nr.study.workflow import receiver_selection
     from railradio.rng import spawn_key
 
     config = yaml.safe_load((ROOT / "config/config.yaml").read_text(encoding="utf-8"))
@@ -360,8 +361,8 @@ def test_a_shortcut_the_production_does_not_take_is_measured_but_left_out_of_the
     change) but marked not taken: its keys exist, say so, and do not decide all_bounded."""
     import types
 
-    from railradio.nr.fidelity import comparisons
-    from railradio.nr.fidelity_keys import key_numbers
+    from railradio.nr.study.fidelity import comparisons
+    from railradio.nr.study.fidelity_keys import key_numbers
 
     scn = types.SimpleNamespace(full_channel_range_m=np.inf, exact_spill=True)
     comps = comparisons(scn)
@@ -392,9 +393,9 @@ def test_the_fidelity_paths_add_the_bands_edges_as_the_production_does():
     import yaml
 
     from railradio.config import load_schema, validate_config
-    from railradio.nr.fidelity import FidelityRun
-    from railradio.nr.simulate import scenario_from_config
-    from railradio.nr.workflow import receiver_selection
+    from railradio.nr.engine.simulate import scenario_from_config
+    from railradio.nr.study.fidelity import FidelityRun
+    from railradio.nr.study.workflow import receiver_selection
     from railradio.rng import spawn_key
 
     config = yaml.safe_load((ROOT / "config/config.yaml").read_text(encoding="utf-8"))

@@ -3,7 +3,7 @@ published values on our curves."""
 
 import pytest
 
-from railradio.nr.figures import _source_quantiles, cell_label
+from railradio.nr.study.figures import _source_quantiles, cell_label
 
 
 @pytest.mark.parametrize(

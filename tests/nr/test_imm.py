@@ -8,12 +8,20 @@ import xarray as xr
 from filterpy.kalman import KalmanFilter
 
 from railradio.constants import SPEED_OF_LIGHT_M_S
-from railradio.nr.dynamics import process_noise, transition
-from railradio.nr.ekf import TrackerConfig, run_ekf
-from railradio.nr.imm import ImmConfig, markov_matrix, position_nees, q_for_jump, run_imm, stationary, track_filters
-from railradio.nr.imm_report import change_windows, key_numbers
-from railradio.nr.smoother import rts_smooth
-from railradio.nr.tracking import track
+from railradio.nr.study.imm_report import change_windows, key_numbers
+from railradio.nr.tracking.dynamics import process_noise, transition
+from railradio.nr.tracking.ekf import TrackerConfig, run_ekf
+from railradio.nr.tracking.imm import (
+    ImmConfig,
+    markov_matrix,
+    position_nees,
+    q_for_jump,
+    run_imm,
+    stationary,
+    track_filters,
+)
+from railradio.nr.tracking.smoother import rts_smooth
+from railradio.nr.tracking.track import track
 
 DT = 0.1
 DH = 7.5
@@ -215,7 +223,7 @@ def test_imm_keeps_the_track_the_gated_low_q_ekf_loses():
 
 def test_track_filters_ekf_is_tracks_ekf():
     """The EKF of ``track_filters`` (selection, initial fix, gate, re-acquisition restated)
-    is exactly :func:`railradio.nr.tracking.track`'s on a dataset with a lost stretch."""
+    is exactly :func:`railradio.nr.tracking.track.track`'s on a dataset with a lost stretch."""
     rng = np.random.default_rng(5)
     x, a = _truth([(10.0, 0.5), (10.0, -0.5)], v0=0.0, x0=1200.0)
     rrh_x = np.arange(0.0, 5000.0, 500.0)

@@ -1,12 +1,13 @@
-"""The compiled kernels (railradio.nr.kernels) against the NumPy formulations they replace."""
+"""The compiled kernels (railradio.nr.synthesis.kernels) against the NumPy formulations they replace."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from railradio.nr import kernels
-from railradio.nr.channel import sos_eval, sos_params
+from railradio.nr.channel.tdl import sos_eval, sos_params
+from railradio.nr.receiver import kernels as receiver_kernels
+from railradio.nr.synthesis import kernels
 
 
 def test_sos_taps_match_direct_evaluation():
@@ -107,7 +108,7 @@ def test_add_spill_matches_numpy_form():
 def test_magnitude_stats_match_numpy():
     rng = np.random.default_rng(5)
     c = (rng.standard_normal((9, 50)) + 1j * rng.standard_normal((9, 50))).astype(np.complex64)
-    r, mu, sigma, eta, arg = kernels.magnitude_stats(c, 40)
+    r, mu, sigma, eta, arg = receiver_kernels.magnitude_stats(c, 40)
     a = np.abs(c[:, :40])
     np.testing.assert_allclose(r, a, rtol=1e-6)
     np.testing.assert_allclose(mu, a.mean(axis=1), rtol=1e-6)
@@ -120,7 +121,7 @@ def test_magnitude_stats_match_numpy():
 def test_local_mean_argmax_matches_a_direct_loop(window, guard, k):
     rng = np.random.default_rng(13)
     r = rng.random((4, k)).astype(np.float32)
-    k_best, eta, floor_at = kernels.local_mean_argmax(r, window, guard)
+    k_best, eta, floor_at = receiver_kernels.local_mean_argmax(r, window, guard)
     k = r.shape[1]
     floor = np.empty_like(r, dtype=float)
     for j in range(k):
@@ -144,7 +145,7 @@ def test_at_offsets_is_the_band_limited_interpolant():
     rows = np.array([2, 0, 1])  # rows of p, in any order
     theta = 2 * np.pi * np.outer(offsets[d:], freqs) / n  # the non-negative offsets
     cs_t = np.concatenate([np.cos(theta), np.sin(theta)]).T.astype(np.float32)
-    got = kernels.at_offsets(
+    got = receiver_kernels.at_offsets(
         p, k0, np.exp(2j * np.pi * np.arange(n) / n).astype(np.complex64), np.ascontiguousarray(cs_t), rows
     )
     lam = k0[:, None] + offsets[None, :]  # [3, J]
@@ -159,14 +160,14 @@ def test_cross_spectra_is_the_broadcast_product():
     zf = (rng.standard_normal((5, 16)) + 1j * rng.standard_normal((5, 16))).astype(np.complex64)
     bs = (rng.standard_normal((3, 16)) + 1j * rng.standard_normal((3, 16))).astype(np.complex64)
     out = np.empty((3, 5, 16), dtype=np.complex64)
-    kernels.cross_spectra(zf, bs, out)
+    receiver_kernels.cross_spectra(zf, bs, out)
     np.testing.assert_allclose(out, zf[None, :, :] * bs[:, None, :], rtol=1e-6)
 
 
 def test_ula_gain_closed_form_equals_the_element_sum():
     """The Dirichlet-kernel array factor equals |Σ_n e^{jπnu}|²/N summed element by element,
     including the endfire/broadside points where both sines of the closed form vanish."""
-    from railradio.nr.antenna import ARRAY_NULL_FLOOR, ula_gain
+    from railradio.nr.channel.antenna import ARRAY_NULL_FLOOR, ula_gain
 
     rng = np.random.default_rng(11)
     phi = np.concatenate([rng.uniform(-np.pi, np.pi, 20000), [np.pi / 2, -np.pi / 2, 0.0, 1e-9]])

@@ -7,8 +7,8 @@ import pytest
 import xarray as xr
 
 from railradio.keynumbers import to_latex
-from railradio.nr import loss
-from railradio.nr.keys import key_numbers, sensitivity_key_numbers
+from railradio.nr.study.keys import key_numbers, sensitivity_key_numbers
+from railradio.nr.tracking import loss
 
 
 def _track(err_value: float | np.ndarray, n: int = 200, spacing_m: float = 500.0) -> xr.Dataset:

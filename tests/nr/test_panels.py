@@ -7,13 +7,13 @@ import xarray as xr
 import yaml
 
 from railradio.constants import SPEED_OF_LIGHT_M_S
-from railradio.nr.antenna import RrhArray, TrainArray, facing_panel
-from railradio.nr.ekf import TrackerConfig
-from railradio.nr.epochs import simulate_epochs
-from railradio.nr.geometry import Deployment
-from railradio.nr.link import RadioParams, ShadowingMap, link_budget
-from railradio.nr.simulate import scenario_from_config
-from railradio.nr.tracking import track_setup
+from railradio.nr.channel.antenna import RrhArray, TrainArray, facing_panel
+from railradio.nr.channel.geometry import Deployment
+from railradio.nr.channel.link import RadioParams, ShadowingMap, link_budget
+from railradio.nr.engine.epochs import simulate_epochs
+from railradio.nr.engine.simulate import scenario_from_config
+from railradio.nr.tracking.ekf import TrackerConfig
+from railradio.nr.tracking.track import track_setup
 from railradio.rng import spawn_key
 
 PANELS = (100.0, -100.0)  # an 8-car set, ~200 m

@@ -1,4 +1,4 @@
-"""The nr plan (railradio.nr.plan): read-only, built from a validated config, equal to the
+"""The nr plan (railradio.nr.study.plan): read-only, built from a validated config, equal to the
 helpers it wraps, and built from the cases and map cells the config check merged and
 validated (once per workflow)."""
 
@@ -15,13 +15,13 @@ import yaml
 from railradio.codedeps import script_closure
 from railradio.config import deep_merge, load_schema, validate_config
 from railradio.config_checks import Checked, check_config, main_epochs
-from railradio.nr import cases as nr_cases
-from railradio.nr import reproduction_map as rm
-from railradio.nr.measurement import MEASUREMENT_SETS
-from railradio.nr.plan import CAL_SHARDS, NrPlan, nr_plan, plain
-from railradio.nr.records import RECORDS
-from railradio.nr.simulate import scenario_from_config
-from railradio.nr.workflow import receiver_selection, sim_config
+from railradio.nr.engine.simulate import scenario_from_config
+from railradio.nr.study import cases as nr_cases
+from railradio.nr.study import reproduction_map as rm
+from railradio.nr.study.plan import CAL_SHARDS, NrPlan, nr_plan, plain
+from railradio.nr.study.records import RECORDS
+from railradio.nr.study.workflow import receiver_selection, sim_config
+from railradio.nr.tracking.measurement import MEASUREMENT_SETS
 
 from ..conftest import COMMAND_TIMEOUT_S, ROOT, copy_workflow, workflow_env
 from ..test_codedeps import rule_scripts
@@ -210,16 +210,16 @@ def test_the_plan_reaches_jobs_through_their_params_only():
     assert len(scripts) > 40
     for rule, script in scripts.items():
         reached = script_closure(script)
-        assert "railradio.nr.plan" not in reached and "railradio.config_checks" not in reached, rule
+        assert "railradio.nr.study.plan" not in reached and "railradio.config_checks" not in reached, rule
     for name in ("map", "cases"):
-        assert "src/railradio/nr/plan.py" in RECORDS[name].rule_files
+        assert "src/railradio/nr/study/plan.py" in RECORDS[name].rule_files
 
 
 # The workflow itself: a dry run (the Snakefile parsed, the DAG built) with the two
 # functions that merge and validate counted.
 COUNTED_DRY_RUN = """
 import json, sys
-from railradio.nr import cases, reproduction_map
+from railradio.nr.study import cases, reproduction_map
 calls = {"merged_cases": 0, "cells": 0}
 for module, name in ((cases, "merged_cases"), (reproduction_map, "cells")):
     def counted(*args, _f=getattr(module, name), _name=name, **kwargs):

@@ -4,13 +4,14 @@ detection on noise only against theory."""
 import numpy as np
 import pytest
 
-from railradio.nr.channel import TdlProfile, tdl_profile
-from railradio.nr.correlator import Correlator
-from railradio.nr.numerology import SAMPLE_RATE_HZ
-from railradio.nr.receiver import ReceiverConfig
-from railradio.nr.reference import reference_correlation, reference_received
-from railradio.nr.ssb import qpsk_pool
-from railradio.nr.synthesis import Links, Synthesizer
+from railradio.nr.channel.link import Links
+from railradio.nr.channel.tdl import TdlProfile, tdl_profile
+from railradio.nr.receiver.config import ReceiverConfig
+from railradio.nr.receiver.correlator import Correlator
+from railradio.nr.synthesis.reference import reference_correlation, reference_received
+from railradio.nr.synthesis.synthesizer import Synthesizer
+from railradio.nr.waveform.numerology import SAMPLE_RATE_HZ
+from railradio.nr.waveform.ssb import qpsk_pool
 
 LOS_ONLY = TdlProfile("LOS", 1.0, 0.0, np.zeros(0), np.zeros(0))
 BEAM_SPACING_RAD = np.pi / 64
@@ -51,7 +52,7 @@ def test_noiseless_toa_within_quantization(decimation, delay):
 def test_noiseless_aod_within_the_beam_grid():
     rng = np.random.default_rng(2)
     cfg = ReceiverConfig(decimation=4)
-    from railradio.nr.antenna import RrhArray
+    from railradio.nr.channel.antenna import RrhArray
 
     arr = RrhArray()
     syn = Synthesizer(cfg, LOS_ONLY, qpsk_pool(rng, 16), data_beam="train")

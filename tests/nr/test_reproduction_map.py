@@ -6,8 +6,8 @@ import yaml
 
 from railradio.config import ConfigError, load_schema, validate_config
 from railradio.config_checks import check_config
-from railradio.nr import reproduction_map as rm
-from railradio.nr.geometry import Trajectory
+from railradio.nr.channel.geometry import Trajectory
+from railradio.nr.study import reproduction_map as rm
 from railradio.rng import make_rng
 
 from ..conftest import ROOT

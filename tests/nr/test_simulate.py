@@ -7,8 +7,8 @@ import pytest
 import xarray as xr
 import yaml
 
-from railradio.nr.epochs import shard_epochs, shard_period, simulate_epochs
-from railradio.nr.simulate import scenario_from_config
+from railradio.nr.engine.epochs import shard_epochs, shard_period, simulate_epochs
+from railradio.nr.engine.simulate import scenario_from_config
 
 from ..conftest import ROOT
 
@@ -65,10 +65,10 @@ def test_data_beam_policies_and_geometry_bounded_window():
     import pytest
 
     from railradio.constants import SPEED_OF_LIGHT_M_S
-    from railradio.nr.link import ShadowingMap, link_budget
-    from railradio.nr.numerology import SAMPLE_RATE_HZ
-    from railradio.nr.ssb import qpsk_pool
-    from railradio.nr.synthesis import Synthesizer
+    from railradio.nr.channel.link import ShadowingMap, link_budget
+    from railradio.nr.synthesis.synthesizer import Synthesizer
+    from railradio.nr.waveform.numerology import SAMPLE_RATE_HZ
+    from railradio.nr.waveform.ssb import qpsk_pool
 
     scn = _scenario()
     dep = scn.deployment
@@ -110,9 +110,9 @@ def test_no_data_synthesizes_only_ss_symbols_without_changing_the_burst():
     """data_beam="none" skips the symbols without an SS block; the burst equals the one
     built over every symbol with an all-zero data pool ("train" with zero data), up to the
     float32 rounding of the FFT batch."""
-    from railradio.nr.link import ShadowingMap, link_budget
-    from railradio.nr.ssb import qpsk_pool
-    from railradio.nr.synthesis import Synthesizer
+    from railradio.nr.channel.link import ShadowingMap, link_budget
+    from railradio.nr.synthesis.synthesizer import Synthesizer
+    from railradio.nr.waveform.ssb import qpsk_pool
 
     scn = _scenario()
     dep = scn.deployment

@@ -1,10 +1,10 @@
-"""The RTS smoother (railradio.nr.smoother) against filterpy's, on an EKF-like track."""
+"""The RTS smoother (railradio.nr.tracking.smoother) against filterpy's, on an EKF-like track."""
 
 import numpy as np
 from filterpy.kalman import KalmanFilter
 
-from railradio.nr.dynamics import process_noise, transition
-from railradio.nr.smoother import rts_smooth
+from railradio.nr.tracking.dynamics import process_noise, transition
+from railradio.nr.tracking.smoother import rts_smooth
 
 
 def _filtered(rng, n=400, dt=0.1, q=0.5):

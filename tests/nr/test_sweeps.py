@@ -9,9 +9,9 @@ import pytest
 import xarray as xr
 
 from railradio.constants import SPEED_OF_LIGHT_M_S
-from railradio.nr.clocks import apply_clock_errors, clock_offsets_s
-from railradio.nr.keys import sensitivity_floor_numbers, sensitivity_key_numbers, toa_floor_m
-from railradio.nr.numerology import SAMPLE_RATE_HZ
+from railradio.nr.channel.clocks import apply_clock_errors, clock_offsets_s
+from railradio.nr.study.keys import sensitivity_floor_numbers, sensitivity_key_numbers, toa_floor_m
+from railradio.nr.waveform.numerology import SAMPLE_RATE_HZ
 from railradio.rng import spawn_key
 
 
@@ -117,8 +117,8 @@ def test_sparse_rrhs_at_the_track_start_give_geometric_truth():
     import yaml
 
     from railradio.config import deep_merge
-    from railradio.nr.epochs import simulate_epochs
-    from railradio.nr.simulate import scenario_from_config
+    from railradio.nr.engine.epochs import simulate_epochs
+    from railradio.nr.engine.simulate import scenario_from_config
 
     from ..conftest import ROOT
 
@@ -149,11 +149,11 @@ def _cases_cfg():
 
 
 def test_case_scheduling_reuses_bursts_and_cuts_epochs():
-    from railradio.nr import cases as nc
+    from railradio.nr.study import cases as nc
 
     nr, sens, cases = _cases_cfg()
     n_main = 5775
-    from railradio.nr.epochs import shard_epochs
+    from railradio.nr.engine.epochs import shard_epochs
 
     s0 = shard_epochs(n_main, nr["n_shards"], 0).size  # epochs of the main run's first shard
     assert s0 >= 400
@@ -190,7 +190,7 @@ def test_case_scheduling_reuses_bursts_and_cuts_epochs():
         "results/nr/cases/panels_200m/"
     )
     # the speed case reaches 500 km/h within its epochs
-    from railradio.nr.simulate import scenario_from_config
+    from railradio.nr.engine.simulate import scenario_from_config
 
     traj = scenario_from_config(cases["speed_500"]).trajectory
     _, v, _ = traj.state(np.array([(nc.case_epochs(cases["speed_500"], sens) - 1) * traj.dt_s]))
@@ -200,9 +200,9 @@ def test_case_scheduling_reuses_bursts_and_cuts_epochs():
 def test_fewer_ss_beams_keep_the_burst_pattern_prefix():
     """n_beams 32/16: the first 32/16 block positions of the source pattern, beams spread
     over the same 0..180 deg (the schema allows 2..64)."""
-    from railradio.nr.antenna import RrhArray
-    from railradio.nr.numerology import ssb_first_symbols
-    from railradio.nr.receiver import ReceiverConfig
+    from railradio.nr.channel.antenna import RrhArray
+    from railradio.nr.receiver.config import ReceiverConfig
+    from railradio.nr.waveform.numerology import ssb_first_symbols
 
     full = ssb_first_symbols("source", 64)
     for n in (32, 16):
@@ -217,11 +217,12 @@ def test_clock_offset_on_the_toa_equals_a_shifted_burst_up_to_one_sample(delay, 
     """The tracker-side shortcut of apply_clock_errors against the faithful model: a burst
     synthesized with the delay τ + δ gives the same integer-sample TOA as τ's TOA + δ up
     to one sample (noiseless, one LOS path, decimated receiver)."""
-    from railradio.nr.channel import TdlProfile
-    from railradio.nr.correlator import Correlator
-    from railradio.nr.receiver import ReceiverConfig
-    from railradio.nr.ssb import qpsk_pool
-    from railradio.nr.synthesis import Links, Synthesizer
+    from railradio.nr.channel.link import Links
+    from railradio.nr.channel.tdl import TdlProfile
+    from railradio.nr.receiver.config import ReceiverConfig
+    from railradio.nr.receiver.correlator import Correlator
+    from railradio.nr.synthesis.synthesizer import Synthesizer
+    from railradio.nr.waveform.ssb import qpsk_pool
 
     los = TdlProfile("LOS", 1.0, 0.0, np.zeros(0), np.zeros(0))
     cfg = ReceiverConfig(decimation=4, n_blocks=8)

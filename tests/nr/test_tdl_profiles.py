@@ -4,13 +4,14 @@ synthesis of the NLOS profiles (no LOS tap) against the brute-force reference.""
 import numpy as np
 import pytest
 
-from railradio.nr.channel import tdl_profile
-from railradio.nr.correlator import Correlator
-from railradio.nr.numerology import SAMPLE_RATE_HZ
-from railradio.nr.receiver import ReceiverConfig
-from railradio.nr.reference import reference_correlation, reference_received
-from railradio.nr.ssb import qpsk_pool
-from railradio.nr.synthesis import Links, Synthesizer
+from railradio.nr.channel.link import Links
+from railradio.nr.channel.tdl import tdl_profile
+from railradio.nr.receiver.config import ReceiverConfig
+from railradio.nr.receiver.correlator import Correlator
+from railradio.nr.synthesis.reference import reference_correlation, reference_received
+from railradio.nr.synthesis.synthesizer import Synthesizer
+from railradio.nr.waveform.numerology import SAMPLE_RATE_HZ
+from railradio.nr.waveform.ssb import qpsk_pool
 
 # Independent transcription of TR 38.901 v17.0.0 Tables 7.7.2-1, -2, -3 and -5, every row
 # (normalized delay, power dB), in the tables' order; TDL-E's first row is the specular

@@ -5,11 +5,11 @@ import numpy as np
 import pytest
 from scipy.stats import chi2
 
-from railradio.nr.dynamics import process_noise, transition
-from railradio.nr.ekf import TrackerConfig, run_ekf
-from railradio.nr.geometry import Trajectory
-from railradio.nr.measurement import hx, jacobian
-from railradio.nr.snapshot import snapshot_ls
+from railradio.nr.channel.geometry import Trajectory
+from railradio.nr.tracking.dynamics import process_noise, transition
+from railradio.nr.tracking.ekf import TrackerConfig, run_ekf
+from railradio.nr.tracking.measurement import hx, jacobian
+from railradio.nr.tracking.snapshot import snapshot_ls
 
 RRH = np.array([[0.0, 15.0], [500.0, 15.0], [-500.0, 15.0]])
 DH = 7.5
@@ -126,7 +126,7 @@ def test_trajectory_source_profile():
 
 
 def test_toa_crb_and_peb_against_hand_values():
-    from railradio.nr.bounds import BETA_RMS_HZ, INTEGER_SAMPLE_SIGMA_M, peb_m, toa_crb_s
+    from railradio.nr.tracking.bounds import BETA_RMS_HZ, INTEGER_SAMPLE_SIGMA_M, peb_m, toa_crb_s
 
     assert BETA_RMS_HZ == pytest.approx(8.8e6, rel=0.01)  # docs/model/nr.md §7
     assert INTEGER_SAMPLE_SIGMA_M == pytest.approx(0.352, abs=1e-3)
@@ -142,7 +142,7 @@ def test_pcrb_settles_below_the_snapshot_peb():
     """With the same geometry and error levels, the recursion integrates the epochs: it
     starts at the one-epoch information and settles below the snapshot PEB of every epoch."""
     from railradio.constants import SPEED_OF_LIGHT_M_S
-    from railradio.nr.bounds import pcrb_m, peb_m
+    from railradio.nr.tracking.bounds import pcrb_m, peb_m
 
     n = 200
     xy = [RRH] * n
@@ -159,9 +159,9 @@ def test_toa_crb_counts_the_detected_blocks_against_the_other_ss_blocks():
     """The bound's E/N0 is the sum over the blocks above the detection level of E_b over
     noise plus the other links' SS blocks of the same index; a block below that level adds
     nothing; another link's data beam does not enter (it fills other symbols)."""
-    from railradio.nr.bounds import DETECT_E_OVER_N0, PSS_SSS_SUBCARRIERS, block_e_over_n0, burst_e_over_n0
-    from railradio.nr.numerology import SUBCARRIER_SPACING_HZ
-    from railradio.nr.synthesis import Links
+    from railradio.nr.channel.link import Links
+    from railradio.nr.tracking.bounds import DETECT_E_OVER_N0, PSS_SSS_SUBCARRIERS, block_e_over_n0, burst_e_over_n0
+    from railradio.nr.waveform.numerology import SUBCARRIER_SPACING_HZ
 
     assert 10 * np.log10(DETECT_E_OVER_N0) == pytest.approx(8.75, abs=0.01)
     n0 = 1e-20
@@ -192,7 +192,7 @@ def test_toa_crb_counts_the_detected_blocks_against_the_other_ss_blocks():
 def test_pcrb_true_motion_bound_orders_and_resets():
     """q = 0 (constant acceleration) bounds below any q > 0; an unknown acceleration jump
     raises the bound right after it; a negative q is rejected."""
-    from railradio.nr.bounds import change_epochs, pcrb_m
+    from railradio.nr.tracking.bounds import change_epochs, pcrb_m
 
     n = 300
     xy = [RRH] * n
@@ -233,7 +233,7 @@ def test_distance_dependent_measurement_noise():
 
 
 def test_robust_sigmas_per_distance_bin():
-    from railradio.nr.calibration import robust_sigmas
+    from railradio.nr.tracking.calibration import robust_sigmas
 
     rng = np.random.default_rng(3)
     dist = rng.uniform(0, 1500, 20000)
@@ -254,7 +254,7 @@ def test_robust_sigmas_per_distance_bin():
 def test_select_measurements_equals_nearest_by_full_sort():
     """The windowed nearest-RRH search picks the same columns as a stable argsort over
     every RRH: midpoint ties, ends of the track, far-off and NaN predictions included."""
-    from railradio.nr.candidates import select_measurements
+    from railradio.nr.tracking.candidates import select_measurements
 
     rrh_x = np.arange(87) * 500.0
     rng = np.random.default_rng(7)
@@ -279,7 +279,7 @@ def test_select_measurements_equals_nearest_by_full_sort():
 
 def test_snapshot_batch_equals_one_epoch_at_a_time():
     """snapshot_ls_batch over padded epochs gives each epoch's own fix."""
-    from railradio.nr.snapshot import snapshot_ls_batch
+    from railradio.nr.tracking.snapshot import snapshot_ls_batch
 
     rng = np.random.default_rng(3)
     cfg = TrackerConfig(measurements="aod_toa", sigma_aod_rad=np.radians(1.0), sigma_toa_s=2e-9)
@@ -312,9 +312,9 @@ def test_the_tracker_sees_no_truth():
     stored order of the candidates."""
     import yaml
 
-    from railradio.nr.epochs import simulate_epochs
-    from railradio.nr.simulate import scenario_from_config
-    from railradio.nr.tracking import track
+    from railradio.nr.engine.epochs import simulate_epochs
+    from railradio.nr.engine.simulate import scenario_from_config
+    from railradio.nr.tracking.track import track
     from railradio.rng import spawn_key
 
     from ..conftest import ROOT
@@ -346,7 +346,7 @@ def test_the_tracker_sees_no_truth():
 def test_inlier_sigma_ignores_outliers_a_mad_does_not():
     """40 % of gross errors (another RRH's peak): the inliers' σ is recovered to 3 %, while
     1.4826 · MAD is inflated by more than a third."""
-    from railradio.nr.calibration import inlier_sigma
+    from railradio.nr.tracking.calibration import inlier_sigma
 
     rng = np.random.default_rng(11)
     e = np.concatenate([rng.standard_normal(12000) * 2.0, rng.uniform(-3000, 3000, 8000)])
@@ -358,7 +358,7 @@ def test_inlier_sigma_ignores_outliers_a_mad_does_not():
 
 
 def test_nees_position_is_the_quadratic_form():
-    from railradio.nr.ekf import nees_position
+    from railradio.nr.tracking.ekf import nees_position
 
     rng = np.random.default_rng(2)
     state = rng.standard_normal((5, 6))
@@ -375,7 +375,7 @@ def test_nees_position_is_the_quadratic_form():
 def test_q_search_widens_past_a_winning_edge_and_reports_monotone_costs(monkeypatch):
     """When the grid's edge wins, the calibration tries decades beyond it; a cost that keeps
     falling to the search limit is reported as monotone and on the edge."""
-    from railradio.nr import calibration as cal
+    from railradio.nr.tracking import calibration as cal
 
     monkeypatch.setattr(
         cal,
@@ -397,7 +397,7 @@ def test_q_search_monotone_means_falling_to_the_limit_from_the_grid_edge(monkeyp
     """A cost that wobbles inside the grid but falls at every decade from the grid's edge to
     the search limit is monotone toward the edge (no q identified); a flat cost, whose
     tie-break walks to the lower limit, is on the edge but not monotone."""
-    from railradio.nr import calibration as cal
+    from railradio.nr.tracking import calibration as cal
 
     monkeypatch.setattr(
         cal,

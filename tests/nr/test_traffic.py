@@ -6,16 +6,16 @@ import numpy as np
 import pytest
 import yaml
 
-from railradio.nr.channel import TdlProfile
-from railradio.nr.correlator import Correlator
-from railradio.nr.link import ShadowingMap, link_budget
-from railradio.nr.numerology import SAMPLE_RATE_HZ
-from railradio.nr.receiver import ReceiverConfig
-from railradio.nr.reference import reference_correlation, reference_received
-from railradio.nr.simulate import Synthesis, scenario_from_config
-from railradio.nr.ssb import qpsk_pool
-from railradio.nr.synthesis import Links, Synthesizer
-from railradio.nr.traffic import ServingCell, ServingRule
+from railradio.nr.channel.link import Links, ShadowingMap, link_budget
+from railradio.nr.channel.tdl import TdlProfile
+from railradio.nr.engine.simulate import Synthesis, scenario_from_config
+from railradio.nr.receiver.config import ReceiverConfig
+from railradio.nr.receiver.correlator import Correlator
+from railradio.nr.synthesis.reference import reference_correlation, reference_received
+from railradio.nr.synthesis.synthesizer import Synthesizer
+from railradio.nr.waveform.numerology import SAMPLE_RATE_HZ
+from railradio.nr.waveform.ssb import qpsk_pool
+from railradio.nr.waveform.traffic import ServingCell, ServingRule
 from railradio.rng import spawn_key
 
 from ..conftest import ROOT

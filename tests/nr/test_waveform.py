@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 
 from railradio.nr import pss, sss
-from railradio.nr.numerology import Numerology, ssb_first_symbols
-from railradio.nr.ssb import RANGES, burst_grid, kbin, qpsk_pool, reference_waveform
+from railradio.nr.waveform.numerology import Numerology, ssb_first_symbols
+from railradio.nr.waveform.ssb import RANGES, burst_grid, kbin, qpsk_pool, reference_waveform
 
 # x(0..14) of the PSS m-sequence, worked by hand from x(i+7) = x(i+4) + x(i) mod 2 with
 # [x(0)..x(6)] = [0 1 1 0 1 1 1] (TS 38.211 prints it reversed: [x(6)..x(0)] = [1 1 1 0 1 1 0])

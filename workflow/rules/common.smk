@@ -20,10 +20,16 @@ from railradio.codedeps import script_code_hash
 from railradio.config import load_schema, validate_config
 from railradio.config_checks import check_config
 
+# The repository root: the one place the workflow computes it. This file is
+# <root>/workflow/rules/common.smk; its own directory (not workflow.basedir, the main
+# Snakefile's, which a wrapper such as tests/test_codedeps.py's probe.smk moves) fixes it.
+# The published records (railradio.published) hash their files relative to it.
+REPO_ROOT = Path(workflow.current_basedir).parents[1]
+
 # The schema (types, ranges, a default for every key), then the rules between keys: a bad
 # value stops Snakemake here, naming the key, before any job. The check returns the nr
 # sensitivity cases and map cells it merged and validated; nr.smk plans from them.
-CONFIG_SCHEMA = load_schema(Path(workflow.basedir) / "workflow/schemas/config.schema.yaml")
+CONFIG_SCHEMA = load_schema(REPO_ROOT / "workflow/schemas/config.schema.yaml")
 # A nested value given with --config (nr={...}) reaches the workflow with its leaves as
 # strings, which the schema would reject one by one as "'8' is not of type 'integer'":
 # name the cause and the way that works instead.

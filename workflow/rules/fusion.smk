@@ -12,8 +12,7 @@ FUSION_FIGURE_SWEEP = {
 from railradio.fusion.montecarlo import sweep_points
 
 # the sensitivity modules are left out: they do not change the main sweeps
-FUSION_SENS_MODULES = ("arc.py", "correlated.py", "sensitivity.py", "sensitivity_keys.py",
-                       "sensitivity_figures.py")
+FUSION_SENS_MODULES = ("arc.py", "correlated.py", "sensitivity.py", "sensitivity_keys.py", "sensitivity_figures.py")
 
 register_figures("fusion", [f"fusion_rmse_vs_{n}" for n in FUSION_FIGURE_SWEEP] + ["fusion_sensitivity"])
 KEY_NUMBER_FRAGMENTS.append("results/fusion/key_numbers.json")

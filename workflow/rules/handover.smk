@@ -190,8 +190,9 @@ rule handover_correction:
     output:
         nc="results/handover/correction.nc",
         json="results/handover/correction_key_numbers.json",
-        pdf=report("results/figures/handover_correction.pdf", caption="../report/handover_figures.rst",
-                   category="handover"),
+        pdf=report(
+            "results/figures/handover_correction.pdf", caption="../report/handover_figures.rst", category="handover"
+        ),
         png="results/figures/handover_correction.png",
     params:
         sim=HO_SIM,

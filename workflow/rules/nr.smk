@@ -1,12 +1,12 @@
 # Study `nr`: 5G NR SS-burst positioning of a high-speed train (source 000, docs/model/nr.md).
 # Chain: trajectory -> per-shard channel + burst + per-cell estimates (NetCDF) ->
 # calibration run (noise levels, q) -> EKF tracking per realization -> figures + numbers.
-from railradio.nr import records as nr_records
-from railradio.nr.plan import nr_plan, plain
+from railradio.nr.study import records as nr_records
+from railradio.nr.study.plan import nr_plan, plain
 
 # The config's nr section (validated with every cross-key rule in common.smk:
 # railradio.config_checks), and what the nr rule files derive from it, computed once and
-# read-only (railradio.nr.plan.NrPlan): the sensitivity cases and the map's cells are the
+# read-only (railradio.nr.study.plan.NrPlan): the sensitivity cases and the map's cells are the
 # ones the config check merged and validated. A rule's params get plain dicts and lists
 # (plain): Snakemake compares their repr to decide re-runs.
 NR = config["nr"]
@@ -33,9 +33,7 @@ if NR_PLAN.cases:
     # the cases' paper-scale key numbers are a published record (make records;
     # railradio.published), read while current, else the cases run here: CI's reproduction
     # skips their ~2 000 s of job time; at CI scale (another config) they always run
-    KEY_NUMBER_FRAGMENTS.append(
-        nr_records.CASES.fragment(Path(workflow.basedir), config, "results/nr/cases/key_numbers.json")
-    )
+    KEY_NUMBER_FRAGMENTS.append(nr_records.CASES.fragment(REPO_ROOT, config, "results/nr/cases/key_numbers.json"))
 
 
 wildcard_constraints:

@@ -1,12 +1,12 @@
-# The nr study's shortcuts measured where they run (railradio.nr.fidelity): on paper-scale
+# The nr study's shortcuts measured where they run (railradio.nr.study.fidelity): on paper-scale
 # epochs of one realization of the main run, the production path against the same path with
 # one shortcut replaced by the exact computation, and against the exact computation. Outside
 # `all` (the exact reference costs ~14 s an epoch): target `fidelity`; `make fidelity`
 # publishes its key numbers to paper/fidelity_numbers.json, which the key-number merge reads.
-from railradio.nr import records as nr_records
+from railradio.nr.study import records as nr_records
 
 # the published paper-scale numbers (make fidelity) join every run's key numbers
-if Path(workflow.basedir, nr_records.FIDELITY.numbers_file).exists():
+if (REPO_ROOT / nr_records.FIDELITY.numbers_file).exists():
     KEY_NUMBER_FRAGMENTS.append(nr_records.FIDELITY.numbers_file)
 
 

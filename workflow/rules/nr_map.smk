@@ -1,9 +1,9 @@
-# The reproduction map of the nr study (railradio.nr.reproduction_map): the source's claims
+# The reproduction map of the nr study (railradio.nr.study.reproduction_map): the source's claims
 # for its receiver and ours against the assumptions it leaves open (M_T x data beams, and
 # template x selection on the default bursts), every cell on the same segment of r0 with
 # its own short calibration run. Bursts are re-used wherever only the tracker changes.
-# The cells, their runs and the shards they read: NR_PLAN.map_* (nr.smk; railradio.nr.plan).
-from railradio.nr import records as nr_records
+# The cells, their runs and the shards they read: NR_PLAN.map_* (nr.smk; railradio.nr.study.plan).
+from railradio.nr.study import records as nr_records
 
 register_figures("nr_map", ["nr_reproduction_map"])
 # Its paper-scale key numbers are a published record (make records; railradio.published): the
@@ -11,7 +11,7 @@ register_figures("nr_map", ["nr_reproduction_map"])
 # was published), else the map runs here. CI's reproduction thus skips the map, whose
 # 1 000-epoch segments of 19 cells are about a third of the paper scale's job time; at CI
 # scale (another config) the map always runs.
-KEY_NUMBER_FRAGMENTS.append(nr_records.MAP.fragment(Path(workflow.basedir), config, "results/nr/map/key_numbers.json"))
+KEY_NUMBER_FRAGMENTS.append(nr_records.MAP.fragment(REPO_ROOT, config, "results/nr/map/key_numbers.json"))
 
 
 rule nr_map_shard:

@@ -32,8 +32,9 @@ rule tunnel_order:
     output:
         "results/tunnel/order_{placement}.nc",
     params:
-        cfg=lambda w: channel_config(TUNNEL, "image" + (SIDE_WALL if w.placement == "side_wall" else ""),
-                                     TUNNEL_CHANNEL_KEYS),
+        cfg=lambda w: channel_config(
+            TUNNEL, "image" + (SIDE_WALL if w.placement == "side_wall" else ""), TUNNEL_CHANNEL_KEYS
+        ),
     wildcard_constraints:
         placement="centreline|side_wall",
     log:
@@ -118,9 +119,7 @@ rule tunnel_engines:
 rule tunnel_run:
     """One train type crossing the tunnel: measurements, snapshot fixes, KF, rigid KF, PF."""
     input:
-        lambda w: "results/tunnel/table_{}.nc".format(
-            "source" if SETUPS[w.setup][0] == "source" else TUNNEL["engine"]
-        ),
+        lambda w: "results/tunnel/table_{}.nc".format("source" if SETUPS[w.setup][0] == "source" else TUNNEL["engine"]),
     output:
         "results/tunnel/runs/{train}/{setup}.nc",
     params:

@@ -1,5 +1,5 @@
 """Study ``nr``: positioning a high-speed train from 5G NR SS bursts (source 000)."""
 
-from railradio.nr.sequences import pss, sss
+from railradio.nr.waveform.sequences import pss, sss
 
 __all__ = ["pss", "sss"]

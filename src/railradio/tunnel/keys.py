@@ -7,7 +7,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from railradio.nr import loss
+from railradio.nr.tracking import loss
 from railradio.tunnel.key_specs import (
     DELAY_SPREAD_THRESHOLDS_DB,
     ENGINE_TOL_COHERENT_DB,
@@ -147,7 +147,7 @@ def lost_epochs(err_m: np.ndarray, slot_spacing_m: float, t_s: np.ndarray | None
 def _pooled(out: dict[str, Any], name: str, ds: xr.Dataset | None, var: str = "rep_err", spacing: float = 20.0) -> None:
     """The pooled 95th percentile of ``var`` [realization, epoch] with its Monte Carlo error,
     null (with the lost share beside it) when the track is lost in 1 % of the epochs or more
-    (:data:`railradio.nr.loss.LOST_FRAC_MAX`, the project's rule)."""
+    (:data:`railradio.nr.tracking.loss.LOST_FRAC_MAX`, the project's rule)."""
     if ds is None:
         _put(out, name, None)
         return

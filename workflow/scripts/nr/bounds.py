@@ -7,9 +7,16 @@ import xarray as xr
 
 from railradio.constants import SPEED_OF_LIGHT_M_S
 from railradio.io import write_dataset
-from railradio.nr.bounds import INTEGER_SAMPLE_SIGMA_M, burst_e_over_n0, change_epochs, pcrb_m, peb_m, toa_crb_s
-from railradio.nr.link import ShadowingMap, link_budget
-from railradio.nr.simulate import KEY_SHADOWING, scenario_from_config
+from railradio.nr.channel.link import ShadowingMap, link_budget
+from railradio.nr.engine.simulate import KEY_SHADOWING, scenario_from_config
+from railradio.nr.tracking.bounds import (
+    INTEGER_SAMPLE_SIGMA_M,
+    burst_e_over_n0,
+    change_epochs,
+    pcrb_m,
+    peb_m,
+    toa_crb_s,
+)
 from railradio.rng import spawn_key
 from railradio.workflow import setup_script
 

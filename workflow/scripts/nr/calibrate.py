@@ -1,8 +1,8 @@
 """Adapter: calibration run -> results/nr/calibration.json (noise levels and q)."""
 
 from railradio.io import write_json
-from railradio.nr.runs import calibrate_receivers, point_model, read_shards
-from railradio.nr.simulate import scenario_from_config
+from railradio.nr.engine.simulate import scenario_from_config
+from railradio.nr.study.runs import calibrate_receivers, point_model, read_shards
 from railradio.workflow import setup_script
 
 smk = snakemake  # noqa: F821

@@ -2,8 +2,8 @@
 calibration on the case's epochs, TOAs with the case's clock errors)."""
 
 from railradio.io import write_json
-from railradio.nr.runs import calibrate_receivers, case_estimates, point_model, read_shards
-from railradio.nr.simulate import scenario_from_config
+from railradio.nr.engine.simulate import scenario_from_config
+from railradio.nr.study.runs import calibrate_receivers, case_estimates, point_model, read_shards
 from railradio.workflow import setup_script
 
 smk = snakemake  # noqa: F821

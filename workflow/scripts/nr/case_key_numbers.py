@@ -1,7 +1,7 @@
 """Adapter: sensitivity-case tracks + the main r0 track -> results/nr/cases/key_numbers.json."""
 
 from railradio.io import read_dataset, write_json
-from railradio.nr.keys import sensitivity_floor_numbers, sensitivity_key_numbers
+from railradio.nr.study.keys import sensitivity_floor_numbers, sensitivity_key_numbers
 from railradio.workflow import setup_script
 
 smk = snakemake  # noqa: F821

@@ -2,7 +2,7 @@
 
 import json
 
-from railradio.nr.figures import plot_sweeps
+from railradio.nr.study.figures import plot_sweeps
 from railradio.workflow import setup_script
 
 smk = snakemake  # noqa: F821

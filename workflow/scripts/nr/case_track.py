@@ -4,8 +4,8 @@ tracking on the case's epochs, TOAs with the case's clock errors)."""
 import json
 
 from railradio.io import write_dataset
-from railradio.nr.runs import case_estimates, point_model, read_shards, track_receivers
-from railradio.nr.simulate import scenario_from_config
+from railradio.nr.engine.simulate import scenario_from_config
+from railradio.nr.study.runs import case_estimates, point_model, read_shards, track_receivers
 from railradio.workflow import setup_script
 
 smk = snakemake  # noqa: F821

@@ -1,7 +1,7 @@
 """Adapter: nr intermediates -> all nr figures."""
 
 from railradio.io import read_dataset
-from railradio.nr import figures as f
+from railradio.nr.study import figures as f
 from railradio.workflow import setup_script
 
 smk = snakemake  # noqa: F821

@@ -3,7 +3,7 @@
 import json
 
 from railradio.io import read_dataset, write_json
-from railradio.nr.keys import calibration_key_numbers, key_numbers
+from railradio.nr.study.keys import calibration_key_numbers, key_numbers
 from railradio.workflow import setup_script
 
 smk = snakemake  # noqa: F821

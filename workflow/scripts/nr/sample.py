@@ -3,9 +3,9 @@
 import numpy as np
 
 from railradio.io import write_dataset
-from railradio.nr.cellsearch import warmup_start
-from railradio.nr.epochs import simulate_epochs
-from railradio.nr.simulate import Synthesis, scenario_from_config
+from railradio.nr.engine.epochs import simulate_epochs
+from railradio.nr.engine.simulate import Synthesis, scenario_from_config
+from railradio.nr.receiver.cellsearch import warmup_start
 from railradio.rng import spawn_key
 from railradio.workflow import setup_script
 

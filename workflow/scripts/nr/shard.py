@@ -4,8 +4,8 @@ results/nr/estimates/{real}/s{shard}.nc (nr_shard, nr_cal_shard, nr_case_shard).
 import dataclasses
 
 from railradio.io import write_dataset
-from railradio.nr.epochs import shard_epochs, shard_period, simulate_epochs
-from railradio.nr.simulate import calibration_trajectory, scenario_from_config
+from railradio.nr.engine.epochs import shard_epochs, shard_period, simulate_epochs
+from railradio.nr.engine.simulate import calibration_trajectory, scenario_from_config
 from railradio.rng import spawn_key
 from railradio.workflow import setup_script
 

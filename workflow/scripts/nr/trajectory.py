@@ -4,7 +4,7 @@ import numpy as np
 import xarray as xr
 
 from railradio.io import write_dataset
-from railradio.nr.simulate import scenario_from_config
+from railradio.nr.engine.simulate import scenario_from_config
 from railradio.workflow import setup_script
 
 smk = snakemake  # noqa: F821

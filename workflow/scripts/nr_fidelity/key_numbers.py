@@ -4,13 +4,13 @@ import numpy as np
 import xarray as xr
 
 from railradio.io import read_dataset, write_json
-from railradio.nr.fidelity import comparisons
-from railradio.nr.fidelity_dataset import from_dataset
-from railradio.nr.fidelity_detector import NOISE_ONLY_ID, noise_false_alarms
-from railradio.nr.fidelity_keys import detector_key_numbers, key_numbers
-from railradio.nr.fidelity_stats import summarize
-from railradio.nr.figures import plot_fidelity
-from railradio.nr.simulate import scenario_from_config
+from railradio.nr.engine.simulate import scenario_from_config
+from railradio.nr.study.fidelity import comparisons
+from railradio.nr.study.fidelity_dataset import from_dataset
+from railradio.nr.study.fidelity_detector import NOISE_ONLY_ID, noise_false_alarms
+from railradio.nr.study.fidelity_keys import detector_key_numbers, key_numbers
+from railradio.nr.study.fidelity_stats import summarize
+from railradio.nr.study.figures import plot_fidelity
 from railradio.rng import make_rng, spawn_key
 from railradio.workflow import setup_script
 

@@ -4,10 +4,10 @@ import numpy as np
 import xarray as xr
 
 from railradio.io import read_dataset, write_dataset
-from railradio.nr.bounds import change_epochs
-from railradio.nr.fidelity import FidelityRun, check_production, sample_epochs
-from railradio.nr.fidelity_dataset import to_dataset
-from railradio.nr.simulate import scenario_from_config
+from railradio.nr.engine.simulate import scenario_from_config
+from railradio.nr.study.fidelity import FidelityRun, check_production, sample_epochs
+from railradio.nr.study.fidelity_dataset import to_dataset
+from railradio.nr.tracking.bounds import change_epochs
 from railradio.rng import spawn_key
 from railradio.workflow import setup_script
 

@@ -1,7 +1,7 @@
 """Adapter: results/nr/imm/{real}.nc -> figure nr_imm_lag."""
 
 from railradio.io import read_dataset
-from railradio.nr.imm_report import plot_lag
+from railradio.nr.study.imm_report import plot_lag
 from railradio.workflow import setup_script
 
 smk = snakemake  # noqa: F821

@@ -4,8 +4,8 @@
 import json
 
 from railradio.io import write_dataset
-from railradio.nr.runs import read_shards, track_imm
-from railradio.nr.simulate import scenario_from_config
+from railradio.nr.engine.simulate import scenario_from_config
+from railradio.nr.study.runs import read_shards, track_imm
 from railradio.workflow import setup_script
 
 smk = snakemake  # noqa: F821

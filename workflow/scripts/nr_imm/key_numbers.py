@@ -1,7 +1,7 @@
 """Adapter: results/nr/imm/{real}.nc -> results/nr/imm/key_numbers.json."""
 
 from railradio.io import read_dataset, write_json
-from railradio.nr.imm_report import key_numbers
+from railradio.nr.study.imm_report import key_numbers
 from railradio.workflow import setup_script
 
 smk = snakemake  # noqa: F821

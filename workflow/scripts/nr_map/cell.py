@@ -5,11 +5,11 @@ import numpy as np
 import xarray as xr
 
 from railradio.io import write_dataset
-from railradio.nr.calibration import calibrate, measurement_errors, selected
-from railradio.nr.reproduction_map import MEASUREMENT_SETS
-from railradio.nr.runs import read_shards
-from railradio.nr.simulate import scenario_from_config
-from railradio.nr.tracking import track
+from railradio.nr.engine.simulate import scenario_from_config
+from railradio.nr.study.reproduction_map import MEASUREMENT_SETS
+from railradio.nr.study.runs import read_shards
+from railradio.nr.tracking.calibration import calibrate, measurement_errors, selected
+from railradio.nr.tracking.track import track
 from railradio.workflow import setup_script
 
 smk = snakemake  # noqa: F821

@@ -2,8 +2,8 @@
 
 import json
 
-from railradio.nr.figures import plot_reproduction_map
-from railradio.nr.reproduction_map import cell_receivers, receivers
+from railradio.nr.study.figures import plot_reproduction_map
+from railradio.nr.study.reproduction_map import cell_receivers, receivers
 from railradio.workflow import setup_script
 
 smk = snakemake  # noqa: F821

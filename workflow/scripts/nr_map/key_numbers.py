@@ -1,9 +1,9 @@
 """Adapter: every map cell's tracks -> results/nr/map/key_numbers.json."""
 
 from railradio.io import read_dataset, write_json
-from railradio.nr import loss
-from railradio.nr.keys import SKIP_S
-from railradio.nr.reproduction_map import cell_key_numbers, diagnostic_key_numbers, summary_key_numbers
+from railradio.nr.study.keys import SKIP_S
+from railradio.nr.study.reproduction_map import cell_key_numbers, diagnostic_key_numbers, summary_key_numbers
+from railradio.nr.tracking import loss
 from railradio.rng import make_rng, spawn_key
 from railradio.workflow import setup_script
 

@@ -6,8 +6,8 @@ import dataclasses
 import numpy as np
 
 from railradio.io import write_dataset
-from railradio.nr.epochs import shard_epochs, shard_period, simulate_epochs
-from railradio.nr.simulate import calibration_trajectory, scenario_from_config
+from railradio.nr.engine.epochs import shard_epochs, shard_period, simulate_epochs
+from railradio.nr.engine.simulate import calibration_trajectory, scenario_from_config
 from railradio.rng import spawn_key
 from railradio.workflow import setup_script
 

@@ -1,6 +1,6 @@
 """The burst engine (:class:`railradio.nr.engine.SpectralSynthesis` and
 :class:`railradio.nr.engine.SharedEstimator`) against the study's path
-(:class:`railradio.nr.simulate.Synthesis` and :class:`~railradio.nr.simulate.Estimator`) on
+(:class:`railradio.nr.engine.simulate.Synthesis` and :class:`~railradio.nr.engine.simulate.Estimator`) on
 the same draws: which decisions the change of arithmetic moves (float32 rounding: the front
 end in one spectral pass, the PSS + SSS correlation as the sum of its parts, the
 refinement's grid samples read from the lag grid).
@@ -25,8 +25,8 @@ import yaml
 
 from railradio.nr.engine.estimator import SharedEstimator
 from railradio.nr.engine.frontend import SpectralSynthesis
-from railradio.nr.numerology import SAMPLE_RATE_HZ
-from railradio.nr.simulate import Estimator, Synthesis, scenario_from_config
+from railradio.nr.engine.simulate import Estimator, Synthesis, scenario_from_config
+from railradio.nr.waveform.numerology import SAMPLE_RATE_HZ
 from railradio.rng import spawn_key
 
 AOD_TOL_RAD = 1e-6
@@ -45,7 +45,7 @@ def compare(scn, seed: int, key: tuple[int, ...], epochs: np.ndarray) -> dict:
 
     Parameters
     ----------
-    scn : railradio.nr.simulate.Scenario
+    scn : railradio.nr.engine.simulate.Scenario
         The scenario.
     seed, key : int, tuple of int
         The config seed and the realization's spawn key.

@@ -1,5 +1,5 @@
-"""The receivers of :class:`railradio.nr.simulate.Estimator` on one shared set of
-correlations (:class:`railradio.nr.engine.correlation.SharedCorrelation`): the same cell
+"""The receivers of :class:`railradio.nr.engine.simulate.Estimator` on one shared set of
+correlations (:class:`railradio.nr.receiver.shared.SharedCorrelation`): the same cell
 search, the same receivers and the same epoch logic, each correlation computed once.
 """
 
@@ -7,9 +7,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from railradio.nr.correlator import BlockCorrelation, Correlator
-from railradio.nr.engine.correlation import SharedCorrelation
-from railradio.nr.simulate import Estimator, Scenario
+from railradio.nr.engine.simulate import Estimator, Scenario
+from railradio.nr.receiver.correlator import BlockCorrelation, Correlator
+from railradio.nr.receiver.shared import SharedCorrelation
 
 
 class _Receiver:
@@ -46,7 +46,7 @@ class _Receiver:
 
 
 class SharedEstimator(Estimator):
-    """:class:`railradio.nr.simulate.Estimator` whose receivers and cell search read one
+    """:class:`railradio.nr.engine.simulate.Estimator` whose receivers and cell search read one
     :class:`SharedCorrelation` (burst + deployment + own state -> measurements; no truth).
 
     Parameters
