@@ -52,6 +52,7 @@ def _scn(**joint):
         (120.0, replace(_scn(), execution=replace(EX, t304_s=0.1, monitor_s=3.0, report_delay_s=0.0, rlf_t310_s=0.3))),
         (300.0, replace(_scn(), radio=replace(Scenario().radio, fading="rayleigh", q_out_db=-4.0, q_in_db=-2.0))),
         (200.0, replace(_scn(), radio=replace(Scenario().radio, fading="none"))),
+        (350.0, replace(_scn(), radio=replace(Scenario().radio, sfn_rrhs=4, spacing_m=1000.0, offset_m=50.0))),
         (460.0, _scn(band_fit="offset", measurements="raw", gaph_rule="narrow")),
         (
             250.0,

@@ -198,6 +198,10 @@ def plot_stages_vs_speed(summary: xr.Dataset, pdf_path, png_path=None) -> None:
             ax.set_axis_off()
             continue
         _rate_plot(ax, summary, name, log=True)
+        pairs = zip(*ax.get_legend_handles_labels(), strict=True)
+        handles = [(h, t) for h, t in pairs if t.startswith("none observed")]
+        if handles:  # the ▼ markers explained where they are drawn (the policies: the first panel)
+            ax.legend(*zip(*handles, strict=True), fontsize="x-small", loc="best")
         plotting.log_axis(ax, "y")
         _decades(ax)
         ax.set_ylabel("share of handovers")

@@ -15,7 +15,16 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from railradio.handover.params import Scenario
-from railradio.handover.radio import l3_coefficient_at, l3_filter, mean_rsrp_dbm, shadowing_fields, sinr_db
+from railradio.handover.radio import (
+    ar1_coefficient,
+    ar1_process,
+    l3_coefficient_at,
+    l3_filter,
+    mean_rsrp_dbm,
+    sfn_shadowing,
+    shadowing_fields,
+    sinr_db,
+)
 from railradio.handover.rlm import first_rlf, indications
 from railradio.handover.train import Kinematics, gnss_error_m
 from railradio.rng import make_rng, spawn_key, stable_id
@@ -27,6 +36,10 @@ runs (the weights are never selected on the runs they are evaluated on)."""
 FADING_SUBSTREAM = 1
 """Sub-ID appended to a block's noise key for its fast fading (:meth:`Draws.fading`)."""
 
+SFN_SUBSTREAM = 1
+"""Sub-ID appended to a block's field key for the shadowing of the cells' other RRHs
+(:meth:`Draws.sfn_white`; ``radio.sfn_rrhs`` > 1)."""
+
 
 @dataclass(frozen=True)
 class Draws:
@@ -36,6 +49,7 @@ class Draws:
     meas_white: np.ndarray  # [B, N, 2, K] measurement error per node, link, sample
     gnss_white: np.ndarray  # [B, K]       GNSS/INS error process
     fading_key: tuple | None = None  # (seed, spawn key) of the fast fading at the PRACH occasions
+    sfn_key: tuple | None = None  # (seed, spawn key) of the shadowing of the cells' other RRHs
 
     @property
     def n_runs(self) -> int:
@@ -53,6 +67,15 @@ class Draws:
         white = rng.standard_normal((b_n, n_n, 2, int(n_occasions), 2))
         phase0 = rng.random((b_n, n_n, 2))
         return white, phase0
+
+    def sfn_white(self, n_other: int) -> np.ndarray:
+        """Standard normals of the shadowing fields of each cell's ``n_other`` RRHs beyond the
+        nearest (``radio.sfn_rrhs`` − 1), [B, 2, n_other, G] float32, from their own stream keyed
+        by the block like the nearest RRHs' field (the other draws do not depend on it)."""
+        if self.sfn_key is None:
+            raise ValueError("these draws carry no sfn_key (made without draw_block)")
+        b_n, _, g_n = self.field_white.shape
+        return make_rng(*self.sfn_key).standard_normal((b_n, 2, int(n_other), g_n), dtype=np.float32)
 
 
 def block_keys(speed_kmh: float, block: int, stream: str = "sweep") -> tuple[tuple[int, ...], tuple[int, ...]]:
@@ -114,7 +137,13 @@ def draw_block(
     field_white = rf.standard_normal((n_runs, 2, kin.grid.n), dtype=np.float32)
     meas_white = rn.standard_normal((n_runs, n_nodes, 2, kin.n_samples), dtype=np.float32)
     gnss_white = rn.standard_normal((n_runs, kin.n_samples), dtype=np.float32)
-    return Draws(field_white, meas_white, gnss_white, (int(seed), (*key_noise, FADING_SUBSTREAM)))
+    return Draws(
+        field_white,
+        meas_white,
+        gnss_white,
+        (int(seed), (*key_noise, FADING_SUBSTREAM)),
+        (int(seed), (*key_field, SFN_SUBSTREAM)),
+    )
 
 
 @dataclass
@@ -186,12 +215,14 @@ def build_context(scn: Scenario, kin: Kinematics, draws: Draws, zeta_db: np.ndar
         Standard normals of the block (from :func:`draw_block` with the same ``kin``).
     zeta_db : numpy.ndarray, optional
         A shadowing field [dB] [B, 2, G] on ``kin.grid`` to use instead of the one drawn (a
-        hand-made field for tests; positive = extra loss).
+        hand-made field for tests; positive = extra loss). It is the nearest RRH's: with
+        ``radio.sfn_rrhs`` > 1 the cells' other RRHs keep their drawn fields.
 
     Returns
     -------
     BlockContext
-        ``zeta_db`` shadowing [dB] [B, 2, G]; ``meas_dbm`` raw RSRP measurements [dBm] and
+        ``zeta_db`` shadowing [dB] [B, 2, G] (with ``radio.sfn_rrhs`` > 1 the single-frequency
+        cell's, :func:`railradio.handover.radio.sfn_shadowing`); ``meas_dbm`` raw RSRP measurements [dBm] and
         ``filt_dbm`` L3-filtered RSRP [dBm], both [B, N, 2, K] (link 0 serving, 1 target);
         ``gnss_err_m`` along-track position error [m] [B, K]; ``l3_a`` the L3 filter
         coefficient a [1] at the measurement period.
@@ -214,6 +245,10 @@ def build_context(scn: Scenario, kin: Kinematics, draws: Draws, zeta_db: np.ndar
         zeta = np.asarray(zeta_db, dtype=float)
         if zeta.shape != (draws.n_runs, 2, kin.grid.n):
             raise ValueError(f"zeta_db must be [B, 2, G] = [{draws.n_runs}, 2, {kin.grid.n}], got {zeta.shape}")
+    if rd.sfn_rrhs > 1:  # each cell a single-frequency network: the power sum of its RRHs
+        rho = ar1_coefficient(kin.grid.step_m, rd.shadow_corr_m)
+        other = ar1_process(draws.sfn_white(rd.sfn_rrhs - 1), rho, rd.shadow_sigma_db)
+        zeta = sfn_shadowing(zeta, other, kin.grid, rd)
     idx = kin.grid.index(kin.x_nodes_m)  # [N, K]
     p_s, p_t = mean_rsrp_dbm(kin.x_nodes_m, rd)  # [N, K]
     mean = np.stack([p_s, p_t], axis=1)  # [N, 2, K]

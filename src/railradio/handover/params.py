@@ -83,6 +83,11 @@ class Radio:
         the RRHs' antennas point along the track, one each way (railway practice): TR 38.901
         Table 7.3-1's pattern, 65° half-power beamwidth, 30 dB floor [3GPP]; ``tx_power_dbm``
         is the EIRP on boresight; ``None``: omnidirectional.
+    sfn_rrhs
+        RRHs per cell [ours: 1]: with K > 1 each cell is a single-frequency network of K RRHs
+        every ``spacing_m`` along the line, one cell ID (TS 36.101 Annex B.3A, HST-SFN): the
+        serving cell's at x_s − k·L_BS, the target's at x_t + k·L_BS (k < K), each with its own
+        shadowing field; a cell's local mean is the power sum of its RRHs'.
     fading, fading_k_db
         fast fading where one look decides (the PRACH occasions of the ``stages`` rule,
         :mod:`railradio.handover.fading`): ``rician`` with K-factor ``fading_k_db``
@@ -112,6 +117,7 @@ class Radio:
     fading_k_db: float = 7.0
     antenna_hpbw_deg: float | None = 65.0
     antenna_max_loss_db: float = 30.0
+    sfn_rrhs: int = 1
 
     def __post_init__(self) -> None:
         _check("spacing_m", self.spacing_m, 10.0, 1e5)
@@ -138,6 +144,8 @@ class Radio:
         if self.antenna_hpbw_deg is not None:
             _check("antenna_hpbw_deg", self.antenna_hpbw_deg, 1.0, 180.0)
         _check("antenna_max_loss_db", self.antenna_max_loss_db, 0.0, 60.0)
+        if not isinstance(self.sfn_rrhs, int) or isinstance(self.sfn_rrhs, bool) or not 1 <= self.sfn_rrhs <= 8:
+            raise ValueError(f"sfn_rrhs must be an integer in 1..8, got {self.sfn_rrhs!r}")
 
     @property
     def x_serving_m(self) -> float:

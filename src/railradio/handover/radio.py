@@ -64,6 +64,61 @@ def mean_rsrp_dbm(x_m, radio: Radio) -> tuple[np.ndarray, np.ndarray]:
     return radio.tx_power_dbm - path_loss_db(d_s, radio) - a_s, radio.tx_power_dbm - path_loss_db(d_t, radio) - a_t
 
 
+def sfn_rrh_positions_m(radio: Radio) -> tuple[np.ndarray, np.ndarray]:
+    """Along-track positions [m] of every RRH of the serving and the target cell, nearest
+    first: x_s − k·L_BS and x_t + k·L_BS for k < ``sfn_rrhs`` (TS 36.101 Annex B.3A's
+    HST-SFN: RRHs every D_s along the line with one cell ID). With one RRH per cell, just
+    x_s and x_t."""
+    k = np.arange(radio.sfn_rrhs)
+    return radio.x_serving_m - k * radio.spacing_m, radio.x_target_m + k * radio.spacing_m
+
+
+def rrh_rsrp_dbm(x_m, radio: Radio) -> np.ndarray:
+    """Mean received power P_tx − L(d) − A(φ) of every RRH of both cells at x [dBm]:
+    shape [..., 2, K] (link 0 serving, 1 target; RRH 0 the nearest, :func:`sfn_rrh_positions_m`)."""
+    x = np.asarray(x_m, dtype=float)[..., None, None]
+    pos = np.stack(sfn_rrh_positions_m(radio))  # [2, K]
+    d = np.hypot(x - pos, radio.offset_m)
+    return radio.tx_power_dbm - path_loss_db(d, radio) - pattern_loss_db(x - pos, radio)
+
+
+def sfn_shadowing(zeta_db: np.ndarray, zeta_other_db: np.ndarray, grid: ShadowGrid, radio: Radio) -> np.ndarray:
+    """The shadowing [dB] on the grid that puts each cell's local mean at the power sum of its
+    RRHs: ζ_eff = P_0 − 10 log10 Σ_k 10^((P_k − ζ_k)/10), with P_k the mean power of RRH k at
+    the grid point. Its nearest RRH's mean minus ζ_eff is then the cell's local mean, so every
+    reader of ``mean_rsrp_dbm − ζ`` sees the single-frequency cell (a position takes its
+    nearest grid point's sum: the other RRHs' means, ≥ 10·n·log10(3) dB below the nearest's
+    at the overlap centre, move by < 0.01 dB within half a grid step).
+
+    Parameters
+    ----------
+    zeta_db : numpy.ndarray
+        Shadowing of the nearest RRH of each cell [dB], [..., 2, G].
+    zeta_other_db : numpy.ndarray
+        Shadowing of the cells' other RRHs [dB], [..., 2, K − 1, G] (RRH k + 1 at index k).
+    grid : ShadowGrid
+        The grid of both.
+    radio : Radio
+        The radio links (``sfn_rrhs`` = K).
+
+    Returns
+    -------
+    numpy.ndarray
+        ζ_eff [dB], [..., 2, G]; ``zeta_db`` itself when K = 1.
+    """
+    k_n = radio.sfn_rrhs
+    if zeta_other_db.shape[-2:] != (k_n - 1, grid.n) or zeta_other_db.shape[:-2] != zeta_db.shape[:-1]:
+        raise ValueError(
+            f"zeta_other_db must be [..., 2, {k_n - 1}, {grid.n}] beside zeta_db {zeta_db.shape}, "
+            f"got {zeta_other_db.shape}"
+        )
+    if k_n == 1:
+        return zeta_db
+    p = np.moveaxis(rrh_rsrp_dbm(grid.x_m, radio), 0, -1)  # [2, K, G]
+    rel = (p[:, 1:] - p[:, :1]) - zeta_other_db + zeta_db[..., None, :]  # RRH k against the nearest [dB]
+    return zeta_db - 10.0 * np.log10(1.0 + np.sum(10.0 ** (rel / 10.0), axis=-2))
+
+
 def noise_power_dbm(radio: Radio) -> float:
     """Thermal noise −174 dBm/Hz + 10 log10(B) + NF [dBm]."""
     return THERMAL_NOISE_DBM_HZ + 10.0 * math.log10(radio.bandwidth_hz) + radio.noise_figure_db

@@ -36,18 +36,22 @@ class _Run:
         rho = math.exp(-g.step_m / rd.shadow_corr_m)
         sig = rd.shadow_sigma_db
         innov = sig * math.sqrt(1.0 - rho * rho)
-        fields = []
-        for j in range(2):
-            w = draws.field_white[b, j]
+
+        def ar1(w) -> list[float]:
             z = [0.0] * g.n
             z[0] = sig * float(w[0])
             for n in range(1, g.n):
                 z[n] = rho * z[n - 1] + innov * float(w[n])
-            fields.append(z)
+            return z
+
+        fields = [ar1(draws.field_white[b, j]) for j in range(2)]
         c = rd.shadow_cross_corr
         if c != 0.0:
             fields[1] = [c * a + math.sqrt(1 - c * c) * t for a, t in zip(fields[0], fields[1], strict=True)]
         self.zeta = fields
+        # a single-frequency cell's other RRHs (radio.sfn_rrhs > 1): their own fields
+        other = draws.sfn_white(rd.sfn_rrhs - 1)[b] if rd.sfn_rrhs > 1 else np.zeros((2, 0, g.n))
+        self.zeta_other = [[ar1(other[j, k]) for k in range(other.shape[1])] for j in range(2)]
         # GNSS/INS error
         e = [0.0] * self.k_n
         if tr.gnss_sigma_m > 0:
@@ -125,11 +129,20 @@ class _Run:
         float
             ζ [dB], positive = extra loss.
         """
-        n = round((x - self.g_x0) / self.g_dx)
-        return self.zeta[j][min(max(n, 0), self.g_n - 1)]
+        n = min(max(round((x - self.g_x0) / self.g_dx), 0), self.g_n - 1)
+        z0 = self.zeta[j][n]
+        if not self.zeta_other[j]:
+            return z0
+        # a single-frequency cell: the nearest RRH's mean minus this is the power sum of its RRHs
+        xg = self.g_x0 + n * self.g_dx
+        p0 = self.rrh_rsrp(j, 0, xg)
+        total = sum(
+            10 ** ((self.rrh_rsrp(j, k + 1, xg) - zk[n] - p0 + z0) / 10) for k, zk in enumerate(self.zeta_other[j])
+        )
+        return z0 - 10 * math.log10(1 + total)
 
     def mean_rsrp(self, j: int, x: float) -> float:
-        """Mean received power P_tx − L(d) of link ``j`` at ``x``, shadowing excluded.
+        """Mean received power P_tx − L(d) of link ``j``'s nearest RRH at ``x``, shadowing excluded.
 
         Parameters
         ----------
@@ -143,8 +156,14 @@ class _Run:
         float
             Power [dBm]; d is the distance from x to the link's RRH, h off the track.
         """
+        return self.rrh_rsrp(j, 0, x)
+
+    def rrh_rsrp(self, j: int, k: int, x: float) -> float:
+        """Mean received power P_tx − L(d) − A(φ) of RRH ``k`` of link ``j``'s cell at ``x``
+        [dBm]: RRH 0 the nearest; the serving cell's others behind it, the target's ahead,
+        one spacing apart (``radio.sfn_rrhs``)."""
         rd = self.scn.radio
-        xj = 0.0 if j == 0 else rd.spacing_m
+        xj = -k * rd.spacing_m if j == 0 else (k + 1) * rd.spacing_m
         d = math.hypot(x - xj, rd.offset_m)
         pattern = 0.0
         if rd.antenna_hpbw_deg is not None:  # along the track, φ off boresight
