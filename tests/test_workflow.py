@@ -93,7 +93,9 @@ def test_reproduction_reads_the_nr_records_only_while_they_are_current(tmp_path)
     wd = _copy_workflow(tmp_path)
     counts = numbers_jobs()
     assert counts["nr_shard"] == 12 and counts["nr_imm"] == 3
-    assert not [r for r in counts if r.startswith(("nr_map_", "nr_case_"))], counts
+    # the map's and the cases' runs stay out; the map dataset is built from the record's fragment
+    assert not [r for r in counts if r.startswith(("nr_map_", "nr_case_")) and r != "nr_map_dataset"], counts
+    assert counts["nr_map_dataset"] == 1
     cfg = wd / "config/config.yaml"
     text = cfg.read_text(encoding="utf-8")
     cfg.write_text(text.replace("n_boot: 1000", "n_boot: 999"), encoding="utf-8")
@@ -102,7 +104,8 @@ def test_reproduction_reads_the_nr_records_only_while_they_are_current(tmp_path)
     assert not [r for r in counts if r.startswith("nr_case_")], counts
     cfg.write_text(text.replace("epochs: 2500 ", "epochs: 2400 "), encoding="utf-8")
     counts = numbers_jobs()
-    assert counts["nr_case_key_numbers"] == 1 and not [r for r in counts if r.startswith("nr_map_")], counts
+    assert counts["nr_case_key_numbers"] == 1
+    assert not [r for r in counts if r.startswith("nr_map_") and r != "nr_map_dataset"], counts
 
 
 def test_slurm_profile_dry_run_resolves(tmp_path):
@@ -202,8 +205,9 @@ def test_intermediates_are_self_explaining(ci_run):
     map_paths = sorted((ci_run / "results/nr/map").rglob("*.nc"))
     # the map's 19 cells: 16 with their own segment bursts (one shard each at CI scale: 15
     # M_T x data cells and the SSS template; the default and the selection-only cells read
-    # others'), 17 calibration runs (one per burst set), 19 tracks
-    assert len(map_paths) == 16 + 17 + 19
+    # others'), 17 calibration runs (one per burst set), 19 tracks, and the map as one dataset
+    assert len(map_paths) == 16 + 17 + 19 + 1
+    assert ci_run / "results/nr/map/reproduction_map.nc" in map_paths
     paths += nr_paths + case_paths + map_paths
     for study, n_min in (("handover", 10), ("tunnel", 10), ("sens/fusion", 5), ("chain", 1)):
         found = sorted((ci_run / "results" / study).rglob("*.nc"))
