@@ -12,7 +12,8 @@ choice of what to keep is measured; and the band's exact completion by its symbo
 (railradio.nr.synthesis.band_edges: ``exact_path_ms.band_edges``, and ``band_edges_vs_band`` against
 what the full band adds to the production's time); and one burst through the reference path
 (railradio.nr.engine.simulate) against the burst engine the study runs (railradio.nr.engine:
-``burst_ms.*``, ``engine_speedup``).
+``burst_ms.*``, ``engine_speedup``); and the reproduction map's amplitude variants from one
+synthesis of the links' unit parts against each variant's own (``variants.*``).
 
     python benchmarks/bench_nr.py --out results/benchmarks/nr_bench.json
 """
@@ -137,6 +138,66 @@ def burst_engine(config: str, n_epochs: int) -> dict:
     return out
 
 
+def variant_bursts(config: str, n_epochs: int) -> dict:
+    """The reproduction map's amplitude variants (every M_T of ``nr.map.rrh_elements`` × every
+    data rule of ``nr.map.data``: 16 at the shipped config) from one synthesis of the links'
+    unit parts (railradio.nr.engine.variants.VariantSynthesis) against each variant's own
+    synthesis (railradio.nr.engine.SpectralSynthesis), on the same consecutive paper-scale
+    epochs of r0, alternated; process time per epoch of the bursts on the lag grid (no
+    receivers): the parts (once per epoch), each variant's weighing, edges and front end, and
+    the direct synthesis per variant; ``variants.break_even`` is the variant count from
+    which the parts pay."""
+    import copy
+
+    from railradio.nr.engine import SpectralSynthesis
+    from railradio.nr.engine.variants import VariantSynthesis
+    from railradio.rng import spawn_key
+
+    with open(config, encoding="utf-8") as fh:
+        cfg = yaml.safe_load(fh)
+    nr = cfg["nr"]
+    scns = []
+    for m_t in nr["map"]["rrh_elements"]:
+        for over in nr["map"]["data"].values():
+            c = copy.deepcopy(nr)
+            c["antenna"]["rrh_elements"] = m_t
+            c["traffic"].update(over)
+            scns.append(scenario_from_config(c))
+    key = spawn_key("nr", 0)
+    vs = VariantSynthesis(scns, cfg["seed"], key)
+    own = [SpectralSynthesis(s, cfg["seed"], key) for s in scns]
+    t_parts = t_each = t_direct = 0.0
+    for i, e in enumerate(range(2500, 2500 + n_epochs + 1)):
+        t0 = time.process_time()
+        vs(e)
+        t1 = time.process_time()
+        for o in own:
+            o(e)
+        t2 = time.process_time()
+        if i:  # the first epoch warms the kernels and caches up
+            t_parts += t1 - t0
+            t_direct += t2 - t1
+    # the parts alone: the same epochs again, one variant (what a variant adds is the rest)
+    one = VariantSynthesis(scns[:1], cfg["seed"], key)
+    for i, e in enumerate(range(2500, 2500 + n_epochs + 1)):
+        t0 = time.process_time()
+        one(e)
+        if i:
+            t_each += time.process_time() - t0
+    k = len(scns)
+    per_variant = (t_parts - t_each) / (k - 1) / n_epochs
+    shared = t_each / n_epochs - per_variant
+    direct = t_direct / n_epochs / k
+    return {
+        "variants.n": k,
+        "variants.parts_ms": 1e3 * shared,
+        "variants.per_variant_ms": 1e3 * per_variant,
+        "variants.direct_ms_per_variant": 1e3 * direct,
+        "variants.speedup": t_direct / t_parts,
+        "variants.break_even": shared / (direct - per_variant),
+    }
+
+
 def fft_backends(repeat: int = 30) -> dict:
     """The receiver's FFT batches (the correlator's 64 × 1232 blocks, the synthesizer's
     457 × 128 symbols; complex64, one thread) through scipy.fft, which the receiver uses,
@@ -258,6 +319,7 @@ def main() -> None:
     report["exact_spill_cost_ratio"] = report["malloc_tuned_ms_per_burst"] / report["wrapped_spill_ms_per_burst"]
     report.update(fft_backends())
     report.update(burst_engine(args.config, max(args.epochs, 2) * 5))
+    report.update(variant_bursts(args.config, 3))
     report.update(exact_costs(args.config, args.exact_epochs))
     emit(report, args.out)
 
