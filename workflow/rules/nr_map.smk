@@ -1,7 +1,8 @@
 # The reproduction map of the nr study (railradio.nr.study.reproduction_map): the source's claims
 # for its receiver and ours against the assumptions it leaves open (M_T x data beams, and
 # template x selection on the default bursts), every cell on the same segment of r0 with
-# its own short calibration run. Bursts are re-used wherever only the tracker changes.
+# its own short calibration run. Bursts are re-used wherever only the tracker changes, and
+# synthesized once per epoch for the cells that differ only in amplitudes or receivers.
 # The cells, their runs and the shards they read: NR_PLAN.map_* (nr.smk; railradio.nr.study.plan).
 from railradio.nr.study import records as nr_records
 
@@ -14,28 +15,62 @@ register_figures("nr_map", ["nr_reproduction_map"])
 KEY_NUMBER_FRAGMENTS.append(nr_records.MAP.fragment(REPO_ROOT, config, "results/nr/map/key_numbers.json"))
 
 
-rule nr_map_shard:
-    """A map cell's bursts and estimates: a shard of the segment (r0's key) or its short
-    calibration run (its own trajectory at speed and key)."""
+# The cells owning each run's bursts (the others read another cell's or the main run's): one
+# job per run and shard makes all their estimate shards, those differing only in amplitudes
+# (M_T, the data's beam and load) or receivers from one synthesis per epoch
+# (railradio.nr.engine.variants.simulate_cells). "_none": no owner, a path nothing asks for.
+MAP_OWNERS = {
+    real: [
+        c
+        for c in NR_PLAN.map_cells
+        if any(f"results/nr/map/{c}/estimates/{real}/" in p for i in NR_PLAN.map_inputs.values() for p in i[real])
+    ]
+    or ["_none"]
+    for real in ("r0", "cal")
+}
+
+
+rule nr_map_segment_shard:
+    """A shard of the segment (r0's key) for every cell owning its bursts."""
     output:
-        "results/nr/map/{cell}/estimates/{real}/s{shard}.nc",
+        expand("results/nr/map/{cell}/estimates/r0/s{{shard}}.nc", cell=MAP_OWNERS["r0"]),
     params:
-        sim=lambda w: plain(NR_PLAN.map_burst_config[w.cell]),
+        sims=[plain(NR_PLAN.map_burst_config[c]) for c in MAP_OWNERS["r0"] if c in NR_PLAN.map_cells],
+        cells=MAP_OWNERS["r0"],
+        real="r0",
         seed=config["seed"],
-        epochs=lambda w: plain(NR_PLAN.map_epochs[w.real]),
-        n_shards=lambda w: NR_PLAN.map_n_shards[w.real],
-        calibration=lambda w: plain(NR_PLAN.map_calibration) if w.real == "cal" else None,
-        rid=lambda w: NR_PLAN.map_rid[w.real],
-    wildcard_constraints:
-        cell=r"[a-z][a-z0-9_]*",
-        real="r0|cal",
+        epochs=plain(NR_PLAN.map_epochs["r0"]),
+        n_shards=NR_PLAN.map_n_shards["r0"],
+        calibration=None,
+        rid=NR_PLAN.map_rid["r0"],
     log:
-        "results/logs/nr/map/{cell}_shard_{real}_s{shard}.log",
+        "results/logs/nr/map/segment_s{shard}.log",
     benchmark:
-        "results/benchmarks/nr/map/{cell}_shard_{real}_s{shard}.tsv"
-    resources:
-        mem_mb=3000,
-        runtime=60,
+        "results/benchmarks/nr/map/segment_s{shard}.tsv"
+    conda:
+        "../envs/railradio.yaml"
+    script:
+        "../scripts/nr_map/shard.py"
+
+
+rule nr_map_calibration_shard:
+    """The cells' short calibration run (its own trajectory at speed and key) for every cell
+    owning its bursts."""
+    output:
+        expand("results/nr/map/{cell}/estimates/cal/s{{shard}}.nc", cell=MAP_OWNERS["cal"]),
+    params:
+        sims=[plain(NR_PLAN.map_burst_config[c]) for c in MAP_OWNERS["cal"] if c in NR_PLAN.map_cells],
+        cells=MAP_OWNERS["cal"],
+        real="cal",
+        seed=config["seed"],
+        epochs=plain(NR_PLAN.map_epochs["cal"]),
+        n_shards=NR_PLAN.map_n_shards["cal"],
+        calibration=plain(NR_PLAN.map_calibration),
+        rid=NR_PLAN.map_rid["cal"],
+    log:
+        "results/logs/nr/map/calibration_s{shard}.log",
+    benchmark:
+        "results/benchmarks/nr/map/calibration_s{shard}.tsv"
     conda:
         "../envs/railradio.yaml"
     script:

@@ -12,6 +12,10 @@ receiver over the (epoch, candidate) pairs both lists share: detected-block coun
 selection rule.
 
     python -m railradio.nr.engine.equivalence --config config/config.yaml --first 1500 --epochs 300 --out eq.json
+
+The reproduction map's cells that share one synthesis per epoch, each synthesized on its
+own against :class:`railradio.nr.engine.variants.VariantSynthesis` (:func:`compare_variants`):
+``python -m railradio.nr.study.map_equivalence``.
 """
 
 from __future__ import annotations
@@ -85,28 +89,97 @@ def compare(scn, seed: int, key: tuple[int, ...], epochs: np.ndarray) -> dict:
         mn = new(int(e), b.z, b.s_min)
         cost["study"] += t1 - t0
         cost["engine"] += time.process_time() - t1
-        common = np.intersect1d(mo.cand, mn.cand)
-        lists += int(not np.array_equal(mo.cand, mn.cand))
-        io = np.array([int(np.flatnonzero(mo.cand == c)[0]) for c in common], dtype=np.int64)
-        in_ = np.array([int(np.flatnonzero(mn.cand == c)[0]) for c in common], dtype=np.int64)
-        for j, n in enumerate(names):
-            c = count[n]
-            c["pairs"] += common.size
-            c["detections_changed"] += int(np.sum(mo.n_detected[j, io] != mn.n_detected[j, in_]))
-            to, tn = mo.toa_s[j, io] * SAMPLE_RATE_HZ, mn.toa_s[j, in_] * SAMPLE_RATE_HZ
-            c["toa_changed"] += int(np.sum(~((to == tn) | (np.isnan(to) & np.isnan(tn)))))
-            ao, an = mo.aod_rad[j, io], mn.aod_rad[j, in_]
-            c["aod_changed"] += int(np.sum(~((np.abs(ao - an) <= AOD_TOL_RAD) | (np.isnan(ao) & np.isnan(an)))))
-            po, pn = _selected(mo, j), _selected(mn, j)
-            for r in sel[n]:
-                sel[n][r] += int(po[r] != pn[r])
-    n_e = epochs.size
+        lists += _count(mo, mn, names, count, sel)
+    return _shares(epochs.size, lists, names, count, sel) | {
+        "ms_per_epoch": {k: 1e3 * v / epochs.size for k, v in cost.items()}
+    }
+
+
+def _count(mo, mn, names, count, sel) -> int:
+    """Add what differs between two estimators' measurements of one epoch to ``count`` and
+    ``sel``; 1 when their neighbour lists differ."""
+    common = np.intersect1d(mo.cand, mn.cand)
+    io = np.array([int(np.flatnonzero(mo.cand == c)[0]) for c in common], dtype=np.int64)
+    in_ = np.array([int(np.flatnonzero(mn.cand == c)[0]) for c in common], dtype=np.int64)
+    for j, n in enumerate(names):
+        c = count[n]
+        c["pairs"] += common.size
+        c["detections_changed"] += int(np.sum(mo.n_detected[j, io] != mn.n_detected[j, in_]))
+        to, tn = mo.toa_s[j, io] * SAMPLE_RATE_HZ, mn.toa_s[j, in_] * SAMPLE_RATE_HZ
+        c["toa_changed"] += int(np.sum(~((to == tn) | (np.isnan(to) & np.isnan(tn)))))
+        ao, an = mo.aod_rad[j, io], mn.aod_rad[j, in_]
+        c["aod_changed"] += int(np.sum(~((np.abs(ao - an) <= AOD_TOL_RAD) | (np.isnan(ao) & np.isnan(an)))))
+        po, pn = _selected(mo, j), _selected(mn, j)
+        for r in sel[n]:
+            sel[n][r] += int(po[r] != pn[r])
+    return int(not np.array_equal(mo.cand, mn.cand))
+
+
+def _shares(n_e, lists, names, count, sel) -> dict:
+    """The counts as shares: of the shared pairs, and of the epochs for the selections."""
     out = {"epochs": int(n_e), "lists_changed": lists / n_e}
     for n in names:
         p = max(count[n]["pairs"], 1)
         out[n] = {"pairs": count[n]["pairs"]} | {k: v / p for k, v in count[n].items() if k != "pairs"}
         out[n]["selection_changed"] = {r: v / n_e for r, v in sel[n].items()}
-    out["ms_per_epoch"] = {k: 1e3 * v / n_e for k, v in cost.items()}
+    return out
+
+
+def compare_variants(scns, seed: int, key: tuple[int, ...], epochs: np.ndarray) -> dict:
+    """Each amplitude variant's own synthesis (:class:`SpectralSynthesis`) against the
+    variants' one synthesis (:class:`railradio.nr.engine.variants.VariantSynthesis`), each
+    with its own receivers (:class:`SharedEstimator`), on consecutive ``epochs``: what
+    differs, per variant, counted as :func:`compare` counts it.
+
+    Parameters
+    ----------
+    scns : sequence of Scenario
+        The variants (:func:`railradio.nr.engine.variants.check_variants`).
+    seed, key : int, tuple of int
+        The config seed and the realization's spawn key.
+    epochs : numpy.ndarray of int
+        Consecutive epoch indices.
+
+    Returns
+    -------
+    dict
+        ``epochs``; per variant index (str) the shares of :func:`compare`; ``ms_per_epoch``
+        of each path (all variants, synthesis and receivers, process time).
+
+    Raises
+    ------
+    ValueError
+        When ``epochs`` are not consecutive, or from ``check_variants``.
+    """
+    from railradio.nr.engine.variants import VariantSynthesis
+
+    epochs = np.asarray(epochs, dtype=np.int64)
+    if np.any(np.diff(epochs) != 1):
+        raise ValueError("epochs must be consecutive")
+    vs = VariantSynthesis(scns, seed, key)
+    own = [SpectralSynthesis(s, seed, key) for s in scns]
+    old = [SharedEstimator(s, on_lag_grid=True) for s in scns]
+    new = [SharedEstimator(s, on_lag_grid=True) for s in scns]
+    for est in old + new:
+        est.start(int(epochs[0]))
+    names = [[n for n, _, _ in est.receivers] for est in old]
+    kinds = ("pairs", "detections_changed", "toa_changed", "aod_changed")
+    count = [{n: dict.fromkeys(kinds, 0) for n in nm} for nm in names]
+    sel = [{n: {r: 0 for r in ("ss_rsrp", "peak", "best_score")} for n in nm} for nm in names]
+    lists, cost = [0] * len(scns), {"own": 0.0, "variants": 0.0}
+    for e in epochs:
+        t0 = time.process_time()
+        mo = [est(int(e), b.z, b.s_min) for est, b in zip(old, [o(int(e)) for o in own], strict=True)]
+        t1 = time.process_time()
+        mn = [est(int(e), b.z, b.s_min) for est, b in zip(new, vs(int(e)), strict=True)]
+        cost["own"] += t1 - t0
+        cost["variants"] += time.process_time() - t1
+        for i in range(len(scns)):
+            lists[i] += _count(mo[i], mn[i], names[i], count[i], sel[i])
+    out: dict = {"epochs": int(epochs.size)}
+    for i in range(len(scns)):
+        out[str(i)] = _shares(epochs.size, lists[i], names[i], count[i], sel[i])
+    out["ms_per_epoch"] = {k: 1e3 * v / epochs.size for k, v in cost.items()}
     return out
 
 
@@ -120,8 +193,8 @@ def main() -> None:  # pragma: no cover - command line
     a = ap.parse_args()
     with open(a.config, encoding="utf-8") as fh:
         cfg = yaml.safe_load(fh)
-    scn = scenario_from_config(cfg["nr"])
-    res = compare(scn, cfg["seed"], spawn_key("nr", a.realization), np.arange(a.first, a.first + a.epochs))
+    epochs, key = np.arange(a.first, a.first + a.epochs), spawn_key("nr", a.realization)
+    res = compare(scenario_from_config(cfg["nr"]), cfg["seed"], key, epochs)
     text = json.dumps(res, indent=2)
     if a.out:
         with open(a.out, "w", encoding="utf-8") as fh:

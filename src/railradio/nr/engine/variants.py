@@ -16,9 +16,13 @@ import dataclasses
 from collections.abc import Sequence
 
 import numpy as np
+import xarray as xr
 
+from railradio.nr.engine.epochs import PROGRESS_EVERY_S, _Progress, simulate_epochs
+from railradio.nr.engine.estimates_dataset import EpochRecord, estimates_dataset
+from railradio.nr.engine.estimator import SharedEstimator
 from railradio.nr.engine.frontend import SpectralSynthesis
-from railradio.nr.engine.simulate import KEY_EPOCH, KEY_POOL, Burst, Scenario
+from railradio.nr.engine.simulate import KEY_EPOCH, KEY_POOL, Burst, Scenario, scenario_from_config
 from railradio.nr.receiver.frontend import front_end
 from railradio.nr.synthesis.beams import at_train_mask, symbol_gains
 from railradio.nr.synthesis.edge_parts import EdgeParts
@@ -187,3 +191,145 @@ class VariantSynthesis:
             for r in range(links.n):
                 data[r] = True if at_train[r] else draws[r]["busy_u"] < scn.load
         return np.ascontiguousarray(np.stack([g, g * data], axis=1), dtype=np.float32)
+
+
+MIN_GROUP = 4
+"""Fewest variants run together by :func:`variant_groups`: the parts pay from 3.2 variants
+(``bench_nr``'s ``variants.break_even``, 2026-12-06), so a group of four or more is cheaper
+than its variants' own syntheses."""
+
+
+def _partition(scns: dict[str, Scenario]) -> list[list[str]]:
+    """Names of ``scns`` in groups of amplitude variants (:func:`check_variants`), in their
+    order, first come first grouped."""
+    groups: list[list[str]] = []
+    for name, scn in scns.items():
+        for g in groups:
+            try:
+                check_variants([scns[g[0]], scn])
+            except ValueError:
+                continue
+            g.append(name)
+            break
+        else:
+            groups.append([name])
+    return groups
+
+
+def variant_groups(configs: dict[str, dict], min_group: int = MIN_GROUP) -> list[list[str]]:
+    """Split named nr configs into groups of amplitude variants (:func:`check_variants`), each
+    group in the configs' order, first come first grouped; configs in groups smaller than
+    ``min_group`` are left out (they run on their own).
+
+    Parameters
+    ----------
+    configs : dict of str to dict
+        Name -> an ``nr`` config section (as :func:`railradio.nr.engine.simulate.scenario_from_config` takes it).
+    min_group : int
+        The smallest group returned.
+
+    Returns
+    -------
+    list of list of str
+        The groups' names.
+    """
+    groups = _partition({name: scenario_from_config(cfg) for name, cfg in configs.items()})
+    return [g for g in groups if len(g) >= min_group]
+
+
+def simulate_cells(
+    scns: dict[str, Scenario], epochs: np.ndarray, seed: int, key: tuple[int, ...], min_group: int = MIN_GROUP
+) -> dict[str, xr.Dataset]:
+    """The estimates of several scenarios on the same epochs and key: each group of at least
+    ``min_group`` amplitude variants from one synthesis per epoch
+    (:func:`simulate_variant_epochs`), any other scenario on its own
+    (:func:`railradio.nr.engine.epochs.simulate_epochs`).
+
+    Parameters
+    ----------
+    scns : dict of str to Scenario
+        Name -> scenario.
+    epochs : array_like of int
+        Epoch indices, strictly increasing.
+    seed, key : int, tuple of int
+        Config seed and the realization's spawn key.
+    min_group : int
+        The fewest variants synthesized together.
+
+    Returns
+    -------
+    dict of str to xarray.Dataset
+        Name -> its estimates, in the order of ``scns``.
+
+    Raises
+    ------
+    ValueError
+        When ``epochs`` is not strictly increasing.
+    """
+    out: dict[str, xr.Dataset] = {}
+    for group in _partition(scns):
+        if len(group) >= min_group:
+            out.update(zip(group, simulate_variant_epochs([scns[g] for g in group], epochs, seed, key), strict=True))
+        else:
+            out.update({g: simulate_epochs(scns[g], epochs, seed, key) for g in group})
+    return {name: out[name] for name in scns}
+
+
+def simulate_variant_epochs(
+    scns: Sequence[Scenario],
+    epochs: np.ndarray,
+    seed: int,
+    key: tuple[int, ...],
+    progress_every_s: float = PROGRESS_EVERY_S,
+) -> list[xr.Dataset]:
+    """:func:`railradio.nr.engine.epochs.simulate_epochs` of each variant, from one synthesis
+    per epoch (:class:`VariantSynthesis`), each variant with its own receivers and state.
+
+    Parameters
+    ----------
+    scns : sequence of Scenario
+        The variants (:func:`check_variants`).
+    epochs : array_like of int
+        Epoch indices, strictly increasing.
+    seed, key : int, tuple of int
+        Config seed and the realization's spawn key.
+    progress_every_s : float
+        Longest wall time between two progress lines, s.
+
+    Returns
+    -------
+    list of xarray.Dataset
+        One estimates dataset per variant, as ``simulate_epochs`` returns it.
+
+    Raises
+    ------
+    ValueError
+        When ``epochs`` is not strictly increasing, the variants' receivers restart at
+        different epochs, or from :func:`check_variants`.
+    """
+    epochs = np.asarray(epochs, dtype=np.int64)
+    if np.any(np.diff(epochs) <= 0):
+        raise ValueError("epochs must be strictly increasing")
+    vs = VariantSynthesis(scns, seed, key)
+    ests = [SharedEstimator(s, on_lag_grid=True) for s in vs.scns]
+    recs = [
+        EpochRecord.empty(len(est.receivers), epochs.size, min(s.cell_search.n_neighbours, s.deployment.n_rrh))
+        for s, est in zip(vs.scns, ests, strict=True)
+    ]
+    progress, bursts = _Progress(epochs.size, progress_every_s), 0
+    for i, e in enumerate(epochs):
+        starts = {est.start(int(e)) for est in ests}
+        if len(starts) > 1:
+            raise ValueError(f"epoch {e}: the variants' receivers restart at different epochs {sorted(starts)}")
+        for w in range(starts.pop(), int(e)):  # warm-up: the cell searches' state at e
+            for est, b in zip(ests, vs(w), strict=True):
+                est(w, b.z, b.s_min, report=False)
+            bursts += 1
+        for s, est, rec, b in zip(vs.scns, ests, recs, vs(int(e)), strict=True):
+            rec.record(i, int(e), b, est(int(e), b.z, b.s_min), s.deployment)
+        bursts += 1
+        progress(i + 1, bursts)
+    return [
+        estimates_dataset(s, epochs, [name for name, _, _ in est.receivers], rec)
+        for s, est, rec in zip(vs.scns, ests, recs, strict=True)
+    ]

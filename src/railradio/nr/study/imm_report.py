@@ -1,5 +1,6 @@
 """Key numbers ``nr.track.{ekf,imm,rts}.*`` and the figure ``nr_imm_lag`` of the
-tracking-that-does-not-lag study (docs/model/nr.md §6): the source's EKF, the IMM and the RTS
+tracking-that-does-not-lag study (docs/model/nr.md §6): the gated EKF (the source's
+eq. 10–14 on the robust receiver's measurements, with our χ² gate), the IMM and the RTS
 smoother around the trajectory's acceleration changes.
 
 The lag is measured two ways over the ``window_s`` after each change (all changes and
@@ -176,7 +177,7 @@ def _filter_keys(out: dict[str, Any], runs: list[xr.Dataset], f: str, window_s: 
     (``window_s``) and NEES."""
     w = f"{window_s:g} s"
     who = {
-        "ekf": "the source's EKF (robust receiver, AOD+TOA, gated)",
+        "ekf": "the gated EKF (robust receiver, AOD+TOA; the source's eq. 10-14 with our gate)",
         "imm": "the IMM (same measurements and gate)",
         "rts": "the RTS-smoothed EKF (offline)",
     }[f]
