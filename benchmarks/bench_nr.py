@@ -233,6 +233,7 @@ def main() -> None:
     ap.add_argument(
         "--exact-epochs", type=int, default=3, help="epochs of the fidelity paths (the exact reference costs ~6 s each)"
     )
+    ap.add_argument("--variant-epochs", type=int, default=3, help="epochs of the map's variants from one synthesis")
     ap.add_argument("--out", default=None)
     args = ap.parse_args()
     with open(args.config, encoding="utf-8") as fh:
@@ -319,7 +320,7 @@ def main() -> None:
     report["exact_spill_cost_ratio"] = report["malloc_tuned_ms_per_burst"] / report["wrapped_spill_ms_per_burst"]
     report.update(fft_backends())
     report.update(burst_engine(args.config, max(args.epochs, 2) * 5))
-    report.update(variant_bursts(args.config, 3))
+    report.update(variant_bursts(args.config, args.variant_epochs))
     report.update(exact_costs(args.config, args.exact_epochs))
     emit(report, args.out)
 

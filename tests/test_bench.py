@@ -28,6 +28,8 @@ def test_bench_nr_smoke(tmp_path):
             "2",
             "--exact-epochs",
             "1",
+            "--variant-epochs",
+            "1",
             "--out",
             str(out),
         ],
@@ -51,6 +53,9 @@ def test_bench_nr_smoke(tmp_path):
         "burst_ms.engine.total",
         "engine_speedup",
         "engine_speedup_receivers",
+        "variants.parts_ms",
+        "variants.per_variant_ms",
+        "variants.speedup",
     ):
         assert math.isfinite(rep[key]) and rep[key] > 0, key
     shares = [rep[f"project_share_{k}"] for k in ("link", "synthesis_and_channel", "correlation")]
