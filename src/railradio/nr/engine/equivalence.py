@@ -38,10 +38,28 @@ AOD_TOL_RAD = 1e-6
 by ~1e-7 rad)."""
 
 
+SELECTIONS = ("ss_rsrp", "peak", "best_score")
+"""The cell-selection rules whose picks are compared."""
+
+
 def _selected(m, j: int) -> dict[str, int]:
     """The RRH each selection rule picks for receiver ``j`` (-1: none)."""
     rows = {"ss_rsrp": m.ss_rsrp_db, "peak": m.peak[j], "best_score": m.best_score[j]}
     return {r: int(m.cand[np.nanargmax(v)]) if np.isfinite(v).any() else -1 for r, v in rows.items()}
+
+
+def _consecutive(epochs) -> np.ndarray:
+    """``epochs`` as int64, checked consecutive (ValueError otherwise)."""
+    epochs = np.asarray(epochs, dtype=np.int64)
+    if np.any(np.diff(epochs) != 1):
+        raise ValueError("epochs must be consecutive")
+    return epochs
+
+
+def _tally(names) -> tuple[dict, dict]:
+    """Empty counts per receiver name: of the shared pairs and of the selections."""
+    kinds = ("pairs", "detections_changed", "toa_changed", "aod_changed")
+    return {n: dict.fromkeys(kinds, 0) for n in names}, {n: dict.fromkeys(SELECTIONS, 0) for n in names}
 
 
 def compare(scn, seed: int, key: tuple[int, ...], epochs: np.ndarray) -> dict:
@@ -69,16 +87,13 @@ def compare(scn, seed: int, key: tuple[int, ...], epochs: np.ndarray) -> dict:
     ValueError
         When ``epochs`` are not consecutive.
     """
-    epochs = np.asarray(epochs, dtype=np.int64)
-    if np.any(np.diff(epochs) != 1):
-        raise ValueError("epochs must be consecutive")
+    epochs = _consecutive(epochs)
     syn, spectral = Synthesis(scn, seed, key), SpectralSynthesis(scn, seed, key)
     old, new = Estimator(scn), SharedEstimator(scn, on_lag_grid=True)
     names = [n for n, _, _ in old.receivers]
     old.start(int(epochs[0]))
     new.start(int(epochs[0]))
-    count = {n: {"pairs": 0, "detections_changed": 0, "toa_changed": 0, "aod_changed": 0} for n in names}
-    sel = {n: {r: 0 for r in ("ss_rsrp", "peak", "best_score")} for n in names}
+    count, sel = _tally(names)
     lists, cost = 0, {"study": 0.0, "engine": 0.0}
     for e in epochs:
         t0 = time.process_time()
@@ -153,9 +168,7 @@ def compare_variants(scns, seed: int, key: tuple[int, ...], epochs: np.ndarray) 
     """
     from railradio.nr.engine.variants import VariantSynthesis
 
-    epochs = np.asarray(epochs, dtype=np.int64)
-    if np.any(np.diff(epochs) != 1):
-        raise ValueError("epochs must be consecutive")
+    epochs = _consecutive(epochs)
     vs = VariantSynthesis(scns, seed, key)
     own = [SpectralSynthesis(s, seed, key) for s in scns]
     old = [SharedEstimator(s, on_lag_grid=True) for s in scns]
@@ -163,9 +176,8 @@ def compare_variants(scns, seed: int, key: tuple[int, ...], epochs: np.ndarray) 
     for est in old + new:
         est.start(int(epochs[0]))
     names = [[n for n, _, _ in est.receivers] for est in old]
-    kinds = ("pairs", "detections_changed", "toa_changed", "aod_changed")
-    count = [{n: dict.fromkeys(kinds, 0) for n in nm} for nm in names]
-    sel = [{n: {r: 0 for r in ("ss_rsrp", "peak", "best_score")} for n in nm} for nm in names]
+    tallies = [_tally(nm) for nm in names]
+    count, sel = [t[0] for t in tallies], [t[1] for t in tallies]
     lists, cost = [0] * len(scns), {"own": 0.0, "variants": 0.0}
     for e in epochs:
         t0 = time.process_time()

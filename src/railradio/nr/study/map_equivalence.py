@@ -19,7 +19,7 @@ import yaml
 from railradio.nr.engine.equivalence import compare_variants
 from railradio.nr.engine.simulate import Scenario, scenario_from_config
 from railradio.nr.engine.variants import variant_groups
-from railradio.nr.study.reproduction_map import burst_config
+from railradio.nr.study.reproduction_map import burst_config, calibration_owner
 from railradio.rng import spawn_key
 
 
@@ -44,10 +44,9 @@ def map_variants(cfg: dict, schema: dict) -> tuple[list[Scenario], list[str]]:
 
     validate_config(cfg, schema)
     cells = check_config(cfg, schema).nr_map_cells
-    configs = {c: burst_config(v) for c, v in cells.items()}
-    distinct = {c: v for c, v in configs.items() if next(d for d in configs if configs[d] == v) == c}
-    group = max(variant_groups(distinct), key=len, default=[])
-    return [scenario_from_config(configs[c]) for c in group], group
+    owners = {c: burst_config(v) for c, v in cells.items() if calibration_owner(c, cells) == c}
+    group = max(variant_groups(owners), key=len, default=[])
+    return [scenario_from_config(owners[c]) for c in group], group
 
 
 def main(argv: list[str] | None = None) -> None:  # pragma: no cover - command line
