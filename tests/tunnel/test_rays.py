@@ -284,3 +284,58 @@ def test_bad_arguments_raise():
         lift(image_families(RECT, 2), OFFSETS, LAM, CONCRETE_900MHZ, "circular")
     with pytest.raises(ValueError, match="divide"):
         offset_grid_m(0.3, 100.0, 20.0)
+
+
+def _far_slope_db_per_km(tun, lo_m, hi_m):
+    """Least-squares decay of one slot's modal local mean in the circle over beat-length
+    windows centred from lo_m to hi_m [dB/km]."""
+    from railradio.tunnel.modes import circle_modal_gain
+
+    lb = beat_length_m(tun, LAM)
+    centres = np.arange(lo_m, hi_m + 1e-9, lb / 4.0)
+    x = np.arange(lo_m - lb / 2.0, hi_m + lb / 2.0, 0.293)
+    p = np.abs(circle_modal_gain(tun, x, LAM, CONCRETE_900MHZ)) ** 2
+    db = [10 * np.log10(p[np.abs(x - c) <= lb / 2.0].mean()) for c in centres]
+    return -np.polyfit(centres / 1e3, db, 1)[0]
+
+
+def test_circle_modes_carry_marcatili_schmeltzer_losses():
+    # each mode's vector parts decay as Marcatili & Schmeltzer's EH11, TE01, TM01 (dB = 8.686 Np);
+    # off the vertical diameter the vertical field J1 cos(phi) is half TE01 and half EH21,
+    # J1 sin(phi) half TM01 and half EH21 (the same phase constant)
+    from railradio.tunnel.materials import circular_attenuation_db_per_m
+    from railradio.tunnel.modes import circle_modes
+
+    a = CIRCLE.diameter_m / 2.0
+    off = Tunnel(shape="circle", slot_z_m=1.0, rx_z_m=1.0)
+    m = circle_modes(off, LAM, CONCRETE_900MHZ)
+    db = {k: circular_attenuation_db_per_m(LAM, a, k) for k in ("EH11", "TE01", "TM01")}
+    first = np.argmin(np.where(m["l"] == 0, m["u"], np.inf))
+    assert 8.686 * m["alpha"][first] == pytest.approx([db["EH11"]] * 2, rel=1e-3)
+    l1 = np.flatnonzero((m["l"] == 1) & (m["u"] < 3.9))
+    assert sorted(8.686 * m["alpha"][l1, 0]) == pytest.approx(sorted([db["TE01"], db["TM01"]]), rel=1e-3)
+    np.testing.assert_allclose(m["share"].sum(axis=1), 1.0)
+    # on the vertical diameter (the paper's slot and receiver) TE01 carries no vertical field
+    on = circle_modes(CIRCLE, LAM, CONCRETE_900MHZ)
+    assert not np.any(np.isclose(8.686 * on["alpha"][:, 0], db["TE01"], rtol=1e-3))
+    with pytest.raises(ValueError, match="circular"):
+        circle_modes(RECT, LAM, CONCRETE_900MHZ)
+
+
+def test_circle_far_field_tends_to_its_least_attenuated_mode():
+    # the modal sum's far decay never beats the least-attenuated mode the field excites, and
+    # tends to it: EH11 on the vertical diameter (the paper's geometry, measured 2.88 dB/km
+    # over 1.5-5 km, 2.79 for EH11 alone), TE01 (the lowest of all modes) once the slot and the
+    # receiver leave it and TE01 carries vertical field; a scalar model with one averaged loss
+    # per mode would tend to EH11 in both
+    from railradio.tunnel.materials import circular_attenuation_db_per_m
+
+    a = CIRCLE.diameter_m / 2.0
+    eh11 = circular_attenuation_db_per_m(LAM, a, "EH11") * 1e3
+    te01 = circular_attenuation_db_per_m(LAM, a, "TE01") * 1e3
+    near = _far_slope_db_per_km(CIRCLE, 1500.0, 5000.0)
+    assert eh11 <= near <= eh11 + 0.3
+    assert _far_slope_db_per_km(CIRCLE, 25000.0, 30000.0) == pytest.approx(eh11, abs=0.03)
+    off = Tunnel(shape="circle", length_m=80000.0, slot_z_m=1.0, rx_z_m=1.0)
+    far = _far_slope_db_per_km(off, 60000.0, 70000.0)
+    assert te01 <= far <= te01 + 0.05

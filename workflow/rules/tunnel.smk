@@ -6,7 +6,7 @@ from railradio.tunnel.sensitivity import sensitivity_cases
 from railradio.tunnel.study import SETUPS, SIDE_WALL, TABLES, channel_config
 
 TUNNEL = config["tunnel"]
-TUNNEL_TABLES = [n for n in TABLES if SIDE_WALL not in n]  # image (square), sbr (circle), source (the source's model)
+TUNNEL_TABLES = [n for n in TABLES if SIDE_WALL not in n]  # image (square), source (the source's model)
 TUNNEL_SIDE_WALL = TUNNEL["engine"] + SIDE_WALL  # the engine's channel with the cable on the side wall
 TUNNEL_TRAINS = list(TUNNEL["trains"])
 TUNNEL_SETUPS = list(SETUPS)

@@ -115,11 +115,13 @@ def moving_mean(a: np.ndarray, n: int, mirror_start: bool = False) -> np.ndarray
 
 
 def beat_length_m(tunnel: Tunnel, wavelength_m: float) -> float:
-    """Beat length of the two lowest modes EH11 and EH12 of the rectangular guide across
-    its larger side a: 2π / (β11 - β12) with β_mn ≈ k - (π²/2k)(m²/w² + n²/h²)
-    (Emslie, Lagace & Strong 1975), i.e. 8 a² / (3 λ) [m]."""
-    a = max(tunnel.width_m, tunnel.height_m)
-    return 8.0 * a * a / (3.0 * wavelength_m)
+    """Beat length 2π / (β11 - β12) of the two lowest modes EH11 and EH12 [m]: across the larger
+    side a of the rectangle β_mn ≈ k - (π²/2k)(m²/w² + n²/h²) (Emslie, Lagace & Strong 1975),
+    i.e. 8 a² / (3 λ); in the circle of radius a β_1m ≈ k - u_1m²/(2 k a²), u_1m the zeros of
+    J_0 (Marcatili & Schmeltzer 1964), i.e. 8 π² a² / (λ (u_12² - u_11²))."""
+    if tunnel.shape == "circle":
+        return 2.0 * np.pi**2 * tunnel.diameter_m**2 / (wavelength_m * (5.520078110286311**2 - 2.404825557695773**2))
+    return 8.0 * max(tunnel.width_m, tunnel.height_m) ** 2 / (3.0 * wavelength_m)
 
 
 @njit(cache=True, nogil=True)

@@ -1,6 +1,7 @@
-"""The ray engines and the channel table checked: image method vs SBR at fixed offsets, one
-slot's far decay against the modal attenuation of the square and the circle, and whether the
-table reaches far enough (its cut-off)."""
+"""The ray engines and the channel table checked: image method vs SBR in the square at fixed
+offsets, one slot's far decay against the lossy modal sum of the square and of the circle
+(where the retired SBR engine is measured against it), and whether the table reaches far
+enough (its cut-off)."""
 
 from __future__ import annotations
 
@@ -12,7 +13,7 @@ import xarray as xr
 from railradio.tunnel.channel import beat_length_m, coherent_gain_by_order, offset_grid_m, received, tabulate
 from railradio.tunnel.lifting import lift
 from railradio.tunnel.materials import circular_attenuation_db_per_m, eh11_attenuation_db_per_m
-from railradio.tunnel.modes import rect_modal_gain
+from railradio.tunnel.modes import circle_modal_gain, circle_modes, rect_modal_gain
 from railradio.tunnel.rays import image_families
 from railradio.tunnel.study import cable_from_config, eps_from_config, families, local_mean_window, tunnel_from_config
 
@@ -125,14 +126,62 @@ def far_decay(cfg: dict[str, Any]) -> xr.Dataset:
     )
 
 
-def far_decay_circle(cfg: dict[str, Any], sample_m: float = 1.0) -> dict[str, float]:
-    """The circular engine (SBR, the configured polarization rule) checked far from the slot
-    against an independent reference: one slot's local mean averaged over windows of the
-    square's beat length (as :func:`far_decay`; samples ``sample_m`` apart), its slope over
-    ``rays.far_decay_m`` at ``max_order`` (the reflection product interpolated in sin b as
-    in the tables), against Marcatili & Schmeltzer's attenuation of
-    EH11 and TE01 in a lossy circular guide of the tunnel's radius (TE01, the least
-    attenuated mode, bounds every mode's decay from below).
+def modal_near_check(cfg: dict[str, Any], order: int, reach_m: float = 600.0, step_m: float = 0.04) -> dict[str, float]:
+    """Where the square's modal sum stops being its field: one slot's local mean (the
+    coherent power averaged over ``rays.local_mean_wavelengths``, consecutive windows from
+    the slot to ``reach_m``) from the image method at ``order`` and from the lossy EH_mn
+    modal sum (:func:`railradio.tunnel.modes.rect_modal_gain`), their largest difference in
+    the first window and beyond it.  Near the slot the steep rays meet the lining far from
+    grazing, where the modes' perturbative losses do not hold: rays are needed there.
+
+    Parameters
+    ----------
+    cfg : dict
+        The ``tunnel`` section of the configuration (``geometry``, ``cable``, ``wall``,
+        ``rays.local_mean_wavelengths``).
+    order : int
+        Reflection order of the image method (the table's).
+    reach_m : float
+        Offset up to which the windows run [m].
+    step_m : float
+        Offset sample spacing [m].
+
+    Returns
+    -------
+    dict
+        ``window_m`` (the local-mean window) [m], ``first_window_diff_db`` (|modes - rays| in
+        the window at the slot) and ``beyond_max_diff_db`` (the largest |modes - rays| of the
+        later windows) [dB].
+
+    Raises
+    ------
+    ValueError
+        When the configuration is invalid for the tunnel, cable or image method.
+    """
+    tun = tunnel_from_config(cfg, "rect")
+    lam = cable_from_config(cfg).wavelength_m
+    eps = eps_from_config(cfg)
+    lw = local_mean_window(cfg)
+    x = np.arange(0.0, reach_m, step_m) + step_m / 2.0
+    rays = np.abs(coherent_gain_by_order(image_families(tun, order), x, lam, eps, "paraxial").sum(axis=0)) ** 2
+    modes = np.abs(rect_modal_gain(tun, x, lam, eps)) ** 2
+    win = np.floor(x / lw).astype(int)
+    full = win < int(reach_m // lw)
+    diff = np.abs(
+        10 * np.log10(np.bincount(win[full], modes[full]) / np.bincount(win[full], rays[full]))
+    )  # equal counts per window
+    return {"window_m": lw, "first_window_diff_db": float(diff[0]), "beyond_max_diff_db": float(diff[1:].max())}
+
+
+def far_decay_circle(cfg: dict[str, Any], sample_m: float = 0.293) -> xr.Dataset:
+    """The circle's far field: one slot's local mean from the lossy modes of the circular
+    guide (:func:`railradio.tunnel.modes.circle_modal_gain`, Marcatili & Schmeltzer 1964),
+    averaged over windows of the circle's EH11-EH12 beat length centred every quarter beat
+    length over ``rays.far_decay_m`` (as :func:`far_decay` in the square), its least-squares
+    slope, against the single modes' attenuation (EH11, and TE01, the least attenuated of
+    all); beside it the SBR engine's same statistic (the configured polarization rule, the
+    reflection product interpolated in sin b as in the tables) and its largest difference
+    from the modal one, the check that retired SBR in the circle (docs/model/tunnel.md §2.2).
 
     Parameters
     ----------
@@ -145,10 +194,13 @@ def far_decay_circle(cfg: dict[str, Any], sample_m: float = 1.0) -> dict[str, fl
 
     Returns
     -------
-    dict
-        ``slope_db_per_km`` (least-squares decay of the window means) [dB/km],
-        ``eh11_db_per_km`` and ``te01_db_per_km`` (the modes' attenuation in the circular
-        guide of the tunnel's radius) [dB/km], ``n_families`` (SBR ray families) [1].
+    xarray.Dataset
+        Over ``circle_centre_m`` (window centre, offset from the slot) [m]:
+        ``circle_modal_local_mean_db`` and ``circle_sbr_local_mean_db`` (unit EIRP) [dB].
+        Attributes ``beat_length_m`` [m], ``modal_slope_db_per_km``, ``sbr_slope_db_per_km``,
+        ``eh11_db_per_km``, ``te01_db_per_km`` [dB/km], ``sbr_modal_max_diff_db`` (largest
+        |SBR - modes| window mean) [dB], ``n_modes`` (modes summed), ``n_families`` (SBR ray
+        families) [1].
 
     Raises
     ------
@@ -159,20 +211,41 @@ def far_decay_circle(cfg: dict[str, Any], sample_m: float = 1.0) -> dict[str, fl
     tun = tunnel_from_config(cfg, "circle")
     lam = cable_from_config(cfg).wavelength_m
     eps = eps_from_config(cfg)
-    lb = beat_length_m(tunnel_from_config(cfg, "rect"), lam)
+    lb = beat_length_m(tun, lam)
     lo, hi = (float(v) for v in r["far_decay_m"])
     centres = np.arange(lo, hi + 1e-9, lb / 4.0)
     x = np.arange(lo - lb / 2.0, hi + lb / 2.0, sample_m)
     fam = families(cfg, "circle", "sbr", r["max_order"])
-    p = np.abs(coherent_gain_by_order(fam, x, lam, eps, r["sbr_polarization"]).sum(axis=0)) ** 2
-    lm_db = _window_means_db(x, p, centres, lb)
+    p_sbr = np.abs(coherent_gain_by_order(fam, x, lam, eps, r["sbr_polarization"]).sum(axis=0)) ** 2
+    sbr_db = _window_means_db(x, p_sbr, centres, lb)
+    modal_db = _window_means_db(x, np.abs(circle_modal_gain(tun, x, lam, eps)) ** 2, centres, lb)
     radius = tun.diameter_m / 2.0
-    return {
-        "slope_db_per_km": float(-np.polyfit(centres / 1e3, lm_db, 1)[0]),
-        "eh11_db_per_km": circular_attenuation_db_per_m(lam, radius, "EH11", eps) * 1e3,
-        "te01_db_per_km": circular_attenuation_db_per_m(lam, radius, "TE01", eps) * 1e3,
-        "n_families": len(fam),
-    }
+    dims = ("circle_centre_m",)
+    return xr.Dataset(
+        {
+            "circle_modal_local_mean_db": (
+                dims,
+                modal_db,
+                {"units": "dB", "long_name": "one slot's local mean in the circle, lossy modal sum (beat windows)"},
+            ),
+            "circle_sbr_local_mean_db": (
+                dims,
+                sbr_db,
+                {"units": "dB", "long_name": "the same window means of the SBR engine in the circle (retired)"},
+            ),
+        },
+        coords={"circle_centre_m": (dims, centres, {"units": "m", "long_name": "window centre, offset from the slot"})},
+        attrs={
+            "beat_length_m": lb,
+            "modal_slope_db_per_km": float(-np.polyfit(centres / 1e3, modal_db, 1)[0]),
+            "sbr_slope_db_per_km": float(-np.polyfit(centres / 1e3, sbr_db, 1)[0]),
+            "sbr_modal_max_diff_db": float(np.max(np.abs(sbr_db - modal_db))),
+            "eh11_db_per_km": circular_attenuation_db_per_m(lam, radius, "EH11", eps) * 1e3,
+            "te01_db_per_km": circular_attenuation_db_per_m(lam, radius, "TE01", eps) * 1e3,
+            "n_modes": len(circle_modes(tun, lam, eps)["beta"]),
+            "n_families": len(fam),
+        },
+    )
 
 
 def cutoff_check(cfg: dict[str, Any], table: xr.Dataset, x_step_m: float = 2.0, step_m: float = 0.2) -> xr.Dataset:
@@ -287,15 +360,18 @@ def make_engines(cfg: dict[str, Any], table: xr.Dataset) -> xr.Dataset:
     Returns
     -------
     xarray.Dataset
-        Over ``model`` (``image_rect``, ``sbr_rect``, ``sbr_rect_vector``, ``sbr_circle``)
+        Over ``model`` (``image_rect``, ``sbr_rect``, ``sbr_rect_vector``)
         and ``offset_m`` [m]: ``power_mean_db`` (incoherent sum of one slot's ray powers,
         unit EIRP) [dB], ``power_coherent_db`` (coherent path gain) [dB], ``n_rays`` [model];
         over ``far_order`` and ``centre_m`` [m] (:func:`far_decay`): ``far_local_mean_db``
         [dB], ``far_slope_db_per_km`` [far_order] [dB/km]; over ``x_m`` [m]
         (:func:`cutoff_check`): ``power_beyond_cutoff_frac`` [1], ``delay_rms_cutoff_s``,
-        ``delay_rms_doubled_s``, ``delay_rms_halved_s`` [s].  Attributes:
+        ``delay_rms_doubled_s``, ``delay_rms_halved_s`` [s]; over ``circle_centre_m`` [m]
+        (:func:`far_decay_circle`): ``circle_modal_local_mean_db``, ``circle_sbr_local_mean_db``
+        [dB].  Attributes:
         ``reflection_order``, ``far_*`` (:func:`far_decay`), ``far_circle_*``
-        (:func:`far_decay_circle`), ``cutoff_m`` [m], ``cutoff_power_frac`` [1].
+        (:func:`far_decay_circle`), ``modal_near_*`` (:func:`modal_near_check`), ``cutoff_m``
+        [m], ``cutoff_power_frac`` [1].
 
     Raises
     ------
@@ -311,7 +387,6 @@ def make_engines(cfg: dict[str, Any], table: xr.Dataset) -> xr.Dataset:
         ("image_rect", "rect", "image", "paraxial"),
         ("sbr_rect", "rect", "sbr", "paraxial"),
         ("sbr_rect_vector", "rect", "sbr", "vector"),
-        ("sbr_circle", "circle", "sbr", cfg["rays"]["sbr_polarization"]),
     ):
         rays = lift(families(cfg, shape, engine, order), offs, cab.wavelength_m, eps, pol)
         out[label] = (
@@ -349,11 +424,14 @@ def make_engines(cfg: dict[str, Any], table: xr.Dataset) -> xr.Dataset:
     )
     ds = ds.merge(cut)
     circ = far_decay_circle(cfg)
+    ds = ds.merge(circ.drop_attrs(deep=False))
+    near = modal_near_check(cfg, order)
     ds.attrs.update(
         {
             "reflection_order": order,
             **{f"far_{k}": v for k, v in far.attrs.items()},
-            **{f"far_circle_{k}": v for k, v in circ.items()},
+            **{f"far_circle_{k}": v for k, v in circ.attrs.items()},
+            **{f"modal_near_{k}": v for k, v in near.items()},
             "cutoff_m": cut.attrs["cutoff_m"],
             "cutoff_power_frac": cut.attrs["cutoff_power_frac"],
         }

@@ -12,14 +12,14 @@ TRAINS = ("metro", "hst", "freight")
 
 def rssi_map(maps: dict[str, xr.Dataset], coverage_dbm: float, blind_dbm: float, pdf, png) -> None:
     """Figure ``tunnel_rssi_map``: the local-mean RSSI along the tunnel of every map (top),
-    and a zoom on x = 1000-1100 m of the image map's coherent and local-mean RSSI and the
-    SBR map's coherent RSSI (bottom); coverage threshold dashed, blind-spot level dotted.
+    and a zoom on x = 1000-1100 m of the image map's coherent and local-mean RSSI (bottom);
+    coverage threshold dashed, blind-spot level dotted.
 
     Parameters
     ----------
     maps : dict
         Table name -> map of :func:`railradio.tunnel.study.make_map` (``x_m``,
-        ``rssi_mean_dbm``, ``rssi_coherent_dbm``); needs ``image``, ``sbr`` optional.
+        ``rssi_mean_dbm``, ``rssi_coherent_dbm``); needs ``image``.
     coverage_dbm : float
         Coverage threshold [dBm].
     blind_dbm : float
@@ -35,7 +35,7 @@ def rssi_map(maps: dict[str, xr.Dataset], coverage_dbm: float, blind_dbm: float,
         The figure is written to ``pdf`` and ``png``.
     """
     fig, (ax, az) = figure(nrows=2, figsize=(7.0, 5.6))
-    labels = {"image": "physical, image method (square)", "sbr": "physical, SBR (circle)", "source": "source's model"}
+    labels = {"image": "physical, image method (square)", "source": "source's model"}
     for name, ds in maps.items():
         ax.plot(ds["x_m"], ds["rssi_mean_dbm"], lw=0.8, label=labels.get(name, name))
     for a in (ax, az):
@@ -48,10 +48,6 @@ def rssi_map(maps: dict[str, xr.Dataset], coverage_dbm: float, blind_dbm: float,
     sel = (ds["x_m"] >= 1000) & (ds["x_m"] <= 1100)
     az.plot(ds["x_m"][sel], ds["rssi_coherent_dbm"][sel], lw=0.6, label="coherent (image)")
     az.plot(ds["x_m"][sel], ds["rssi_mean_dbm"][sel], lw=1.2, label="local mean (image)")
-    if "sbr" in maps:
-        s = maps["sbr"]
-        sel2 = (s["x_m"] >= 1000) & (s["x_m"] <= 1100)
-        az.plot(s["x_m"][sel2], s["rssi_coherent_dbm"][sel2], lw=0.6, label="coherent (SBR circle)")
     az.set_xlabel("x [m] (zoom; coverage - - , blind spot ···)")
     az.set_ylabel("RSSI [dBm]")
     az.legend(fontsize=7, loc="lower right")
@@ -210,14 +206,19 @@ def position_error_cdf(runs: dict[tuple[str, str], xr.Dataset], pdf, png, headli
 
 def ray_engines(eng: xr.Dataset, pdf, png) -> None:
     """Figure ``tunnel_ray_engines``: one slot's path gain over the along-axis offset for
-    every engine model (sum of ray powers; the image method's coherent gain in grey, top),
-    and the SBR engines in the square minus the image method (bottom) [dB].
+    every engine model in the square (sum of ray powers; the image method's coherent gain in
+    grey, top), the SBR engines in the square minus the image method (middle) [dB], and one
+    slot's far field averaged over beat-length windows (bottom) [dB]: the image method and
+    the modal sum in the square, the modal sum in the circle, and the retired SBR engine in
+    the circle.
 
     Parameters
     ----------
     eng : xarray.Dataset
         The engine checks of :func:`railradio.tunnel.engine_checks.make_engines`
-        (``power_mean_db``, ``power_coherent_db`` [model, offset_m] [dB]).
+        (``power_mean_db``, ``power_coherent_db`` [model, offset_m] [dB]; ``far_local_mean_db``
+        [far_order, centre_m], ``modal_local_mean_db`` [centre_m], ``circle_modal_local_mean_db``,
+        ``circle_sbr_local_mean_db`` [circle_centre_m] [dB]).
     pdf : str or os.PathLike
         Output PDF path.
     png : str or os.PathLike
@@ -228,7 +229,7 @@ def ray_engines(eng: xr.Dataset, pdf, png) -> None:
     None
         The figure is written to ``pdf`` and ``png``.
     """
-    fig, (ax, ad) = figure(nrows=2, figsize=(6.4, 5.0), sharex=True)
+    fig, (ax, ad, af) = figure(nrows=3, figsize=(6.4, 7.6), layout="constrained")
     off = eng["offset_m"].values
     for m in eng["model"].values:
         ax.plot(off, eng["power_mean_db"].sel(model=m), label=f"{m} (sum of ray powers)")
@@ -242,12 +243,21 @@ def ray_engines(eng: xr.Dataset, pdf, png) -> None:
         lw=0.6,
         label="sbr_rect - image (coherent)",
     )
-    ax.set_xscale("log")
+    for a in (ax, ad):
+        a.set_xscale("log")
     ax.set_ylabel("path gain of one slot [dB]")
     ax.legend(fontsize=6)
     ad.set_xlabel("offset along the tunnel [m]")
     ad.set_ylabel("difference [dB]")
     ad.legend(fontsize=6)
+    c, cc = eng["centre_m"].values / 1e3, eng["circle_centre_m"].values / 1e3
+    af.plot(c, eng["far_local_mean_db"].isel(far_order=-1), label="square, image method")
+    af.plot(c, eng["modal_local_mean_db"], ls="--", label="square, modal sum (EH_mn)")
+    af.plot(cc, eng["circle_modal_local_mean_db"], label="circle, modal sum (Marcatili-Schmeltzer)")
+    af.plot(cc, eng["circle_sbr_local_mean_db"], lw=0.7, color="grey", label="circle, SBR (retired)")
+    af.set_xlabel("offset from the slot [km] (window means over one EH11-EH12 beat length)")
+    af.set_ylabel("local mean of one slot [dB]")
+    af.legend(fontsize=6)
     save(fig, pdf, png)
 
 
@@ -290,7 +300,7 @@ def source_vs_physical(
         The figure is written to ``pdf`` and ``png``.
     """
     fig, (ax, ac) = figure(ncols=2, figsize=(8.0, 3.4))
-    labels = {"image": "physical (image, square)", "sbr": "physical (SBR, circle)", "source": "source's model"}
+    labels = {"image": "physical (image, square)", "source": "source's model"}
     for name, t in tables.items():
         off = t["offset_m"].values
         sel = off >= 0.5

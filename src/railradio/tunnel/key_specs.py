@@ -162,7 +162,6 @@ def _coverage_specs(s: dict[str, KeySpec]) -> None:
         "≥",
     )
     _add(s, "tunnel.coverage_frac.coherent", "1", "same with the coherent RSSI (fading included)")
-    _add(s, "tunnel.coverage_frac.sbr_circle", "1", "same, SBR in the circular cross-section")
     _add(s, "tunnel.coverage_frac.source_model", "1", "same, the source's propagation model")
     _add(s, "tunnel.blind_spot_frac", "1", "share of the tunnel in a blind spot (source 5.1.2), physical")
     _add(s, "tunnel.blind_spot_frac.source_model", "1", "share in a blind spot, the source's model")
@@ -230,7 +229,6 @@ def _channel_specs(s: dict[str, KeySpec]) -> None:
     _add(s, "tunnel.rssi_dbm.median.source_model", "dBm", "median local-mean RSSI, the source's model")
     _add(s, "tunnel.rays.order", "1", "reflection order chosen by the convergence criterion")
     _add(s, "tunnel.rays.families_image", "1", "image-method rays (families) per slot")
-    _add(s, "tunnel.rays.families_sbr_circle", "1", "SBR ray families per slot, circular cross-section")
     _add(
         s,
         "tunnel.engines.rect_max_diff_db",
@@ -364,14 +362,7 @@ def _delay_error_and_guide_specs(s: dict[str, KeySpec]) -> None:
         "consecutive epochs of one receiver (rank correlation, all trains): its time structure",
         digits=2,
     )
-    _add(
-        s,
-        "tunnel.rays.sbr_circle.local_mean_slope_db_per_km",
-        "dB/km",
-        "the circular engine (SBR): one slot's far "
-        "local-mean decay over rays.far_decay_m at rays.max_order, as for the square",
-        digits=2,
-    )
+    _circle_specs(s)
     _add(
         s,
         "tunnel.rays.circle_eh11_db_per_km",
@@ -396,6 +387,58 @@ def _delay_error_and_guide_specs(s: dict[str, KeySpec]) -> None:
         digits=1,
     )
     _add(s, "tunnel.slot_eirp_db_re_cable", "dB", "slot EIRP relative to the cable power (slot-chain calibration)")
+
+
+def _circle_specs(s: dict[str, KeySpec]) -> None:
+    """The circle's modal far field, where the square's modes part from its rays, the retired SBR engine."""
+    _add(
+        s,
+        "tunnel.rays.circle_modal_slope_db_per_km.1500_5000",
+        "dB/km",
+        "the circle's far field: one slot's local mean from the lossy modes of the circular guide (Marcatili & "
+        "Schmeltzer 1964), averaged over one EH11-EH12 beat length, its decay over rays.far_decay_m",
+        digits=2,
+    )
+    _add(
+        s,
+        "tunnel.rays.modal_near.first_window_diff_db",
+        "dB",
+        "the square's modal sum against the image method near the slot: |difference| of one slot's local mean "
+        "(40 wavelengths) in the window at the slot, where steep rays break the modes' grazing losses",
+        digits=1,
+    )
+    _add(
+        s,
+        "tunnel.rays.modal_near.beyond_max_diff_db",
+        "dB",
+        "the same, the largest |difference| of the later local-mean windows to 600 m",
+        digits=1,
+    )
+    _add(s, "tunnel.rays.circle_beat_length_m", "m", "EH11-EH12 beat length of the circular tunnel", digits=0)
+    _add(s, "tunnel.rays.circle_n_modes", "1", "modes of the circular guide carrying the slot's field to the receiver")
+    _add(
+        s,
+        "tunnel.rays.square_minus_circle_slope_db_per_km",
+        "dB/km",
+        "how much faster one slot's far field decays in the square of equal area (the positioning engine's "
+        "cross-section) than in the true circle: the two modal sums' slopes over rays.far_decay_m",
+        digits=2,
+    )
+    _add(
+        s,
+        "tunnel.rays.sbr_circle.local_mean_slope_db_per_km",
+        "dB/km",
+        "the retired circular SBR engine: the same far decay (not used by any other number)",
+        digits=2,
+    )
+    _add(
+        s,
+        "tunnel.rays.sbr_circle.modal_max_diff_db",
+        "dB",
+        "the retired circular SBR engine: largest difference of its beat-length window means from the modal sum's "
+        "over rays.far_decay_m",
+        digits=1,
+    )
 
 
 def _peak_bias_and_side_wall_specs(s: dict[str, KeySpec]) -> None:

@@ -273,7 +273,6 @@ def _map_keys(
 
     _put(out, "tunnel.coverage_frac", np.mean(maps["image"]["rssi_mean_dbm"].values >= coverage_dbm))
     _put(out, "tunnel.coverage_frac.coherent", np.mean(maps["image"]["rssi_coherent_dbm"].values >= coverage_dbm))
-    _put(out, "tunnel.coverage_frac.sbr_circle", np.mean(maps["sbr"]["rssi_mean_dbm"].values >= coverage_dbm))
     _put(out, "tunnel.coverage_frac.source_model", np.mean(maps["source"]["rssi_mean_dbm"].values >= coverage_dbm))
     _put(out, "tunnel.blind_spot_frac", blind(maps["image"]))
     _put(out, "tunnel.blind_spot_frac.source_model", blind(maps["source"]))
@@ -289,7 +288,6 @@ def _map_keys(
     _put(out, "tunnel.rssi_dbm.median.source_model", np.median(maps["source"]["rssi_mean_dbm"].values))
     _put(out, "tunnel.rays.order", tables["image"].attrs["reflection_order"])
     _put(out, "tunnel.rays.families_image", tables["image"].attrs["n_families"])
-    _put(out, "tunnel.rays.families_sbr_circle", tables["sbr"].attrs["n_families"])
     diff = engines["power_mean_db"].sel(model="sbr_rect") - engines["power_mean_db"].sel(model="image_rect")
     _put(out, "tunnel.engines.rect_max_diff_db", float(np.max(np.abs(diff.values))))
     _put(out, "tunnel.engines.test_tol_mean_db", ENGINE_TOL_MEAN_DB)
@@ -317,7 +315,8 @@ def _hst_and_lining_keys(
 
 
 def _table_keys(out: dict[str, Any], tables: dict[str, xr.Dataset], engines: xr.Dataset) -> None:
-    """The image table's far decay, cut-off and slot EIRP; the circular engine's far decay."""
+    """The image table's far decay, cut-off and slot EIRP; the circle's modal far decay and
+    the retired SBR engine's gap to it."""
     t = tables["image"]
     off = t["offset_m"].values
     _put(out, "tunnel.rays.local_mean_slope_db_per_km.1500_5000", engines.attrs["far_slope_db_per_km"])
@@ -325,7 +324,15 @@ def _table_keys(out: dict[str, Any], tables: dict[str, xr.Dataset], engines: xr.
     _put(out, "tunnel.rays.modal_slope_db_per_km.1500_5000", engines.attrs.get("far_modal_slope_db_per_km"))
     _put(out, "tunnel.rays.modal_max_diff_db", engines.attrs.get("far_modal_max_diff_db"))
     _put(out, "tunnel.rays.beat_length_m", engines.attrs["far_beat_length_m"])
-    _put(out, "tunnel.rays.sbr_circle.local_mean_slope_db_per_km", engines.attrs["far_circle_slope_db_per_km"])
+    _put(out, "tunnel.rays.modal_near.first_window_diff_db", engines.attrs.get("modal_near_first_window_diff_db"))
+    _put(out, "tunnel.rays.modal_near.beyond_max_diff_db", engines.attrs.get("modal_near_beyond_max_diff_db"))
+    circle = engines.attrs["far_circle_modal_slope_db_per_km"]
+    _put(out, "tunnel.rays.circle_modal_slope_db_per_km.1500_5000", circle)
+    _put(out, "tunnel.rays.circle_beat_length_m", engines.attrs["far_circle_beat_length_m"])
+    _put(out, "tunnel.rays.circle_n_modes", engines.attrs["far_circle_n_modes"])
+    _put(out, "tunnel.rays.square_minus_circle_slope_db_per_km", engines.attrs["far_modal_slope_db_per_km"] - circle)
+    _put(out, "tunnel.rays.sbr_circle.local_mean_slope_db_per_km", engines.attrs["far_circle_sbr_slope_db_per_km"])
+    _put(out, "tunnel.rays.sbr_circle.modal_max_diff_db", engines.attrs["far_circle_sbr_modal_max_diff_db"])
     _put(out, "tunnel.rays.circle_eh11_db_per_km", engines.attrs["far_circle_eh11_db_per_km"])
     _put(out, "tunnel.rays.circle_te01_db_per_km", engines.attrs["far_circle_te01_db_per_km"])
     _put(out, "tunnel.rays.power_beyond_cutoff_frac.p95", np.percentile(engines["power_beyond_cutoff_frac"].values, 95))

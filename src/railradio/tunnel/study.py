@@ -29,10 +29,8 @@ from railradio.tunnel.wideband_runs import CableModelError
 
 TABLES = {
     "image": ("rect", "image", "physical"),
-    "sbr": ("circle", "sbr", "physical"),
     "source": ("rect", "image", "source"),
     "image_side_wall": ("rect", "image", "physical"),
-    "sbr_side_wall": ("circle", "sbr", "physical"),
 }
 """table name -> (cross-section, engine, propagation); ``*_side_wall``: the same engine with the
 cable at ``sensitivity.side_wall_slot_z_m`` (:func:`side_wall_config`)."""
