@@ -22,9 +22,10 @@ def test_band_keeps_what_the_run_cannot_tell_apart_and_drops_what_it_can():
     rng = np.random.default_rng(7)
     nees = np.stack([_nees(1.0, 1500, rng), _nees(1.0, 1500, rng), _nees(3.0, 1500, rng)])
     nees[:, :5] = np.nan  # the track starts late
-    inb = band(nees, 0, 100, 400, np.random.default_rng(1))
+    inb, lo, hi = band(nees, 0, 100, 400, np.random.default_rng(1))
     assert inb.tolist() == [True, True, False]
-    assert band(nees, 2, 100, 400, np.random.default_rng(1))[2]
+    assert lo[2] > 0 and lo[1] < 0 < hi[1] and lo[0] == hi[0] == 0
+    assert band(nees, 2, 100, 400, np.random.default_rng(1))[0][2]
     with pytest.raises(ValueError, match="block"):
         band(nees, 0, 0, 400, np.random.default_rng(1))
     with pytest.raises(ValueError, match="shorter"):

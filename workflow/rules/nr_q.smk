@@ -2,6 +2,7 @@
 # not tell apart, and the headline tracker's accuracy over them. Reads the nr shards and
 # calibration; simulates nothing.
 
+register_figures("nr_q", ["nr_q_band"])
 KEY_NUMBER_FRAGMENTS.append("results/nr/q_band/key_numbers.json")
 
 
@@ -28,3 +29,24 @@ rule nr_q_band:
         "../envs/railradio.yaml"
     script:
         "../scripts/nr_q/q_band.py"
+
+
+rule nr_q_figure:
+    """The calibration cost and the headline tracker's error against q, the band shaded."""
+    input:
+        "results/nr/q_band/q_band.nc",
+    output:
+        pdf=report(
+            "results/figures/nr_q_band.pdf",
+            caption="../report/nr_q_band.rst",
+            category="nr",
+        ),
+        png="results/figures/nr_q_band.png",
+    log:
+        "results/logs/nr/q_figure.log",
+    benchmark:
+        "results/benchmarks/nr/q_figure.tsv"
+    conda:
+        "../envs/railradio.yaml"
+    script:
+        "../scripts/nr_q/figure.py"

@@ -29,6 +29,7 @@ from railradio.nr.study.runs import tracker_name
 from railradio.nr.tracking import loss
 from railradio.nr.tracking.ekf import TrackerConfig, nees_position
 from railradio.nr.tracking.track import track
+from railradio.plotting import figure, save
 
 BLOCK_S = 10.0
 """Bootstrap block length [s] [ours]: 100 epochs, several times the EKF's settling after a
@@ -54,7 +55,9 @@ def _nan_stat(v: np.ndarray, fn) -> float:
     return float(fn(v)) if np.isfinite(v).any() else np.nan
 
 
-def band(nees: np.ndarray, i_hat: int, block: int, n_boot: int, rng: np.random.Generator) -> np.ndarray:
+def band(
+    nees: np.ndarray, i_hat: int, block: int, n_boot: int, rng: np.random.Generator
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Which q the calibration can not tell from q̂ (module docstring).
 
     Parameters
@@ -73,8 +76,9 @@ def band(nees: np.ndarray, i_hat: int, block: int, n_boot: int, rng: np.random.G
 
     Returns
     -------
-    numpy.ndarray
-        [q] bool: in the band (q̂ always is).
+    tuple of numpy.ndarray
+        ``(in_band, lo, hi)``, each [q]: in the band (bool; q̂ always is), and the interval of
+        cost(q) - cost(q̂) at :data:`LEVEL` [1].
 
     Raises
     ------
@@ -97,7 +101,7 @@ def band(nees: np.ndarray, i_hat: int, block: int, n_boot: int, rng: np.random.G
     lo, hi = np.nanquantile(diff, [(1 - LEVEL) / 2, (1 + LEVEL) / 2], axis=1)
     out = (lo <= 0.0) & (hi >= 0.0)
     out[i_hat] = True
-    return out
+    return out, lo, hi
 
 
 def q_band(
@@ -138,6 +142,7 @@ def q_band(
     -------
     xarray.Dataset
         Over ``q`` [m² s⁻⁵]: ``cost`` (calibration NEES cost) [1], ``in_band`` [bool],
+        ``diff_lo``, ``diff_hi`` (the bootstrap interval of cost - cost(q̂)) [1],
         ``err_mean_m``, ``err_p95_m`` (2-D error after the first ``SKIP_S`` seconds, pooled over
         the realizations, as the headline keys count it) [m], ``lost_frac`` [1] (the loss
         rule's share; the keys null an accuracy above 1 %). Attributes
@@ -159,7 +164,7 @@ def q_band(
         nees[i] = nees_position(o["state"], o["cov"], dsc["x_true"].values)  # scoring the survey run
     i_hat = int(np.argmin(np.abs(np.log(qs / float(rec["q"])))))
     block = max(1, int(round(BLOCK_S / scn.trajectory.dt_s)))
-    in_band = band(nees, i_hat, block, N_BOOT, rng)
+    in_band, lo, hi = band(nees, i_hat, block, N_BOOT, rng)
     cost = np.abs(np.log(np.nanmedian(np.where(np.isfinite(nees), nees, np.nan), axis=1) / chi2.median(2)))
     stats = np.full((3, qs.size), np.nan)
     for i, q in enumerate(qs):
@@ -185,6 +190,16 @@ def q_band(
                 "q",
                 in_band.astype(np.int8),
                 {"units": "1", "long_name": "1: the calibration can not tell q from q_hat (paired block bootstrap)"},
+            ),
+            "diff_lo": (
+                "q",
+                lo,
+                {"units": "1", "long_name": f"{LEVEL:.0%} bootstrap interval of cost - cost(q_hat): low"},
+            ),
+            "diff_hi": (
+                "q",
+                hi,
+                {"units": "1", "long_name": f"{LEVEL:.0%} bootstrap interval of cost - cost(q_hat): high"},
             ),
             "lost_frac": ("q", stats[0], {"units": "1", "long_name": "share of epochs lost"}),
             "err_mean_m": ("q", stats[1], {"units": "m", "long_name": "mean 2-D error after SKIP_S"}),
@@ -244,3 +259,54 @@ def key_numbers(qb: xr.Dataset) -> dict[str, Any]:
         )
     put("lost_frac.max", "1", "largest share of epochs lost over the q band", lost)
     return out
+
+
+def plot_band(qb: xr.Dataset, pdf, png) -> None:
+    """Figure ``nr_q_band``: the calibration's NEES cost against q, each q's cost minus the
+    bootstrap interval of cost(q) - cost(q̂) beside it (top; in the band when it reaches
+    cost(q̂), dotted),
+    and the headline tracker's mean and 95th-percentile error against q (bottom), the band
+    shaded and q̂ marked.
+
+    Parameters
+    ----------
+    qb : xarray.Dataset
+        :func:`q_band`'s output.
+    pdf, png : str or os.PathLike
+        Output paths.
+
+    Returns
+    -------
+    None
+        The figure is written to ``pdf`` and ``png``.
+    """
+    q = qb["q"].values
+    inb = qb["in_band"].values.astype(bool)
+    q_hat = qb.attrs["q_hat"]
+    c_hat = float(qb["cost"].sel(q=q_hat))
+    fig, (ac, ae) = figure(nrows=2, figsize=(6.0, 5.6), sharex=True, layout="constrained")
+    ac.plot(q, qb["cost"], "o-", label="calibration NEES cost |log(median NEES / median χ²₂)|")
+    level = f"{qb.attrs['level']:.0%}"
+    ac.vlines(
+        q,
+        qb["cost"] - qb["diff_hi"],
+        qb["cost"] - qb["diff_lo"],
+        color="grey",
+        lw=2,
+        alpha=0.6,
+        label=f"cost(q) minus the {level} bootstrap interval of cost(q) - cost(q̂): in the band if it meets the dots",
+    )
+    ac.axhline(c_hat, color="k", ls=":", lw=0.8)
+    ae.plot(q, qb["err_mean_m"], "o-", label="mean")
+    ae.plot(q, qb["err_p95_m"], "s-", label="95th percentile")
+    for a in (ac, ae):
+        a.set_xscale("log")
+        if inb.any():
+            a.axvspan(q[inb].min(), q[inb].max(), color="tab:green", alpha=0.08, lw=0)
+        a.axvline(q_hat, color="k", ls="--", lw=0.8)
+    ac.set_ylabel("cost [1]")
+    ac.legend(fontsize=7)
+    ae.set_xlabel("white-jerk intensity q [m² s⁻⁵] (shaded: the band; dashed: calibrated q̂)")
+    ae.set_ylabel("2-D position error [m]")
+    ae.legend(fontsize=7)
+    save(fig, pdf, png)
