@@ -24,9 +24,10 @@ DOCS = (
     + [p for p in sorted((ROOT / "docs").glob("*.md")) if p.name != "keys.md"]
     + [ROOT / "README.md", ROOT / "config" / "README.md"]
 )
-NUMBER = r"([−-]?\d[\d,]*(?:\.\d+)?)"
-BEFORE = re.compile(NUMBER + r"\s*[^\s(\d,;]{0,12}\s*(?:\(|\(keys? |, keys? |,\s*)$")
-AFTER = re.compile(r"\s*(?:\(|=|:)?\s*" + NUMBER + r"(?![\d.])")
+NUMBER = r"(?<![\w.−-])([−-]?\d[\d,]*(?:\.\d+)?)(?!\d|\.\d)"
+BEFORE = re.compile(NUMBER + r"\s*[^\s(\d,;]{0,12}\s*(?:\(|\(keys? |, keys? )$")
+INSIDE = re.compile(r"\(" + NUMBER + r"\s*[^\s(\d,;]{0,12},\s*$")  # (2.79 dB/km, `key`
+AFTER = re.compile(r"\s*(?:\(|=|:)?\s*" + NUMBER)
 SCALES = (1.0, 1e3, 1e-3, 1e6, 1e-6, 1e9, 100.0)
 
 
@@ -43,14 +44,14 @@ def _keys() -> dict[str, float]:
 def _agrees(text: str, value: float) -> bool:
     """``text`` (a printed number) equals ``value`` in some unit scale to its printed digits."""
     x = float(text.replace("−", "-").replace(",", ""))
-    decimals = len(text.split(".")[1]) if "." in text else 0
-    for scale in SCALES:
-        v = value * scale
-        # integers of three or more digits may be rounded to their significant digits
-        tol = 0.5 * 10.0**-decimals + (0.005 * abs(v) if decimals == 0 and abs(v) >= 100 else 0.0)
-        if abs(x - v) <= tol * (1 + 1e-9):
-            return True
-    return False
+    if x == 0:  # a quoted zero is exact and in the key's unit
+        return value == 0
+    digits = text.replace("−", "").replace("-", "").replace(",", "")
+    if "." in digits:
+        tol = 0.5 * 10.0 ** -len(digits.split(".")[1])
+    else:  # an integer: half a unit of its last non-zero digit (2 300 may be 2 3xx rounded)
+        tol = 0.5 * 10.0 ** (len(digits) - len(digits.rstrip("0")))
+    return any(abs(x - value * scale) <= tol * (1 + 1e-9) for scale in SCALES)
 
 
 def quotes(path: Path, keys: dict[str, float]) -> list[tuple[str, str, int]]:
@@ -62,7 +63,8 @@ def quotes(path: Path, keys: dict[str, float]) -> list[tuple[str, str, int]]:
         if key not in keys:
             continue
         line = text.count("\n", 0, m.start()) + 1
-        before = BEFORE.search(text[max(0, m.start() - 40) : m.start()])
+        left = text[max(0, m.start() - 40) : m.start()]
+        before = BEFORE.search(left) or INSIDE.search(left)
         if before:
             out.append((before.group(1), key, line))
         after = AFTER.match(text[m.end() : m.end() + 40])
@@ -88,19 +90,30 @@ def test_the_checker_catches_a_stale_number(tmp_path):
     doc = tmp_path / "doc.md"
     doc.write_text(
         "PCRB 0.40 m (`nr.predict.pcrb_m.mean`); `nr.bound.toa_crb_m.median` = 0.009 m; "
-        "36.3 % (`nr.predict.pcrb_m.mean`)"
+        "36.3 % (`nr.predict.pcrb_m.mean`); EH11 (`nr.predict.pcrb_m.mean`); `nr.bound.toa_crb_m.median` = 0.009."
     )
     found = quotes(doc, keys)
     assert [(q[0], q[1]) for q in found] == [
         ("0.40", "nr.predict.pcrb_m.mean"),
         ("0.009", "nr.bound.toa_crb_m.median"),
         ("36.3", "nr.predict.pcrb_m.mean"),
+        ("0.009", "nr.bound.toa_crb_m.median"),
     ]
-    assert [_agrees(q[0], keys[q[1]]) for q in found] == [False, True, True]
+    assert [_agrees(q[0], keys[q[1]]) for q in found] == [False, True, True, True]
 
 
 @pytest.mark.parametrize(
-    ("text", "value", "ok"), [("3.63", 3.6332, True), ("3.64", 3.6332, False), ("948", 947.6, True)]
+    ("text", "value", "ok"),
+    [
+        ("3.63", 3.6332, True),
+        ("3.64", 3.6332, False),
+        ("948", 947.6, True),
+        ("174", 173.42, False),
+        ("0", 1.0, False),
+        ("0", 0.0, True),
+        ("2300", 2306.0, True),
+        ("−19", -0.194, True),
+    ],
 )
 def test_agreement_is_to_the_printed_digits(text, value, ok):
     assert _agrees(text, value) is ok

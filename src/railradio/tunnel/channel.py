@@ -115,7 +115,8 @@ def moving_mean(a: np.ndarray, n: int, mirror_start: bool = False) -> np.ndarray
 
 
 def beat_length_m(tunnel: Tunnel, wavelength_m: float) -> float:
-    """Beat length 2π / (β11 - β12) of the two lowest modes EH11 and EH12 [m]: across the larger
+    """Beat length 2π / (β11 - β12) of EH11 and EH12 [m] (in the circle the l = 1 group, TE01/TM01/EH21,
+    lies between them; its beat with EH11 is longer): across the larger
     side a of the rectangle β_mn ≈ k - (π²/2k)(m²/w² + n²/h²) (Emslie, Lagace & Strong 1975),
     i.e. 8 a² / (3 λ); in the circle of radius a β_1m ≈ k - u_1m²/(2 k a²), u_1m the zeros of
     J_0 (Marcatili & Schmeltzer 1964), i.e. 8 π² a² / (λ (u_12² - u_11²))."""

@@ -262,9 +262,9 @@ def key_numbers(qb: xr.Dataset) -> dict[str, Any]:
 
 
 def plot_band(qb: xr.Dataset, pdf, png) -> None:
-    """Figure ``nr_q_band``: the calibration's NEES cost against q, each q's cost minus the
-    bootstrap interval of cost(q) - cost(q̂) beside it (top; in the band when it reaches
-    cost(q̂), dotted),
+    """Figure ``nr_q_band``: the calibration's NEES cost against q and, at each q, cost(q̂)
+    plus the bootstrap interval of cost(q) - cost(q̂) (top; in the band when the interval holds
+    0, i.e. the bar meets cost(q̂), dotted),
     and the headline tracker's mean and 95th-percentile error against q (bottom), the band
     shaded and q̂ marked.
 
@@ -289,12 +289,12 @@ def plot_band(qb: xr.Dataset, pdf, png) -> None:
     level = f"{qb.attrs['level']:.0%}"
     ac.vlines(
         q,
-        qb["cost"] - qb["diff_hi"],
-        qb["cost"] - qb["diff_lo"],
+        c_hat + qb["diff_lo"],
+        c_hat + qb["diff_hi"],
         color="grey",
         lw=2,
         alpha=0.6,
-        label=f"cost(q) minus the {level} bootstrap interval of cost(q) - cost(q̂): in the band if it meets the dots",
+        label=f"cost(q̂) + the {level} bootstrap interval of cost(q) - cost(q̂): in the band if it meets the dots",
     )
     ac.axhline(c_hat, color="k", ls=":", lw=0.8)
     ae.plot(q, qb["err_mean_m"], "o-", label="mean")
