@@ -1,6 +1,8 @@
 """Tracker: analytic Jacobians against finite differences, EKF consistency (NEES) on a
 simulated case, no NaN when every measurement of an epoch is missing."""
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 from scipy.stats import chi2
@@ -103,6 +105,50 @@ def test_gate_rejects_an_outlier():
     out = run_ekf(_fixed([RRH] * 30, [m[0::2] for m in meas], toa), 0.1, DH, cfg, truth[0], np.eye(6), 30)
     assert out["n_used"][20] == 2
     assert abs(out["state"][20, 0] - truth[20, 0]) < 5.0
+
+
+def test_track_bound_filter_holds_the_train_on_the_track():
+    """The track-bound EKF keeps y, v_y, a_y and their covariances exactly 0 (also through a
+    start off the track and a re-acquisition), its along-track NEES is χ²₁-consistent, and with
+    TOAs alone it does not take the mirror side of the RRH line the free filter can take."""
+    from railradio.nr.tracking.ekf import LATERAL, nees_position
+
+    rng = np.random.default_rng(11)
+    truth, meas, cfg = _simulate(rng)
+    xy = [RRH] * len(meas)
+    aod = [m[0::2] for m in meas]
+    toa = [m[1::2] for m in meas]
+    s0 = truth[0] + np.array([1.0, 0.5, 0, 0.3, 0, 0.1])  # off the track: y is reset to 0
+    p0 = np.diag([4.0, 4.0, 4.0, 4.0, 1.0, 1.0])
+    tb = replace(cfg, track_bound=True)
+    out = run_ekf(_fixed(xy, aod, toa), 0.1, DH, tb, s0, p0, len(xy))
+    assert np.all(out["state"][:, LATERAL] == 0.0)
+    assert np.all(out["cov"][:, LATERAL, :] == 0.0) and np.all(out["cov"][:, :, LATERAL] == 0.0)
+    nees = nees_position(out["state"], out["cov"], truth[:, 0], track_bound=True)[100:]
+    n = nees.size
+    lo, hi = chi2.ppf([0.005, 0.995], n) / n
+    assert lo / 2 < nees.mean() < hi * 2, nees.mean()
+    np.testing.assert_allclose(nees, (out["state"][100:, 0] - truth[100:, 0]) ** 2 / out["cov"][100:, 0, 0])
+
+    # TOAs alone from RRHs on one side, started on the mirror side (y = 30 m): the free filter
+    # stays there, the track-bound one cannot
+    toa_only = TrackerConfig(measurements="toa", q=cfg.q, sigma_toa_s=cfg.sigma_toa_s)
+    mirror = truth[0] + np.array([0.0, 30.0, 0, 0, 0, 0])
+    free = run_ekf(_fixed(xy, aod, toa), 0.1, DH, toa_only, mirror, p0, len(xy))
+    bound = run_ekf(
+        _fixed(xy, aod, toa), 0.1, DH, replace(toa_only, track_bound=True), mirror, p0, len(xy)
+    )
+    assert np.median(np.abs(free["state"][100:, 1])) > 20.0
+    assert np.sqrt(np.mean((bound["state"][100:, 0] - truth[100:, 0]) ** 2)) < 1.0
+
+    # a re-acquisition moves x alone: every measurement rejected for 10 epochs, then a fix
+    gated = replace(tb, gate=True)
+    far = [t + 5000 / 3e8 for t in toa]  # every TOA 5 km off: all rejected
+    fix = (np.array([truth[20, 0] + 2.0, 7.0]), np.array([[9.0, 1.0], [1.0, 16.0]]))
+    got = run_ekf(_fixed(xy, aod, far), 0.1, DH, gated, truth[0], p0, 30, reacquire=lambda k: fix)
+    k = int(np.flatnonzero(got["reacquired"])[0])
+    assert got["state"][k, 0] == fix[0][0] and got["cov"][k, 0, 0] == 9.0
+    assert np.all(got["state"][:, LATERAL] == 0.0) and np.all(got["cov"][:, LATERAL, :] == 0.0)
 
 
 def test_snapshot_ls_recovers_noiseless_position():

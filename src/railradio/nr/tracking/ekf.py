@@ -29,6 +29,8 @@ Select = Callable[[int, NDArray], tuple[NDArray, NDArray, NDArray]]
 epoch n, chosen from the predicted state ``x_pred`` [6]."""
 Reacquire = Callable[[int], tuple[NDArray, NDArray] | None]
 """``reacquire(n) -> (position [2], covariance [2, 2]) | None``: a position fix at epoch n."""
+LATERAL = [1, 3, 5]
+"""Indices of y, v_y and a_y in the state (x, y, v_x, v_y, a_x, a_y)."""
 
 
 @dataclass(frozen=True)
@@ -63,6 +65,8 @@ class TrackerConfig:
         Per-bin σ, rad and s: ``len(distance_edges_m) + 1`` positive values each.
     start_speed_sigma_m_s : float
         σ of the initial speed, m/s (> 0).
+    track_bound : bool
+        Hold the train on the track y = 0 and estimate the along-track state only.
 
     Raises
     ------
@@ -83,6 +87,10 @@ class TrackerConfig:
     start_speed_sigma_m_s: float = 1.0
     """σ of the initial speed [m/s] about 0: 1 for a start from rest (the source's
     trajectory); large for a start at an unknown speed (the reproduction map's segment)."""
+    track_bound: bool = False
+    """The train held on its known straight track (the source's y = 0 taken literally): the
+    lateral position, speed and acceleration are fixed at 0 — no initial covariance, no process
+    noise — so the filter estimates the along-track x, v_x, a_x only (docs/model/nr.md §6)."""
 
     def __post_init__(self) -> None:
         if self.measurements not in MEASUREMENT_SETS:
@@ -119,14 +127,15 @@ class TrackerConfig:
 
     @classmethod
     def from_record(cls, rec: dict, **kw) -> TrackerConfig:
-        """Inverse of :meth:`record` (``kw``: measurements, gate, gate_prob).
+        """Inverse of :meth:`record` (``kw``: measurements, gate, gate_prob, track_bound).
 
         Parameters
         ----------
         rec : dict
             A record of :meth:`record` (extra keys are ignored).
         **kw
-            Further :class:`TrackerConfig` fields (``measurements``, ``gate``, ``gate_prob``).
+            Further :class:`TrackerConfig` fields (``measurements``, ``gate``, ``gate_prob``,
+            ``track_bound``).
 
         Returns
         -------
@@ -276,6 +285,11 @@ def run_ekf(
     ekf.P = np.asarray(p0, float).copy()
     ekf.F = f
     ekf.Q = process_noise(dt_s, cfg.q)
+    if cfg.track_bound:  # y, v_y, a_y held at 0: no covariance, no process noise (so no gain)
+        ekf.x[LATERAL] = 0.0
+        for m in (ekf.P, ekf.Q):
+            m[LATERAL, :] = 0.0
+            m[:, LATERAL] = 0.0
     res = residual_fn(cfg.measurements)
     per = sum(MEASUREMENT_SETS[cfg.measurements])
     n = n_epochs
@@ -303,10 +317,11 @@ def run_ekf(
                 if reacquire is not None and misses >= reacquire_after:
                     fix = reacquire(k)
                     if fix is not None:
-                        ekf.x[:2] = fix[0]
-                        ekf.P[:2, :] = 0.0
-                        ekf.P[:, :2] = 0.0
-                        ekf.P[:2, :2] = fix[1]
+                        pos = [0] if cfg.track_bound else [0, 1]  # on the track: the fix's x alone
+                        ekf.x[pos] = np.asarray(fix[0])[pos]
+                        ekf.P[pos, :] = 0.0
+                        ekf.P[:, pos] = 0.0
+                        ekf.P[np.ix_(pos, pos)] = np.asarray(fix[1])[np.ix_(pos, pos)]
                         reacquired[k] = True
                         misses = 0
         states[k] = ekf.x
@@ -367,10 +382,12 @@ def _gated_update(
     return int(keep.sum())
 
 
-def nees_position(state: NDArray, cov: NDArray, x_true: NDArray) -> NDArray[np.float64]:
+def nees_position(state: NDArray, cov: NDArray, x_true: NDArray, track_bound: bool = False) -> NDArray[np.float64]:
     """Normalized estimation error squared of the 2-D position, eᵀ P_pos⁻¹ e per epoch
     (e = estimate − truth, the train at y = 0); χ²₂-distributed for a consistent filter
-    (mean 2). NaN before the track starts. Scoring only: it uses the truth.
+    (mean 2). For a track-bound filter (``track_bound``: y held at 0) the along-track
+    e_x² / P_xx, χ²₁-distributed (mean 1). NaN before the track starts. Scoring only: it
+    uses the truth.
 
     Parameters
     ----------
@@ -380,12 +397,18 @@ def nees_position(state: NDArray, cov: NDArray, x_true: NDArray) -> NDArray[np.f
         [epoch, 6, 6] their covariances (position block in m²).
     x_true : numpy.ndarray
         [epoch] true along-track positions, m.
+    track_bound : bool
+        The filter held y at 0 (:attr:`TrackerConfig.track_bound`).
 
     Returns
     -------
     numpy.ndarray
         [epoch] position NEES (1); NaN where undefined.
     """
+    if track_bound:
+        with np.errstate(invalid="ignore", divide="ignore"):
+            q = (state[:, 0] - np.asarray(x_true, float)) ** 2 / cov[:, 0, 0]
+        return np.where(np.isfinite(q), q, np.nan)
     e = np.stack([state[:, 0] - np.asarray(x_true, float), state[:, 1]], axis=1)
     p = cov[:, :2, :2]
     det = p[:, 0, 0] * p[:, 1, 1] - p[:, 0, 1] * p[:, 1, 0]
