@@ -135,9 +135,7 @@ def test_track_bound_filter_holds_the_train_on_the_track():
     toa_only = TrackerConfig(measurements="toa", q=cfg.q, sigma_toa_s=cfg.sigma_toa_s)
     mirror = truth[0] + np.array([0.0, 30.0, 0, 0, 0, 0])
     free = run_ekf(_fixed(xy, aod, toa), 0.1, DH, toa_only, mirror, p0, len(xy))
-    bound = run_ekf(
-        _fixed(xy, aod, toa), 0.1, DH, replace(toa_only, track_bound=True), mirror, p0, len(xy)
-    )
+    bound = run_ekf(_fixed(xy, aod, toa), 0.1, DH, replace(toa_only, track_bound=True), mirror, p0, len(xy))
     assert np.median(np.abs(free["state"][100:, 1])) > 20.0
     assert np.sqrt(np.mean((bound["state"][100:, 0] - truth[100:, 0]) ** 2)) < 1.0
 
