@@ -231,6 +231,7 @@ def test_intermediates_are_self_explaining(ci_run):
         "nr_sensitivity",
         "nr_imm_lag",
         "nr_q_band",
+        "nr_along_track",
         "nr_reproduction_map",
         "handover_cost_vs_m",
         "handover_pingpong_vs_speed",
