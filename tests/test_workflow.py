@@ -195,8 +195,9 @@ def test_intermediates_are_self_explaining(ci_run):
     nr_paths = sorted(
         p for p in (ci_run / "results/nr").rglob("*.nc") if "cases" not in p.parts and "map" not in p.parts
     )
-    # trajectory, samples, 2 calibration + 2 evaluation shards, 1 track, 1 bounds, 1 IMM/RTS, the q band
-    assert len(nr_paths) == 1 + 1 + 2 + 2 + 1 + 1 + 1 + 1
+    # trajectory, samples, 2 calibration + 2 evaluation shards, 1 track, 1 bounds, 1 IMM/RTS, the q band,
+    # the along-track study
+    assert len(nr_paths) == 1 + 1 + 2 + 2 + 1 + 1 + 1 + 1 + 1
     case_paths = sorted((ci_run / "results/nr/cases").rglob("*.nc"))
     # 14 cases with their own bursts: 2 calibration + 1 evaluation shard, 1 track each;
     # 7 cases that read another run's bursts (w_distance, sweep_ref, the 4 clock-sync cases,
