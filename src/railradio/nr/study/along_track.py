@@ -36,10 +36,10 @@ from scipy.stats import beta, norm
 from railradio.keynumbers import KeySpec
 from railradio.nr.engine.simulate import Scenario
 from railradio.nr.study.keys import SKIP_S
+from railradio.nr.study.q_band import track_run
 from railradio.nr.study.runs import tracker_name
 from railradio.nr.tracking import loss
 from railradio.nr.tracking.ekf import TrackerConfig, nees_position
-from railradio.nr.tracking.track import track
 from railradio.plotting import figure, save
 
 RECEIVERS = ("robust", "source")
@@ -119,20 +119,13 @@ def protection(e_along: np.ndarray, sigma: np.ndarray, risk: float) -> dict[str,
     }
 
 
-def _track(ds: xr.Dataset, scn: Scenario, cfg: TrackerConfig, strength: str) -> dict[str, np.ndarray]:
-    dep = scn.deployment
-    return track(
-        ds, dep.x_m, dep.offset_m, dep.h_bs_m - dep.h_ut_m, scn.trajectory.dt_s, cfg, strength=strength, snapshot=False
-    )
-
-
 def _scored(runs, rx, scn, cfg, strength) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Along-track and cross-track errors, σ_x and the along-track NEES of one tracker over the
     realizations' scored epochs (t ≥ SKIP_S), pooled."""
     out = [[], [], [], []]
     for ds in runs:
         d = ds.sel(receiver=rx)
-        o = _track(d, scn, cfg, strength)
+        o = track_run(d, scn, cfg, strength)
         keep = d["t"].values >= SKIP_S
         x_true = d["x_true"].values
         e_along = o["state"][:, 0] - x_true  # scoring: the truth is read here only

@@ -44,7 +44,26 @@ RECEIVER, MEASUREMENTS, GATE = "robust", "aod_toa", True
 """The headline tracker: our receiver, AOD+TOA, with the χ² gate."""
 
 
-def _run(ds: xr.Dataset, scn: Scenario, cfg: TrackerConfig, strength: str) -> dict[str, np.ndarray]:
+def track_run(ds: xr.Dataset, scn: Scenario, cfg: TrackerConfig, strength: str) -> dict[str, np.ndarray]:
+    """One receiver's estimates tracked on the scenario's deployment, as the main run tracks
+    them (:func:`railradio.nr.tracking.track.track`, no snapshot baseline).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        One receiver's estimates (a realization's, selected at one ``receiver``).
+    scn : Scenario
+        The scenario (deployment, ``trajectory.dt_s``).
+    cfg : TrackerConfig
+        The tracker settings.
+    strength : str
+        The receiver's strength measure of its measured RRHs.
+
+    Returns
+    -------
+    dict
+        :func:`railradio.nr.tracking.track.track`'s output (``state`` [epoch, 6], ``cov``, ...).
+    """
     dep = scn.deployment
     return track(
         ds, dep.x_m, dep.offset_m, dep.h_bs_m - dep.h_ut_m, scn.trajectory.dt_s, cfg, strength=strength, snapshot=False
@@ -160,7 +179,7 @@ def q_band(
     dsc = cal_ds.sel(receiver=RECEIVER)
     nees = np.empty((qs.size, dsc.sizes["epoch"]))
     for i, q in enumerate(qs):
-        o = _run(dsc, scn, dataclasses.replace(base, q=float(q)), strength)
+        o = track_run(dsc, scn, dataclasses.replace(base, q=float(q)), strength)
         nees[i] = nees_position(o["state"], o["cov"], dsc["x_true"].values)  # scoring the survey run
     i_hat = int(np.argmin(np.abs(np.log(qs / float(rec["q"])))))
     block = max(1, int(round(BLOCK_S / scn.trajectory.dt_s)))
@@ -172,7 +191,7 @@ def q_band(
         errs = []
         for ds in runs:
             d = ds.sel(receiver=RECEIVER)
-            o = _run(d, scn, cfg, strength)
+            o = track_run(d, scn, cfg, strength)
             keep = d["t"].values >= SKIP_S
             errs.append(np.hypot(o["state"][:, 0] - d["x_true"].values, o["state"][:, 1])[keep])
         err = np.concatenate(errs)
