@@ -63,6 +63,10 @@ def local_cluster():
     assert run.returncode == 0, run.stdout + run.stderr
     yield
     subprocess.run([str(LOCAL_CLUSTER), "stop"], capture_output=True, timeout=COMMAND_TIMEOUT_S, check=False)
+    # its configuration goes with it: one naming a stopped controller makes every later
+    # Snakemake start wait ~9 s (the executor plugin's `scontrol show config`)
+    conf = Path("/etc/slurm/slurm.conf")
+    assert not (conf.exists() and "railradio's local-cluster.sh" in conf.read_text().splitlines()[0]), conf
 
 
 def _squeue_states(job_ids: list[str]) -> dict[str, tuple[str, str]]:

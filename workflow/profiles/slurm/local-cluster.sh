@@ -4,7 +4,7 @@
 #
 #   workflow/profiles/slurm/local-cluster.sh start    # write slurm.conf, start munged, slurmctld, slurmd; wait until idle
 #   workflow/profiles/slurm/local-cluster.sh status   # sinfo
-#   workflow/profiles/slurm/local-cluster.sh stop     # stop the daemons started by `start`
+#   workflow/profiles/slurm/local-cluster.sh stop     # stop the daemons started by `start`, remove its slurm.conf
 #
 # Needs root and Debian's slurm-wlm and munge (apt-get install slurm-wlm munge). One node:
 # this host with its CPUs and memory (less RAILRADIO_SLURM_RESERVE_MB for the system), one
@@ -12,8 +12,11 @@
 # are kept there for MinJobAge (10 min) — run Snakemake with --slurm-status-command squeue.
 # The configuration goes to SLURM's default path, /etc/slurm/slurm.conf (the executor plugin
 # clears SLURM_* variables, SLURM_CONF among them, before the job steps' srun reads it); a
-# configuration there that this script did not write is never replaced. State, logs and pid
-# files live under RAILRADIO_SLURM_DIR (default $TMPDIR/railradio-slurm).
+# configuration there that this script did not write is never replaced. `stop` removes the
+# configuration it wrote: left behind, it names a controller that no longer answers, and every
+# later `scontrol show config` waits ~9 s for it (the executor plugin runs that command each
+# time Snakemake starts, installed plugins being loaded whatever the profile). State, logs and
+# pid files live under RAILRADIO_SLURM_DIR (default $TMPDIR/railradio-slurm).
 set -euo pipefail
 
 dir=${RAILRADIO_SLURM_DIR:-${TMPDIR:-/tmp}/railradio-slurm}
@@ -87,7 +90,7 @@ wait_idle() {
 start() {
   need munged; need slurmctld; need slurmd; need sinfo
   write_conf
-  stop  # a cluster this script started before: its daemons are replaced (its jobs are lost)
+  stop_daemons  # a cluster this script started before: its daemons are replaced (its jobs are lost)
   if ! pgrep -x munged >/dev/null; then
     if [ ! -s /etc/munge/munge.key ]; then
       mkdir -p /etc/munge
@@ -108,12 +111,17 @@ start() {
   wait_idle
 }
 
-stop() {
+stop_daemons() {
   local f
   for f in "$dir/run/slurmd.pid" "$dir/run/slurmctld.pid"; do
     if [ -s "$f" ]; then kill "$(cat "$f")" 2>/dev/null || true; fi
   done
   sleep 1
+}
+
+stop() {
+  stop_daemons
+  if [ -e "$conf" ] && head -n1 "$conf" | grep -qF "$marker"; then rm -f "$conf"; fi
 }
 
 case "${1:-}" in
