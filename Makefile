@@ -12,6 +12,10 @@ SNAKE  := $(BIN)/snakemake
 CONFIG ?=
 OVERRIDE := $(if $(CONFIG),--configfile $(CONFIG))
 RUFF_PATHS := src workflow tests benchmarks
+# the test suite on pytest-xdist workers, tests with a shared fixture kept together
+# (tests/conftest.py); TEST_WORKERS=0: one process
+TEST_WORKERS ?= 2
+PYTEST_PAR := $(if $(filter 0,$(TEST_WORKERS)),,-n $(TEST_WORKERS) --dist loadgroup)
 # snakefmt (pyproject.toml [tool.snakefmt]) finds workflow/Snakefile and workflow/rules/*.smk
 SMK_PATHS  := workflow
 export HDF5_USE_FILE_LOCKING := FALSE
@@ -50,10 +54,10 @@ test: $(STAMP)  ## lint, dry runs, unit + integration tests, CI-scale pipeline, 
 	$(BIN)/ruff check $(RUFF_PATHS)
 	$(BIN)/ruff format --check $(RUFF_PATHS)
 	$(BIN)/snakefmt --check $(SMK_PATHS)
-	$(BIN)/python -m pytest
+	$(BIN)/python -m pytest $(PYTEST_PAR)
 
 test-fast: $(STAMP)  ## unit tests only
-	$(BIN)/python -m pytest -m "not slow"
+	$(BIN)/python -m pytest $(PYTEST_PAR) -m "not slow"
 
 bench: $(STAMP)  ## benchmarks -> results/benchmarks/*.json
 	$(BIN)/python benchmarks/bench_fusion.py --out results/benchmarks/fusion_bench.json

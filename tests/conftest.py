@@ -1,14 +1,28 @@
 """Shared fixtures. Every random draw uses an explicit generator (no global seeding).
 
 The CI-scale pipeline (``config/ci.yaml``) runs once per test session, in a private copy of
-the workflow (:func:`ci_run`); every test that needs its results shares that run.
+the workflow (:func:`ci_run`); every test that needs its results shares that run. It starts
+in the background as the session begins, the tests that need it are put last, and the others
+run meanwhile. ``make test`` runs the suite on two pytest-xdist workers (``--dist
+loadgroup``), which share the one pipeline run; the tests of a module with a module-scoped
+fixture stay on one worker (their fixture is built once), as do the SLURM tests (one local
+cluster).
 """
 
 import os
 import shutil
+import signal
 import subprocess
 import sys
+import threading
+import time
 from pathlib import Path
+
+if os.environ.get("PYTEST_XDIST_WORKER"):
+    # before NumPy loads OpenBLAS: one BLAS thread a worker, as the jobs run
+    # (railradio.workflow.JOB_ENV); a pool in each worker oversubscribes the cores
+    for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+        os.environ.setdefault(_var, "1")
 
 import numpy as np
 import pytest
@@ -63,9 +77,99 @@ def smk(
     return run
 
 
+CI_FIXTURE = "ci_run"
+
+
+def _uses(item: pytest.Item, name: str) -> bool:
+    return name in getattr(item, "fixturenames", ())
+
+
+def _module_group(item: pytest.Item) -> str | None:
+    """The item's module when one of its fixtures (ours, not pytest's) is module-scoped, or
+    ``slurm`` for the SLURM tests (one local cluster a session)."""
+    module = item.nodeid.split("::")[0]
+    if module.endswith("test_slurm.py"):
+        return "slurm"
+    info = getattr(item, "_fixtureinfo", None)
+    for defs in info.name2fixturedefs.values() if info else ():
+        fdef = defs[-1]
+        if fdef.scope == "module" and str(fdef.baseid).startswith("tests"):
+            return module
+    return None
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    """The tests that wait for the CI-scale pipeline (and their module's group) last; the
+    groups marked for pytest-xdist (:func:`_module_group`)."""
+    groups = {id(item): _module_group(item) for item in items}
+    late = {groups[id(i)] for i in items if _uses(i, CI_FIXTURE) and groups[id(i)]}
+    for item in items:
+        if groups[id(item)]:
+            item.add_marker(pytest.mark.xdist_group(groups[id(item)]))
+    items.sort(key=lambda i: _uses(i, CI_FIXTURE) or groups[id(i)] in late)
+
+
+def _ci_root(tmp_path_factory) -> Path:
+    """Where the session's CI-scale run lives: beside the workers' own temporary
+    directories, so that every pytest-xdist worker finds the same run."""
+    base = tmp_path_factory.getbasetemp()
+    return (base.parent if os.environ.get("PYTEST_XDIST_WORKER") else base) / "ci_pipeline"
+
+
+_PIPELINE: list[subprocess.Popen] = []
+
+
+def _start_ci_pipeline(root: Path) -> None:
+    """Start the CI-scale run (every target of ``all``, -j2) in the background, unless a
+    worker already has: its log goes to ``root/log.txt``, its exit status to ``root/rc``
+    when it ends (a thread of this process waits for it)."""
+    try:
+        root.mkdir()
+    except FileExistsError:
+        return
+    wd = copy_workflow(root / "wd")
+    cmd = [SNAKEMAKE, "all", "-j2", "--workflow-profile", "workflow/profiles/default", "--configfile", "config/ci.yaml"]
+    with open(root / "log.txt", "w", encoding="utf-8") as log:
+        proc = subprocess.Popen(cmd, cwd=wd, env=workflow_env(wd), stdout=log, stderr=subprocess.STDOUT)
+    _PIPELINE.append(proc)
+
+    def report() -> None:
+        (root / "rc.part").write_text(str(proc.wait()))
+        (root / "rc.part").rename(root / "rc")
+
+    threading.Thread(target=report, daemon=True).start()
+
+
+@pytest.fixture(scope="session", autouse=True)
+def _ci_pipeline_started(request, tmp_path_factory):
+    """The CI-scale run starts as the session does when a selected test needs it; the worker
+    that started it waits for it at the end (another may still need it) and stops it when
+    the session is interrupted."""
+    if any(_uses(item, CI_FIXTURE) for item in request.session.items):
+        _start_ci_pipeline(_ci_root(tmp_path_factory))
+    yield
+    for proc in _PIPELINE:
+        try:
+            proc.wait(timeout=PIPELINE_TIMEOUT_S)
+        except (KeyboardInterrupt, subprocess.TimeoutExpired):
+            proc.send_signal(signal.SIGINT)
+            proc.wait(timeout=60)
+            raise
+
+
 @pytest.fixture(scope="session")
 def ci_run(tmp_path_factory) -> Path:
-    """The CI-scale pipeline, run once per session at -j2 (every target of ``all``)."""
-    wd = copy_workflow(tmp_path_factory.mktemp("ci"))
-    smk(wd, "all", "-j2")
-    return wd
+    """The CI-scale pipeline, run once per session at -j2 (every target of ``all``): its
+    working directory, once the run has finished."""
+    root = _ci_root(tmp_path_factory)
+    _start_ci_pipeline(root)
+    deadline = time.monotonic() + PIPELINE_TIMEOUT_S
+    while not (root / "rc").exists():
+        if time.monotonic() > deadline:
+            raise AssertionError(f"the CI-scale run did not finish in {PIPELINE_TIMEOUT_S} s")
+        time.sleep(1)
+    if (root / "rc").read_text().strip() != "0":
+        log = (root / "log.txt").read_text(errors="replace")
+        raise AssertionError(f"the CI-scale run failed:\n{log[-8000:]}")
+    return root / "wd"
