@@ -98,16 +98,30 @@ def _module_group(item: pytest.Item) -> str | None:
     return None
 
 
+def _needs_ci(item: pytest.Item) -> bool:
+    return _uses(item, CI_FIXTURE) or item.get_closest_marker("ci_run_last") is not None
+
+
 @pytest.hookimpl(tryfirst=True)
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
-    """The tests that wait for the CI-scale pipeline (and their module's group) last; the
-    groups marked for pytest-xdist (:func:`_module_group`)."""
+    """The order: first the tests that run something of their own before comparing it with
+    the CI-scale pipeline (marked ``ci_run_last``: their run overlaps the pipeline's; their
+    module's group with them), then those that need nothing of it, last those that start
+    from it (and their module's group); the groups marked for pytest-xdist
+    (:func:`_module_group`)."""
     groups = {id(item): _module_group(item) for item in items}
-    late = {groups[id(i)] for i in items if _uses(i, CI_FIXTURE) and groups[id(i)]}
+    first = {groups[id(i)] for i in items if i.get_closest_marker("ci_run_last") and groups[id(i)]}
+    late = {groups[id(i)] for i in items if _uses(i, CI_FIXTURE) and groups[id(i)]} - first
     for item in items:
         if groups[id(item)]:
             item.add_marker(pytest.mark.xdist_group(groups[id(item)]))
-    items.sort(key=lambda i: _uses(i, CI_FIXTURE) or groups[id(i)] in late)
+
+    def rank(item: pytest.Item) -> int:
+        if item.get_closest_marker("ci_run_last") or groups[id(item)] in first:
+            return 0
+        return 2 if _uses(item, CI_FIXTURE) or groups[id(item)] in late else 1
+
+    items.sort(key=rank)
 
 
 def _ci_root(tmp_path_factory) -> Path:
@@ -146,7 +160,7 @@ def _ci_pipeline_started(request, tmp_path_factory):
     """The CI-scale run starts as the session does when a selected test needs it; the worker
     that started it waits for it at the end (another may still need it) and stops it when
     the session is interrupted."""
-    if any(_uses(item, CI_FIXTURE) for item in request.session.items):
+    if any(_needs_ci(item) for item in request.session.items):
         _start_ci_pipeline(_ci_root(tmp_path_factory))
     yield
     for proc in _PIPELINE:

@@ -32,7 +32,8 @@ NR_SLICE = ("results/nr/key_numbers.json", "results/nr/imm/key_numbers.json")
 
 
 @pytest.mark.slow
-def test_generic_cpu_build_of_the_kernels_gives_the_same_nr_numbers(ci_run, tmp_path):
+@pytest.mark.ci_run_last
+def test_generic_cpu_build_of_the_kernels_gives_the_same_nr_numbers(request, tmp_path):
     """The nr study at CI scale with numba compiling for a generic x86-64 CPU, at -j1,
     against the session's host build at -j2: the key numbers agree within the
     reproduction rule (and the per-shard estimates are identical)."""
@@ -48,6 +49,7 @@ def test_generic_cpu_build_of_the_kernels_gives_the_same_nr_numbers(ci_run, tmp_
         timeout=COMMAND_TIMEOUT_S,
     )
     assert probe.stdout.split()[:2] == ["generic", "''"], probe.stdout  # no host features
+    ci_run = request.getfixturevalue("ci_run")
     n_keys = 0
     for frag in NR_SLICE:
         ours, host = (json.loads((d / frag).read_text()) for d in (wd, ci_run))

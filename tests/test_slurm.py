@@ -122,7 +122,8 @@ def retry_run(local_cluster, tmp_path_factory):
 
 
 @pytest.mark.slow
-def test_the_fusion_study_through_slurm_gives_the_local_key_numbers(ci_run, local_cluster, retry_run, tmp_path):
+@pytest.mark.ci_run_last
+def test_the_fusion_study_through_slurm_gives_the_local_key_numbers(request, local_cluster, retry_run, tmp_path):
     wd = copy_workflow(tmp_path)
     cmd = [
         SNAKEMAKE,
@@ -144,7 +145,7 @@ def test_the_fusion_study_through_slurm_gives_the_local_key_numbers(ci_run, loca
     states = _squeue_states(submitted)
     assert {s for s, _ in states.values()} == {"COMPLETED"}, states
     ours = json.loads((wd / SLICE).read_text())
-    local = json.loads((ci_run / SLICE).read_text())
+    local = json.loads((request.getfixturevalue("ci_run") / SLICE).read_text())
     assert len(ours) >= 10  # the fusion study publishes 10 keys
     assert compare(ours, local, mode="reproduce") == []
     assert {k: v["value"] for k, v in ours.items()} == {k: v["value"] for k, v in local.items()}

@@ -296,7 +296,8 @@ def test_only_affected_rules_rerun(ci_run, tmp_path):
     assert all("Input files updated by another job" in why for r, why in reasons.items() if r not in want)
 
 
-def test_interrupted_run_leaves_nothing_half_written_and_resumes_to_the_same_numbers(ci_run, tmp_path):
+@pytest.mark.ci_run_last
+def test_interrupted_run_leaves_nothing_half_written_and_resumes_to_the_same_numbers(request, tmp_path):
     """A -j1 run of the fusion study killed after two Monte Carlo points leaves no partial
     file; resumed at -j1 it finishes the rest, and its numbers and sweeps equal those of
     the session's uninterrupted -j2 run (same config: identical at any -j)."""
@@ -343,6 +344,7 @@ def test_interrupted_run_leaves_nothing_half_written_and_resumes_to_the_same_num
     # the rest, plus at most the point whose file was renamed into place as the run was
     # stopped, before Snakemake recorded it
     assert n_points - n_done <= redone <= n_points - n_done + 1, (redone, n_points, n_done)
+    ci_run = request.getfixturevalue("ci_run")
     for frag in ("results/fusion/key_numbers.json", "results/sens/fusion/key_numbers.json"):
         assert json.loads((wd / frag).read_text()) == json.loads((ci_run / frag).read_text()), frag
     for sweep in ("d_m", "sigma_tdoa_us", "sigma_aoa_rad"):
