@@ -1,16 +1,17 @@
-# Along-track and cross-track errors (docs/model/nr.md §6): every gated tracker free in 2-D
-# and held on the track (y = 0), and the headline tracker's along-track protection level.
-# Reads the nr shards and calibration; simulates nothing.
+# Along-track and cross-track errors (docs/model/nr.md §6): every tracker free in 2-D and
+# held on the track (y = 0), gated and not, the IMM runs' filters, and the headline tracker's
+# along-track protection level. Reads the nr shards, calibration and IMM runs; simulates nothing.
 
 register_figures("nr_along", ["nr_along_track"])
 KEY_NUMBER_FRAGMENTS.append("results/nr/along/key_numbers.json")
 
 
 rule nr_along_track:
-    """Every gated tracker free and track-bound: along/cross-track errors, protection level."""
+    """Every tracker free and track-bound, the IMM's: along/cross-track errors, protection level."""
     input:
         runs=expand("results/nr/estimates/{real}/s{shard}.nc", real=NR_PLAN.realizations, shard=range(NR["n_shards"])),
         calibration="results/nr/calibration.json",
+        imm=expand("results/nr/imm/{real}.nc", real=NR_PLAN.realizations),
     output:
         nc="results/nr/along/along_track.nc",
         numbers="results/nr/along/key_numbers.json",

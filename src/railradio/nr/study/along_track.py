@@ -1,27 +1,28 @@
 """Along-track and cross-track errors, the track-bound filter, and the along-track protection
 level (docs/model/nr.md §6).
 
-The 2-D EKF estimates the train's lateral position y although the train cannot leave its
-track; the source fixes the track at y = 0. Here every gated tracker of the main run (both
-receivers, each measurement set) runs twice on every realization: free in 2-D, as the
-headline runs it, and **track-bound** (:attr:`railradio.nr.tracking.ekf.TrackerConfig.track_bound`:
-y, v_y and a_y held at 0) with the same calibrated W and q — the calibration's NEES does not
-identify q (§6, the q band), so the track-bound filter keeps the 2-D filter's q and the
-comparison isolates what the track constraint does [ours]. Errors are split along the track
-(x̂ − x) and across it (ŷ, the train at y = 0).
+The 2-D EKF estimates the train's lateral position y although the train cannot leave its track;
+the source fixes the track at y = 0. Here every tracker of the main run (both receivers, each
+measurement set, with and without the χ² gate) runs twice on every realization: free in 2-D, as
+the main run runs it, and **track-bound**
+(:attr:`railradio.nr.tracking.ekf.TrackerConfig.track_bound`: y, v_y and a_y held at 0) with
+the same calibrated W and q — the calibration's NEES does not identify q (§6, the q band), so
+the track-bound filter keeps the 2-D filter's q and the comparison isolates what the track
+constraint does [ours]. Errors are split along the track (x̂ − x) and across it (ŷ, the train
+at y = 0); the IMM and the RTS-smoothed EKF of the ``nr_imm`` runs (their stored along-track
+and 2-D errors) are split alike.
 
-The along-track **protection level** at integrity risk P_IR is the filter's own bound
-PL = k σ_x with σ_x = √P_xx and k = Φ⁻¹(1 − P_IR/2), the two-sided Gaussian quantile, for
-P_IR of 10⁻³, 10⁻⁴ and 10⁻⁵ [ours: a span, not one standard's value]. Whether it holds is
-measured: the misleading-information (MI) rate is the share of scored epochs with
-|x̂ − x| > PL — a share per epoch, not the per-hour or per-operation risk a specification
-states — with its 90 % two-sided Clopper–Pearson interval [mi_lo, mi_hi]. The verdict, fixed
-before the run [ours]: the level **holds** at P_IR when mi_hi < P_IR, **fails** when
-mi_lo > P_IR, and is **undecided** otherwise (a run of n epochs can hold only when
-n ≥ 3/P_IR, the rule of three). Epochs are correlated (the filter's memory), so the interval
-is narrower than the run's evidence: a "holds" or "fails" is optimistic, an "undecided" is
-not. σ_x is computed at the calibrated q̂, which the calibration does not identify (the q
-band), so PL and the MI rate are those of q̂.
+The along-track **protection level** at integrity risk P_IR is the filter's own bound PL = k
+σ_x with σ_x = √P_xx and k = Φ⁻¹(1 − P_IR/2), the two-sided Gaussian quantile, for P_IR of
+10⁻³, 10⁻⁴ and 10⁻⁵ [ours: a span, not one standard's value]. Whether it holds is measured: the
+misleading-information (MI) rate is the share of scored epochs with |x̂ − x| > PL — a share per
+epoch, not the per-hour or per-operation risk a specification states — with its 90 % two-sided
+Clopper–Pearson interval [mi_lo, mi_hi]. The verdict, fixed before the run [ours]: the level
+**holds** at P_IR when mi_hi < P_IR, **fails** when mi_lo > P_IR, and is **undecided**
+otherwise (a run of n epochs can hold only when n ≥ 3/P_IR, the rule of three). Epochs are
+correlated (the filter's memory), so the interval is narrower than the run's evidence: a
+"holds" or "fails" is optimistic, an "undecided" is not. σ_x is computed at the calibrated q̂,
+which the calibration does not identify (the q band), so PL and the MI rate are those of q̂.
 """
 
 from __future__ import annotations
@@ -46,8 +47,12 @@ RECEIVERS = ("robust", "source")
 """Receivers whose trackers are compared (our receiver, the source's)."""
 MEASUREMENTS = ("aod", "toa", "aod_toa")
 """Measurement sets."""
-GATE = True
-"""Every tracker here runs with the χ² gate (the headline's setting)."""
+GATES = (True, False)
+"""With the χ² gate (the headline's setting) and without; the protection level's keys are the
+gated headline tracker's."""
+IMM_FILTERS = ("ekf", "imm", "rts")
+"""The filters of the ``nr_imm`` runs (results/nr/imm/r*.nc): the gated AOD+TOA EKF, the IMM,
+the RTS-smoothed EKF."""
 MODELS = ("free", "track")
 """The 2-D EKF and the track-bound EKF."""
 RISKS = (1e-3, 1e-4, 1e-5)
@@ -119,6 +124,10 @@ def protection(e_along: np.ndarray, sigma: np.ndarray, risk: float) -> dict[str,
     }
 
 
+def _gate_name(gate: bool) -> str:
+    return "" if gate else "ungated."
+
+
 def _scored(runs, rx, scn, cfg, strength) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Along-track and cross-track errors, σ_x and the along-track NEES of one tracker over the
     realizations' scored epochs (t ≥ SKIP_S), pooled."""
@@ -140,6 +149,76 @@ def _nan_stat(v: np.ndarray, fn) -> float:
     return float(fn(v)) if v.size else np.nan
 
 
+STATS = ("along_mean_m", "along_p95_m", "cross_mean_m", "cross_p95_m", "err_mean_m", "lost_frac")
+"""The accuracy of one tracker (:func:`_accuracy`)."""
+PL_KEYS = ("pl_median_m", "pl_p95_m", "mi_rate", "mi_lo", "mi_hi", "n_mi", "n_scored", "verdict")
+"""The protection level's variables, per risk."""
+ATTRS = {
+    "along_mean_m": ("m", "mean |along-track error| after SKIP_S"),
+    "along_p95_m": ("m", "95th pct |along-track error| after SKIP_S"),
+    "cross_mean_m": ("m", "mean |cross-track error| after SKIP_S (the train at y = 0)"),
+    "cross_p95_m": ("m", "95th pct |cross-track error| after SKIP_S"),
+    "err_mean_m": ("m", "mean 2-D error after SKIP_S"),
+    "lost_frac": ("1", "share of scored epochs lost (2-D error above half the RRH spacing)"),
+    "nees_median": ("1", "median along-track NEES e_x^2/P_xx (chi2_1 median 0.455)"),
+    "q": ("m2 s-5", "white-jerk intensity (the 2-D filter's calibration)"),
+    "pl_median_m": ("m", "median along-track protection level k sigma_x"),
+    "pl_p95_m": ("m", "95th pct along-track protection level"),
+    "mi_rate": ("1", "share of scored epochs with |along-track error| > protection level"),
+    "mi_lo": ("1", f"{LEVEL:.0%} Clopper-Pearson interval of mi_rate: low"),
+    "mi_hi": ("1", f"{LEVEL:.0%} Clopper-Pearson interval of mi_rate: high"),
+    "n_mi": ("1", "epochs with |along-track error| > protection level"),
+    "n_scored": ("1", "epochs scored"),
+    "verdict": ("1", "protection level: 1 holds (mi_hi < risk), -1 fails (mi_lo > risk), 0 undecided"),
+}
+"""Units and descriptions of the dataset's variables (the IMM's carry an ``imm_`` prefix)."""
+
+
+def _accuracy(e_along: np.ndarray, e_cross: np.ndarray, spacing_m: float) -> dict[str, float]:
+    """:data:`STATS` of pooled along- and cross-track errors [m] (NaN: no position)."""
+    err = np.hypot(e_along, e_cross)
+    a, c = np.abs(e_along), np.abs(e_cross)
+    return {
+        "along_mean_m": _nan_stat(a, np.mean),
+        "along_p95_m": _nan_stat(a, lambda v: np.percentile(v, 95)),
+        "cross_mean_m": _nan_stat(c, np.mean),
+        "cross_p95_m": _nan_stat(c, lambda v: np.percentile(v, 95)),
+        "err_mean_m": _nan_stat(err, np.mean),
+        "lost_frac": float(np.mean(loss.lost_mask(err, spacing_m))),
+    }
+
+
+def imm_along(imm_runs: Sequence[xr.Dataset], spacing_m: float) -> dict[str, np.ndarray]:
+    """The ``nr_imm`` filters' errors along and across the track, pooled over the
+    realizations' scored epochs (t ≥ SKIP_S): the along-track error is stored, the
+    cross-track one is the rest of the 2-D error, √(e² − e_x²) = |ŷ|.
+
+    Parameters
+    ----------
+    imm_runs : sequence of xarray.Dataset
+        The realizations' ``results/nr/imm/r*.nc`` (``along_err``, ``pos_err`` [m] per
+        (``filter``, ``epoch``), ``t`` [s]).
+    spacing_m : float
+        RRH spacing [m] (the loss rule).
+
+    Returns
+    -------
+    dict of str to numpy.ndarray
+        :data:`STATS` over :data:`IMM_FILTERS`.
+    """
+    out = {k: np.full(len(IMM_FILTERS), np.nan) for k in STATS}
+    for i, f in enumerate(IMM_FILTERS):
+        along, cross = [], []
+        for ds in imm_runs:
+            keep = ds["t"].values >= SKIP_S
+            a, e = (ds[v].sel(filter=f).values[keep] for v in ("along_err", "pos_err"))
+            along.append(a)
+            cross.append(np.sqrt(np.maximum(e**2 - a**2, 0.0)))
+        for k, v in _accuracy(np.concatenate(along), np.concatenate(cross), spacing_m).items():
+            out[k][i] = v
+    return out
+
+
 def along_track(
     runs: Sequence[xr.Dataset],
     scn: Scenario,
@@ -147,9 +226,11 @@ def along_track(
     tracker: dict[str, Any],
     selection: dict[str, str],
     spacing_m: float,
+    imm_runs: Sequence[xr.Dataset] = (),
 ) -> xr.Dataset:
-    """Every gated tracker free and track-bound on every realization: errors along and across
-    the track, the loss share, the along-track NEES and the protection level.
+    """Every tracker free and track-bound on every realization: errors along and across the
+    track, the loss share, the along-track NEES and the protection level; the ``nr_imm``
+    filters' errors split alike.
 
     Parameters
     ----------
@@ -166,85 +247,73 @@ def along_track(
         Receiver name -> strength measure of its measured RRHs.
     spacing_m : float
         RRH spacing [m], the loss rule's threshold (:func:`railradio.nr.tracking.loss.lost_mask`).
+    imm_runs : sequence of xarray.Dataset
+        The realizations' IMM runs (:func:`imm_along`); none: no ``imm_*`` variables.
 
     Returns
     -------
     xarray.Dataset
-        Over (``receiver``, ``measurements``, ``model``): ``along_mean_m``, ``along_p95_m``
-        (|x̂ − x|), ``cross_mean_m``, ``cross_p95_m`` (|ŷ|), ``err_mean_m`` (2-D) [m],
-        ``lost_frac`` [1], ``nees_median`` (along-track, against χ²₁'s median 0.455) [1],
-        ``q`` [m² s⁻⁵]; and over ``risk`` too: ``pl_median_m``, ``pl_p95_m`` [m], ``mi_rate``,
-        ``mi_lo``, ``mi_hi`` [1], ``n_mi``, ``n_scored``, ``verdict`` (1 holds, 0 undecided,
-        -1 fails).
+        Over (``receiver``, ``measurements``, ``gate``, ``model``): ``along_mean_m``,
+        ``along_p95_m`` (|x̂ − x|), ``cross_mean_m``, ``cross_p95_m`` (|ŷ|), ``err_mean_m``
+        (2-D) [m], ``lost_frac`` [1], ``nees_median`` (along-track, against χ²₁'s median 0.455)
+        [1], ``q`` [m² s⁻⁵]; and over ``risk`` too: ``pl_median_m``, ``pl_p95_m`` [m],
+        ``mi_rate``, ``mi_lo``, ``mi_hi`` [1], ``n_mi``, ``n_scored``, ``verdict`` (1 holds,
+        0 undecided, -1 fails); over ``filter`` (:data:`IMM_FILTERS`): ``imm_`` + each of
+        :data:`STATS`.
 
     Raises
     ------
     KeyError
-        When the calibration lacks a gated tracker of :data:`RECEIVERS` × :data:`MEASUREMENTS`.
+        When the calibration lacks a tracker of :data:`RECEIVERS` × :data:`MEASUREMENTS` ×
+        :data:`GATES`.
     """
-    shape = (len(RECEIVERS), len(MEASUREMENTS), len(MODELS))
-    stats = {k: np.full(shape, np.nan) for k in ("along_mean_m", "along_p95_m", "cross_mean_m", "cross_p95_m")}
-    stats |= {k: np.full(shape, np.nan) for k in ("err_mean_m", "lost_frac", "nees_median", "q")}
-    pl_keys = ("pl_median_m", "pl_p95_m", "mi_rate", "mi_lo", "mi_hi", "n_mi", "n_scored", "verdict")
-    pls = {k: np.full(shape + (len(RISKS),), np.nan) for k in pl_keys}
-    for i, rx in enumerate(RECEIVERS):
-        for j, meas in enumerate(MEASUREMENTS):
-            rec = cal[tracker_name(rx, meas, GATE)]
-            for m, model in enumerate(MODELS):
-                cfg = TrackerConfig.from_record(
-                    rec, measurements=meas, gate=GATE, gate_prob=tracker["gate_prob"], track_bound=model == "track"
-                )
-                e_a, e_c, sig, nees = _scored(runs, rx, scn, cfg, selection[rx])
-                err = np.hypot(e_a, e_c)
-                at = (i, j, m)
-                stats["lost_frac"][at] = float(np.mean(loss.lost_mask(err, spacing_m)))
-                stats["along_mean_m"][at] = _nan_stat(np.abs(e_a), np.mean)
-                stats["along_p95_m"][at] = _nan_stat(np.abs(e_a), lambda v: np.percentile(v, 95))
-                stats["cross_mean_m"][at] = _nan_stat(np.abs(e_c), np.mean)
-                stats["cross_p95_m"][at] = _nan_stat(np.abs(e_c), lambda v: np.percentile(v, 95))
-                stats["err_mean_m"][at] = _nan_stat(err, np.mean)
-                stats["nees_median"][at] = _nan_stat(nees, np.median)
-                stats["q"][at] = cfg.q
-                for r, risk in enumerate(RISKS):
-                    p = protection(e_a, sig, risk)
-                    for k, src in zip(pl_keys, (*pl_keys[:-2], "n", "verdict"), strict=True):
-                        pls[k][at + (r,)] = float(p[src])
-    dims = ("receiver", "measurements", "model")
-    attrs = {
-        "along_mean_m": ("m", "mean |along-track error| after SKIP_S"),
-        "along_p95_m": ("m", "95th pct |along-track error| after SKIP_S"),
-        "cross_mean_m": ("m", "mean |cross-track error| after SKIP_S (the train at y = 0)"),
-        "cross_p95_m": ("m", "95th pct |cross-track error| after SKIP_S"),
-        "err_mean_m": ("m", "mean 2-D error after SKIP_S"),
-        "lost_frac": ("1", "share of scored epochs lost (2-D error above half the RRH spacing)"),
-        "nees_median": ("1", "median along-track NEES e_x^2/P_xx (chi2_1 median 0.455)"),
-        "q": ("m2 s-5", "white-jerk intensity (the 2-D filter's calibration)"),
-        "pl_median_m": ("m", "median along-track protection level k sigma_x"),
-        "pl_p95_m": ("m", "95th pct along-track protection level"),
-        "mi_rate": ("1", "share of scored epochs with |along-track error| > protection level"),
-        "mi_lo": ("1", f"{LEVEL:.0%} Clopper-Pearson interval of mi_rate: low"),
-        "mi_hi": ("1", f"{LEVEL:.0%} Clopper-Pearson interval of mi_rate: high"),
-        "n_mi": ("1", "epochs with |along-track error| > protection level"),
-        "n_scored": ("1", "epochs scored"),
-        "verdict": ("1", "protection level: 1 holds (mi_hi < risk), -1 fails (mi_lo > risk), 0 undecided"),
-    }
-    data = {k: (dims, v, {"units": attrs[k][0], "long_name": attrs[k][1]}) for k, v in stats.items()}
-    data |= {k: (dims + ("risk",), v, {"units": attrs[k][0], "long_name": attrs[k][1]}) for k, v in pls.items()}
+    shape = (len(RECEIVERS), len(MEASUREMENTS), len(GATES), len(MODELS))
+    stats = {k: np.full(shape, np.nan) for k in (*STATS, "nees_median", "q")}
+    pls = {k: np.full(shape + (len(RISKS),), np.nan) for k in PL_KEYS}
+    for at in np.ndindex(shape):
+        rx, meas, gate, model = RECEIVERS[at[0]], MEASUREMENTS[at[1]], GATES[at[2]], MODELS[at[3]]
+        cfg = TrackerConfig.from_record(
+            cal[tracker_name(rx, meas, gate)],
+            measurements=meas,
+            gate=gate,
+            gate_prob=tracker["gate_prob"],
+            track_bound=model == "track",
+        )
+        e_a, e_c, sig, nees = _scored(runs, rx, scn, cfg, selection[rx])
+        for k, v in _accuracy(e_a, e_c, spacing_m).items():
+            stats[k][at] = v
+        stats["nees_median"][at] = _nan_stat(nees, np.median)
+        stats["q"][at] = cfg.q
+        for r, risk in enumerate(RISKS):
+            p = protection(e_a, sig, risk)
+            for k, src in zip(PL_KEYS, (*PL_KEYS[:-2], "n", "verdict"), strict=True):
+                pls[k][at + (r,)] = float(p[src])
+    dims = ("receiver", "measurements", "gate", "model")
+    data = {k: (dims, v, {"units": ATTRS[k][0], "long_name": ATTRS[k][1]}) for k, v in stats.items()}
+    data |= {k: (dims + ("risk",), v, {"units": ATTRS[k][0], "long_name": ATTRS[k][1]}) for k, v in pls.items()}
+    if imm_runs:
+        imm = imm_along(imm_runs, spacing_m)
+        data |= {f"imm_{k}": (("filter",), v, {"units": ATTRS[k][0], "long_name": ATTRS[k][1]}) for k, v in imm.items()}
     coords = {
         "receiver": ("receiver", list(RECEIVERS), {"units": "1", "long_name": "receiver"}),
         "measurements": ("measurements", list(MEASUREMENTS), {"units": "1", "long_name": "measurement set"}),
+        "gate": ("gate", [int(g) for g in GATES], {"units": "1", "long_name": "chi-square gate (1 on, 0 off)"}),
         "model": ("model", list(MODELS), {"units": "1", "long_name": "free: 2-D EKF; track: track-bound EKF (y = 0)"}),
         "risk": ("risk", list(RISKS), {"units": "1", "long_name": "integrity risk"}),
     }
-    return xr.Dataset(data, coords=coords, attrs={"skip_s": SKIP_S, "level": LEVEL, "gate": int(GATE)})
+    if imm_runs:
+        coords["filter"] = ("filter", list(IMM_FILTERS), {"units": "1", "long_name": "nr_imm filter"})
+    return xr.Dataset(data, coords=coords, attrs={"skip_s": SKIP_S, "level": LEVEL})
 
 
 def key_numbers(at: xr.Dataset) -> dict[str, Any]:
     """Key numbers ``nr.along.*`` of :func:`along_track`'s dataset: every tracker's along-track
     mean and 95th percentile, the free filter's cross-track mean and the loss share (an
-    accuracy is null when lost, :func:`railradio.nr.tracking.loss.accuracy`), and the headline
-    tracker's protection level at each risk, free and track-bound: its median, the MI rate, its
-    interval and the verdict (null with the track lost).
+    accuracy is null when lost, :func:`railradio.nr.tracking.loss.accuracy`; the ungated
+    trackers' under ``<receiver>.<measurements>.ungated.``), the same of the IMM filters
+    (``nr.along.imm.<filter>.``) when the dataset has them, and the gated headline tracker's
+    protection level at each risk, free and track-bound: its median, the MI rate, its interval
+    and the verdict (null with the track lost).
 
     Parameters
     ----------
@@ -264,21 +333,29 @@ def key_numbers(at: xr.Dataset) -> dict[str, Any]:
             v = loss.accuracy(v, lost_frac)
         out[f"nr.along.{name}"] = KeySpec(f"nr.along.{name}", unit, desc, digits=digits).entry(v, lost_frac=lost_frac)
 
-    for rx in RECEIVERS:
-        for meas in MEASUREMENTS:
-            for model in MODELS:
-                s = at.sel(receiver=rx, measurements=meas, model=model)
-                lost = float(s["lost_frac"])
-                what = f"{LABELS[model]}, {rx} receiver, {meas}, chi2 gate"
-                rows = [("along_m.mean", "along_mean_m", "mean |along-track error|")]
-                rows += [("along_m.p95", "along_p95_m", "95th pct |along-track error|")]
-                if model == "free":  # the track-bound filter's ŷ is 0 by construction
-                    rows += [("cross_m.mean", "cross_mean_m", "mean |cross-track error|")]
-                for name, var, desc in rows:
-                    put(f"{rx}.{meas}.{model}.{name}", "m", f"{desc} of the {what}", float(s[var]), lost)
-                put(f"{rx}.{meas}.{model}.lost_frac", "1", f"share of epochs lost by the {what}", lost)
+    def accuracy(base, s, what, cross=True):
+        lost = float(s["lost_frac"])
+        rows = [("along_m.mean", "along_mean_m", "mean |along-track error|")]
+        rows += [("along_m.p95", "along_p95_m", "95th pct |along-track error|")]
+        if cross:
+            rows += [("cross_m.mean", "cross_mean_m", "mean |cross-track error|")]
+        for name, var, desc in rows:
+            put(f"{base}.{name}", "m", f"{desc} of the {what}", float(s[var]), lost)
+        put(f"{base}.lost_frac", "1", f"share of epochs lost by the {what}", lost)
+
+    for rx, meas, gate, model in np.ndindex(len(RECEIVERS), len(MEASUREMENTS), len(GATES), len(MODELS)):
+        rx, meas, gate, model = RECEIVERS[rx], MEASUREMENTS[meas], GATES[gate], MODELS[model]
+        s = at.sel(receiver=rx, measurements=meas, gate=int(gate), model=model)
+        what = f"{LABELS[model]}, {rx} receiver, {meas}, {'chi2 gate' if gate else 'no gate'}"
+        # the track-bound filter's ŷ is 0 by construction: no cross-track key
+        accuracy(f"{rx}.{meas}.{_gate_name(gate)}{model}", s, what, cross=model == "free")
+    if "filter" in at.dims:
+        names = {"ekf": "gated AOD+TOA EKF", "imm": "IMM", "rts": "RTS-smoothed EKF"}
+        for f in IMM_FILTERS:
+            s = at[[f"imm_{k}" for k in STATS]].sel(filter=f).rename({f"imm_{k}": k for k in STATS})
+            accuracy(f"imm.{f}", s, f"{names[f]} of the IMM runs (nr_imm)")
     rx, meas = HEADLINE
-    head = at.sel(receiver=rx, measurements=meas)
+    head = at.sel(receiver=rx, measurements=meas, gate=1)
     put(f"{rx}.{meas}.n_scored", "1", "epochs scored per tracker", float(head["n_scored"].max()), digits=5)
     for model in MODELS:
         lost = float(head["lost_frac"].sel(model=model))
@@ -317,6 +394,7 @@ def plot_along(at: xr.Dataset, pdf, png) -> None:
         The figure is written to ``pdf`` and ``png``.
     """
     fig, (ab, ap) = figure(ncols=2, figsize=(10.0, 4.0), layout="constrained")
+    at = at.sel(gate=1)  # the gated trackers
     rx = HEADLINE[0]
     width = 0.25
     xs = np.arange(len(MEASUREMENTS))
