@@ -10,6 +10,7 @@ cluster).
 """
 
 import os
+import re
 import shutil
 import signal
 import subprocess
@@ -84,18 +85,28 @@ def _uses(item: pytest.Item, name: str) -> bool:
     return name in getattr(item, "fixturenames", ())
 
 
-def _module_group(item: pytest.Item) -> str | None:
-    """The item's module when one of its fixtures (ours, not pytest's) is module-scoped, or
-    ``slurm`` for the SLURM tests (one local cluster a session)."""
-    module = item.nodeid.split("::")[0]
+def _grouped_modules() -> frozenset[str]:
+    """The test modules (paths relative to the repository) whose tests share a module-scoped
+    fixture: those defining one, and every module of a directory whose conftest.py does."""
+    out = set()
+    for path in (ROOT / "tests").rglob("*.py"):
+        if not re.search(r'^@pytest\.fixture\(scope="module"', path.read_text(encoding="utf-8"), re.MULTILINE):
+            continue
+        mods = path.parent.glob("test_*.py") if path.name == "conftest.py" else [path]
+        out |= {str(m.relative_to(ROOT)) for m in mods}
+    return frozenset(out)
+
+
+GROUPED = _grouped_modules()
+
+
+def _module_group(nodeid: str) -> str | None:
+    """The test's group: ``slurm`` for the SLURM tests (one local cluster a session), its
+    module for a module of :data:`GROUPED`, else none (the test is scheduled alone)."""
+    module = nodeid.split("::")[0]
     if module.endswith("test_slurm.py"):
         return "slurm"
-    info = getattr(item, "_fixtureinfo", None)
-    for defs in info.name2fixturedefs.values() if info else ():
-        fdef = defs[-1]
-        if fdef.scope == "module" and str(fdef.baseid).startswith("tests"):
-            return module
-    return None
+    return module if module in GROUPED else None
 
 
 def _needs_ci(item: pytest.Item) -> bool:
@@ -104,24 +115,39 @@ def _needs_ci(item: pytest.Item) -> bool:
 
 @pytest.hookimpl(tryfirst=True)
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
-    """The order: first the tests that run something of their own before comparing it with
-    the CI-scale pipeline (marked ``ci_run_last``: their run overlaps the pipeline's; their
-    module's group with them), then those that need nothing of it, last those that start
-    from it (and their module's group); the groups marked for pytest-xdist
-    (:func:`_module_group`)."""
-    groups = {id(item): _module_group(item) for item in items}
+    """The order: first the tests that need nothing of the CI-scale pipeline (they run while
+    it does), then those that run something of their own before comparing it with the
+    pipeline's (marked ``ci_run_last``: their runs, and the SLURM study's polling, overlap the
+    pipeline's end; their group with them), last those that start from it (and their group;
+    :func:`_module_group`). pytest-xdist's workers send this order to the scheduler
+    (:func:`pytest_xdist_make_scheduler`), which keeps it."""
+    groups = {id(item): _module_group(item.nodeid) for item in items}
     first = {groups[id(i)] for i in items if i.get_closest_marker("ci_run_last") and groups[id(i)]}
     late = {groups[id(i)] for i in items if _uses(i, CI_FIXTURE) and groups[id(i)]} - first
-    for item in items:
-        if groups[id(item)]:
-            item.add_marker(pytest.mark.xdist_group(groups[id(item)]))
 
     def rank(item: pytest.Item) -> int:
         if item.get_closest_marker("ci_run_last") or groups[id(item)] in first:
-            return 0
-        return 2 if _uses(item, CI_FIXTURE) or groups[id(item)] in late else 1
+            return 1
+        return 2 if _uses(item, CI_FIXTURE) or groups[id(item)] in late else 0
 
     items.sort(key=rank)
+
+
+def pytest_xdist_make_scheduler(config: pytest.Config, log):
+    """With ``--dist loadgroup``: pytest-xdist's scope scheduler with our groups
+    (:func:`_module_group`; a test without one is a unit of its own) and the collection's
+    order kept. (pytest-xdist 3.8's own loadgroup reads groups from node ids it rewrites,
+    which pytest 9 no longer lets it do: every test would be scheduled alone.)"""
+    if config.getvalue("dist") != "loadgroup":
+        return None
+    from xdist.scheduler import LoadScopeScheduling
+
+    class GroupScheduling(LoadScopeScheduling):
+        def _split_scope(self, nodeid: str) -> str:
+            return _module_group(nodeid) or nodeid
+
+    config.option.loadscopereorder = False  # the collection's order: tests/conftest.py's ranks
+    return GroupScheduling(config, log)
 
 
 def _ci_root(tmp_path_factory) -> Path:
