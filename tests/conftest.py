@@ -58,6 +58,13 @@ def workflow_env(wd: Path, **extra: str) -> dict[str, str]:
     return {**os.environ, "PYTHONPATH": str(wd / "src"), "MPLBACKEND": "Agg", **extra}
 
 
+def smk_command(*args: str, ci: bool = True) -> list[str]:
+    """The Snakemake command line with the default profile (and the CI config unless ``ci=False``)."""
+    return [SNAKEMAKE, *args, "--workflow-profile", "workflow/profiles/default"] + (
+        ["--configfile", "config/ci.yaml"] if ci else []
+    )
+
+
 def smk(
     wd: Path,
     *args: str,
@@ -67,9 +74,7 @@ def smk(
     env: dict[str, str] | None = None,
 ) -> subprocess.CompletedProcess:
     """Run Snakemake in ``wd`` with the default profile (and the CI config unless ``ci=False``)."""
-    cmd = [SNAKEMAKE, *args, "--workflow-profile", "workflow/profiles/default"]
-    if ci:
-        cmd += ["--configfile", "config/ci.yaml"]
+    cmd = smk_command(*args, ci=ci)
     run = subprocess.run(
         cmd, cwd=wd, env=env or workflow_env(wd), capture_output=True, text=True, check=False, timeout=timeout
     )
@@ -169,9 +174,10 @@ def _start_ci_pipeline(root: Path) -> None:
     except FileExistsError:
         return
     wd = copy_workflow(root / "wd")
-    cmd = [SNAKEMAKE, "all", "-j2", "--workflow-profile", "workflow/profiles/default", "--configfile", "config/ci.yaml"]
     with open(root / "log.txt", "w", encoding="utf-8") as log:
-        proc = subprocess.Popen(cmd, cwd=wd, env=workflow_env(wd), stdout=log, stderr=subprocess.STDOUT)
+        proc = subprocess.Popen(
+            smk_command("all", "-j2"), cwd=wd, env=workflow_env(wd), stdout=log, stderr=subprocess.STDOUT
+        )
     _PIPELINE.append(proc)
 
     def report() -> None:

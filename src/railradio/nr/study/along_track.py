@@ -27,6 +27,7 @@ which the calibration does not identify (the q band), so PL and the MI rate are 
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Sequence
 from typing import Any
 
@@ -343,8 +344,7 @@ def key_numbers(at: xr.Dataset) -> dict[str, Any]:
             put(f"{base}.{name}", "m", f"{desc} of the {what}", float(s[var]), lost)
         put(f"{base}.lost_frac", "1", f"share of epochs lost by the {what}", lost)
 
-    for rx, meas, gate, model in np.ndindex(len(RECEIVERS), len(MEASUREMENTS), len(GATES), len(MODELS)):
-        rx, meas, gate, model = RECEIVERS[rx], MEASUREMENTS[meas], GATES[gate], MODELS[model]
+    for rx, meas, gate, model in itertools.product(RECEIVERS, MEASUREMENTS, GATES, MODELS):
         s = at.sel(receiver=rx, measurements=meas, gate=int(gate), model=model)
         what = f"{LABELS[model]}, {rx} receiver, {meas}, {'chi2 gate' if gate else 'no gate'}"
         # the track-bound filter's ŷ is 0 by construction: no cross-track key
