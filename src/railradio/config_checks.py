@@ -176,6 +176,7 @@ def nr_problems(nr: Mapping[str, Any], root: str = "nr", main: bool = True) -> I
                     f"phases that keep the speed >= 0 (this one ends at {v:.3g} m/s)",
                 )
     yield from _prefixed(root, _ascending(nr, "tracker.w_distance_edges_m"))
+    yield from _prefixed(root, _ascending(nr, "tracker.aod_angle_edges_deg"))
     if main and nr["fidelity"]["realization"] >= nr["realizations"]:
         yield (
             f"{root}.fidelity.realization",

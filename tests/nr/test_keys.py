@@ -17,6 +17,7 @@ def _track(err_value: float | np.ndarray, n: int = 200, spacing_m: float = 500.0
     ds = xr.Dataset(
         {
             "pos_err": (("receiver", "measurements", "gate", "epoch"), pos),
+            "along_err": (("receiver", "measurements", "gate", "epoch"), -0.6 * pos),
             "snap_err": (("receiver", "measurements", "epoch"), pos[:, :, 0]),
             "aod_err": (("receiver", "epoch", "slot"), np.full((2, n, 3), np.radians(0.5))),
             "range_err": (("receiver", "epoch", "slot"), np.where(np.arange(3) == 2, np.nan, 0.4) * np.ones((2, n, 3))),

@@ -91,6 +91,7 @@ def _track(n: int, err: float) -> xr.Dataset:
     return xr.Dataset(
         {
             "pos_err": (("receiver", "measurements", "gate", "epoch"), pos),
+            "along_err": (("receiver", "measurements", "gate", "epoch"), -0.6 * pos),  # cross: 0.8 pos
             "aod_err": (("receiver", "epoch", "slot"), np.full((2, n, 3), 0.01)),
             "range_err": (("receiver", "epoch", "slot"), np.full((2, n, 3), 0.4)),
             "t": (("epoch",), np.arange(n) * 0.1),
@@ -105,6 +106,9 @@ def test_sensitivity_key_numbers_cut_each_case_to_its_epochs():
     k = sensitivity_key_numbers(base, {"short": short}, {"base": 400, "short": 200})
     # base: epochs 50..399, half at 1 and half at 10 m; short: epochs 50..199 at 2 m
     assert k["sens.nr.base.robust.track.aod_toa_gated.err_m.mean"]["value"] == pytest.approx((150 * 1 + 200 * 10) / 350)
+    p = "sens.nr.short.robust.track.aod_toa_gated"
+    assert k[f"{p}.along_m.mean"]["value"] == pytest.approx(0.6 * 2.0)
+    assert k[f"{p}.cross_m.mean"]["value"] == pytest.approx(0.8 * 2.0)
     assert k["sens.nr.short.robust.track.aod_toa_gated.err_m.mean"]["value"] == pytest.approx(2.0)
     assert "first 200 epochs" in k["sens.nr.short.source.meas.toa_err_m.p95"]["description"]
     with pytest.raises(ValueError, match="fewer than n_epochs"):

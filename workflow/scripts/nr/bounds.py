@@ -26,6 +26,9 @@ scn = scenario_from_config(dict(smk.params.sim))
 dep = scn.deployment
 dh = dep.h_bs_m - dep.h_ut_m
 cal = json.loads(open(smk.input.calibration, encoding="utf-8").read())[smk.params.calibrated]
+# the AOD spread the tracker faces: about the AOD model's biases when it has one (one σ for
+# every angle bin, railradio.nr.tracking.aod_model.fit), else the single calibrated σ
+s_aod = cal["sigma_aod_angle_bins_rad"][0] if cal.get("sigma_aod_angle_bins_rad") else cal["sigma_aod_rad"]
 key = spawn_key("nr", int(smk.wildcards.real[1:]))
 shadow = ShadowingMap(smk.params.seed, key + (KEY_SHADOWING,), dep, scn.radio)
 t = scn.trajectory.times_s()[: smk.params.n_epochs]
@@ -43,28 +46,19 @@ for k in range(n):
     xy = np.stack([dep.x_m[lb.link_rrh[best]] - lb.link_panel_x_m[best], np.full(best.size, dep.offset_m)], axis=1)
     s_r = SPEED_OF_LIGHT_M_S * s_tau[best]
     crb_best[k] = s_r[0]
-    peb_crb[k] = peb_m(xy, float(x[k]), dh, s_r, cal["sigma_aod_rad"])
+    peb_crb[k] = peb_m(xy, float(x[k]), dh, s_r, s_aod)
     s_r_q = np.sqrt(s_r**2 + INTEGER_SAMPLE_SIGMA_M**2)  # an integer-sample TOA estimator
-    peb[k] = peb_m(xy, float(x[k]), dh, s_r_q, cal["sigma_aod_rad"])
+    peb[k] = peb_m(xy, float(x[k]), dh, s_r_q, s_aod)
     xy_seq.append(xy)
     s_seq.append(s_r_q / SPEED_OF_LIGHT_M_S)
-pcrb = pcrb_m(
-    xy_seq,
-    x,
-    dh,
-    s_seq,
-    cal["sigma_aod_rad"],
-    scn.trajectory.dt_s,
-    cal["q"],
-    np.diag([100.0, 100.0, 1.0, 1.0, 1.0, 1.0]),
-)
+pcrb = pcrb_m(xy_seq, x, dh, s_seq, s_aod, scn.trajectory.dt_s, cal["q"], np.diag([100.0, 100.0, 1.0, 1.0, 1.0, 1.0]))
 # the true motion: constant acceleration within phases, unknown jumps at the changes
 pcrb_true = pcrb_m(
     xy_seq,
     x,
     dh,
     s_seq,
-    cal["sigma_aod_rad"],
+    s_aod,
     scn.trajectory.dt_s,
     0.0,
     np.diag([100.0, 100.0, 1.0, 1.0, 1.0, 1.0]),

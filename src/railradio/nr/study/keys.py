@@ -51,7 +51,7 @@ def _per_real(tracks: list[xr.Dataset], rx: str, fn) -> tuple[float, float | Non
     return pooled, float(np.std(each, ddof=1) / np.sqrt(len(tracks)))
 
 
-_ACCURACY = re.compile(r"^track\.(?P<measurements>aod_toa|aod|toa)(?P<gated>_gated)?\.err_m\.\w+$")
+_ACCURACY = re.compile(r"^track\.(?P<measurements>aod_toa|aod|toa)(?P<gated>_gated)?\.(err|along|cross)_m\.\w+$")
 """An all-epoch accuracy key of a tracker (reported only where the track is rarely lost)."""
 
 TRACK_LOSS_SPECS = {
@@ -155,6 +155,18 @@ def _metric_fns(rx: str) -> dict:
             ]
         )
 
+    def along(ts, measurements, gate=0):
+        return np.concatenate(
+            [
+                t["along_err"].sel(receiver=rx, measurements=measurements, gate=gate).values[t["t"].values >= SKIP_S]
+                for t in ts
+            ]
+        )
+
+    def cross(ts, measurements, gate=0):
+        e, a = err(ts, measurements, gate), along(ts, measurements, gate)
+        return np.sqrt(np.maximum(e**2 - a**2, 0.0))
+
     def meas(ts, name):
         return np.concatenate([t[name].sel(receiver=rx).values.ravel() for t in ts])
 
@@ -175,6 +187,8 @@ def _metric_fns(rx: str) -> dict:
         "track.aod_toa_gated.err_m.p95": lambda ts: float(np.nanpercentile(err(ts, "aod_toa", 1), 95)),
         "track.aod_toa_gated.err_m.p99": lambda ts: float(np.nanpercentile(err(ts, "aod_toa", 1), 99)),
         "track.aod_toa_gated.frac_submeter": lambda ts: float(np.mean(err(ts, "aod_toa", 1) < 1.0)),
+        "track.aod_toa_gated.along_m.mean": lambda ts: float(np.nanmean(np.abs(along(ts, "aod_toa", 1)))),
+        "track.aod_toa_gated.cross_m.mean": lambda ts: float(np.nanmean(cross(ts, "aod_toa", 1))),
         "snapshot.aod_toa.err_m.median": lambda ts: float(
             np.nanmedian(np.concatenate([t["snap_err"].sel(receiver=rx, measurements="aod_toa").values for t in ts]))
         ),
@@ -337,7 +351,8 @@ def calibration_key_numbers(cal: dict[str, dict]) -> dict[str, Any]:
         Key name -> its JSON entry (:meth:`railradio.keynumbers.KeySpec.entry`: ``value``,
         ``unit``, ``description``, source value and relation, ``mc_stderr``, optional ``lost_frac``).
         Per tracker ``q``, ``q_at_edge``, ``q_cost_monotone``, ``q_cost``, ``sigma_aod_deg`` [deg],
-        ``sigma_range_m`` [m]; and the counts ``nr.cal.n_trackers``, ``nr.cal.n_q_at_edge``,
+        ``sigma_range_m`` [m], and with the AOD model per angle bin b ``aod_bias_deg.b<b>`` and
+        ``aod_sigma_deg.b<b>`` [deg]; and the counts ``nr.cal.n_trackers``, ``nr.cal.n_q_at_edge``,
         ``nr.cal.n_q_at_edge_monotone``.
     """
     out: dict[str, Any] = {}
@@ -356,11 +371,22 @@ def calibration_key_numbers(cal: dict[str, dict]) -> dict[str, Any]:
             "sigma_range_m": rec["sigma_toa_s"] * SPEED_OF_LIGHT_M_S,
         }
         who = "" if rx == "source" else f" ({rx} receiver)"
+        what = f"EKF {measurements}{', gated' if gate == 'gate' else ''}{who}"
         for metric, (unit, desc) in CALIBRATION_SPECS.items():
             key = f"{prefix}{track}.{metric}"
-            out[key] = KeySpec(
-                key, unit, f"{desc}, EKF {measurements}{', gated' if gate == 'gate' else ''}{who}"
-            ).entry(values[metric])
+            out[key] = KeySpec(key, unit, f"{desc}, {what}").entry(values[metric])
+        edges_deg = np.degrees(rec.get("aod_angle_edges_rad", []))
+        bins = zip(rec.get("aod_bias_bins_rad", []), rec.get("sigma_aod_angle_bins_rad", []), strict=True)
+        for b, (bias, sig) in enumerate(bins):
+            lo = f"{edges_deg[b - 1]:g}" if b else "0"
+            hi = f"{edges_deg[b]:g}" if b < edges_deg.size else "90"
+            where = f"at {lo}-{hi} deg from endfire (true angle)"
+            for metric, v, desc in (
+                ("aod_bias_deg", bias, "calibrated AOD bias toward broadside"),
+                ("aod_sigma_deg", sig, "calibrated AOD standard deviation about that bias"),
+            ):
+                key = f"{prefix}{track}.{metric}.b{b}"
+                out[key] = KeySpec(key, "deg", f"{desc} {where}, {what}").entry(float(np.degrees(v)))
     edges = [k for k in out if k.endswith(".q_at_edge") and out[k]["value"] == 1.0]
     for key, desc, value in (
         ("nr.cal.n_trackers", "trackers calibrated (receiver x measurement set x gate)", len(cal)),
@@ -375,7 +401,11 @@ def calibration_key_numbers(cal: dict[str, dict]) -> dict[str, Any]:
     return out
 
 
-SENSITIVITY_SPECS = {"meas.toa_err_m.median_abs": ("m", "median |TOA range error| of the measured RRHs (valid TOAs)")}
+SENSITIVITY_SPECS = {
+    "meas.toa_err_m.median_abs": ("m", "median |TOA range error| of the measured RRHs (valid TOAs)"),
+    "track.aod_toa_gated.along_m.mean": ("m", "mean |along-track error| of the gated EKF AOD+TOA"),
+    "track.aod_toa_gated.cross_m.mean": ("m", "mean |cross-track error| of the gated EKF AOD+TOA"),
+}
 """Metrics of the sensitivity cases only (unit, description), beside :data:`SPECS`."""
 
 SENSITIVITY_METRICS = (
@@ -387,6 +417,8 @@ SENSITIVITY_METRICS = (
     "track.aod_toa.err_m.mean",
     "track.aod_toa_gated.err_m.mean",
     "track.aod_toa_gated.err_m.p95",
+    "track.aod_toa_gated.along_m.mean",
+    "track.aod_toa_gated.cross_m.mean",
 )
 
 

@@ -1,8 +1,9 @@
 """From per-RRH AOD/TOA measurements to a track: motion and measurement models (source eq. 10–14),
-snapshot fixes, the EKF and IMM, the RTS smoother, calibration on a separate run, lost-track
-accounting, and the bounds.
+the AOD's error near endfire, snapshot fixes, the EKF and IMM, the RTS smoother, calibration on
+a separate run, lost-track accounting, and the bounds.
 """
 
+from railradio.nr.tracking.aod_model import endfire_angle, predicted_bias
 from railradio.nr.tracking.bounds import (
     BETA_RMS_HZ,
     DETECT_E_OVER_N0,
@@ -73,6 +74,7 @@ __all__ = [
     "change_epochs",
     "detected_blocks",
     "distances_m",
+    "endfire_angle",
     "h_terms",
     "hx",
     "inlier_sigma",
@@ -85,6 +87,7 @@ __all__ = [
     "pcrb_m",
     "peb_m",
     "position_nees",
+    "predicted_bias",
     "process_noise",
     "q_for_jump",
     "residual_fn",

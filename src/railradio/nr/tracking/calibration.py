@@ -8,6 +8,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.stats import chi2, median_abs_deviation
 
+import railradio.nr.tracking.aod_model as aod_model
 from railradio.constants import SPEED_OF_LIGHT_M_S
 from railradio.nr.channel.antenna import wrap_rad
 from railradio.nr.tracking.ekf import TrackerConfig, nees_position
@@ -232,6 +233,7 @@ def calibrate(
     gate_prob: float = 0.99,
     search: dict | None = None,
     start_speed_sigma_m_s: float = 1.0,
+    aod_angle_edges_rad: tuple[float, ...] = (),
 ) -> TrackerConfig:
     """Measurement and process noise from a calibration run (never the evaluation run).
 
@@ -239,7 +241,9 @@ def calibrate(
     at ``gate_prob`` keeps (:func:`inlier_sigma`), the TOA one floored at the
     integer-sample quantization 1/(√12 F_s); with ``distance_edges_m``, also per bin of the
     true 2-D distance (a bin with fewer than ``min_per_bin`` measurements takes the overall
-    values). q: the value whose position NEES on the calibration run (whose truth is
+    values); with ``aod_angle_edges_rad``, the AOD's bias toward broadside and σ per bin of
+    the true angle from endfire (:func:`railradio.nr.tracking.aod_model.fit`), with which the
+    tracker predicts and weights each AOD. q: the value whose position NEES on the calibration run (whose truth is
     legitimately known) is consistent, |log(median NEES / median χ²₂)| smallest, over
     ``q_grid``; when an edge of the grid wins, the grid is extended by decades beyond it up
     to :data:`Q_SEARCH_LIMITS`. ``search`` (a dict) receives the q values tried, their
@@ -282,6 +286,8 @@ def calibrate(
         Filled with the q search record (see above) when given.
     start_speed_sigma_m_s : float
         σ of the initial speed about 0, m/s (> 0).
+    aod_angle_edges_rad : tuple of float
+        Increasing angle-from-endfire bin edges inside (0, π/2), rad (empty: no AOD model).
 
     Returns
     -------
@@ -297,6 +303,17 @@ def calibrate(
     e_aod, e_rng, d3 = measurement_errors(ds, strength, with_distance=True)
     dist = np.sqrt(np.maximum(d3**2 - dh_m**2, 0.0))  # 2-D, as the tracker predicts it
     s_aod, s_toa, bins = robust_sigmas(e_aod, e_rng, dist, distance_edges_m, min_per_bin, fs_hz, gate_prob)
+    if aod_angle_edges_rad:
+        order, ok = selected(ds, strength)
+        aod_true = np.take_along_axis(ds["aod_true"].values, order, axis=1)[ok]  # as e_aod's
+        bias, sig = aod_model.fit(
+            e_aod, aod_true, tuple(aod_angle_edges_rad), lambda e: max(inlier_sigma(e, gate_prob)[0], 1e-4), min_per_bin
+        )
+        bins |= dict(
+            aod_angle_edges_rad=tuple(float(x) for x in aod_angle_edges_rad),
+            aod_bias_bins_rad=bias,
+            sigma_aod_angle_bins_rad=sig,
+        )
     qs = sorted(float(q) for q in q_grid)
     if not qs:
         raise ValueError("q_grid must not be empty")

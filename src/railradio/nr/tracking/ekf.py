@@ -21,6 +21,7 @@ from filterpy.kalman import ExtendedKalmanFilter
 from numpy.typing import NDArray
 from scipy.stats import chi2
 
+import railradio.nr.tracking.aod_model as aod_model
 from railradio.nr.tracking.dynamics import process_noise, transition
 from railradio.nr.tracking.measurement import MEASUREMENT_SETS, h_terms, jac_terms, residual_fn
 
@@ -31,6 +32,8 @@ Reacquire = Callable[[int], tuple[NDArray, NDArray] | None]
 """``reacquire(n) -> (position [2], covariance [2, 2]) | None``: a position fix at epoch n."""
 LATERAL = [1, 3, 5]
 """Indices of y, v_y and a_y in the state (x, y, v_x, v_y, a_x, a_y)."""
+_DISTANCE_BINS = ("distance_edges_m", "sigma_aod_bins_rad", "sigma_toa_bins_s")
+_ANGLE_BINS = ("aod_angle_edges_rad", "aod_bias_bins_rad", "sigma_aod_angle_bins_rad")
 
 
 @dataclass(frozen=True)
@@ -42,7 +45,11 @@ class TrackerConfig:
     gate per RRH at ``gate_prob``. Distance-dependent W [ours, an option]: with
     ``distance_edges_m`` (increasing 2-D train–RRH distances [m]) the standard deviations of
     a measurement are those of its distance bin, ``sigma_aod_bins_rad`` and
-    ``sigma_toa_bins_s`` (one more entry than edges), at the predicted distance.
+    ``sigma_toa_bins_s`` (one more entry than edges), at the predicted distance. The AOD's
+    error by departure angle [ours, an option; :mod:`railradio.nr.tracking.aod_model`]: with
+    ``aod_angle_edges_rad`` (increasing angles from endfire [rad]) each AOD is predicted with
+    its bin's bias toward broadside, ``aod_bias_bins_rad``, and weighted by its bin's σ,
+    ``sigma_aod_angle_bins_rad``, at the predicted azimuth; it replaces the distance bins' AOD σ.
 
     Attributes
     ----------
@@ -63,6 +70,11 @@ class TrackerConfig:
         Positive, increasing 2-D distance bin edges, m (empty: no bins).
     sigma_aod_bins_rad, sigma_toa_bins_s : tuple of float
         Per-bin σ, rad and s: ``len(distance_edges_m) + 1`` positive values each.
+    aod_angle_edges_rad : tuple of float
+        Increasing angle-from-endfire bin edges inside (0, π/2), rad (empty: no AOD model).
+    aod_bias_bins_rad, sigma_aod_angle_bins_rad : tuple of float
+        Per angle bin, the AOD bias toward broadside [rad] and σ [rad, > 0]:
+        ``len(aod_angle_edges_rad) + 1`` values each.
     start_speed_sigma_m_s : float
         σ of the initial speed, m/s (> 0).
     track_bound : bool
@@ -84,6 +96,9 @@ class TrackerConfig:
     distance_edges_m: tuple[float, ...] = ()
     sigma_aod_bins_rad: tuple[float, ...] = ()
     sigma_toa_bins_s: tuple[float, ...] = ()
+    aod_angle_edges_rad: tuple[float, ...] = ()
+    aod_bias_bins_rad: tuple[float, ...] = ()
+    sigma_aod_angle_bins_rad: tuple[float, ...] = ()
     start_speed_sigma_m_s: float = 1.0
     """σ of the initial speed [m/s] about 0: 1 for a start from rest (the source's
     trajectory); large for a start at an unknown speed (the reproduction map's segment)."""
@@ -106,6 +121,19 @@ class TrackerConfig:
                 v = getattr(self, name)
                 if len(v) != nb or not all(x > 0 for x in v):
                     raise ValueError(f"{name} must hold {nb} positive values (one per distance bin), got {v!r}")
+        if self.aod_angle_edges_rad:
+            e = np.asarray(self.aod_angle_edges_rad, float)
+            if np.any(np.diff(e) <= 0) or e[0] <= 0 or e[-1] >= np.pi / 2:
+                raise ValueError(
+                    f"aod_angle_edges_rad must increase inside (0, pi/2), got {self.aod_angle_edges_rad!r}"
+                )
+            na = e.size + 1
+            if len(self.aod_bias_bins_rad) != na or not np.all(np.isfinite(self.aod_bias_bins_rad)):
+                raise ValueError(f"aod_bias_bins_rad must hold {na} finite values, got {self.aod_bias_bins_rad!r}")
+            if len(self.sigma_aod_angle_bins_rad) != na or not all(x > 0 for x in self.sigma_aod_angle_bins_rad):
+                raise ValueError(
+                    f"sigma_aod_angle_bins_rad must hold {na} positive values, got {self.sigma_aod_angle_bins_rad!r}"
+                )
 
     def record(self) -> dict:
         """The calibrated quantities as stored in ``calibration.json``.
@@ -114,15 +142,14 @@ class TrackerConfig:
         -------
         dict
             ``q`` [m² s⁻⁵], ``sigma_aod_rad`` [rad], ``sigma_toa_s`` [s], and with distance bins
-            ``distance_edges_m`` [m], ``sigma_aod_bins_rad`` [rad], ``sigma_toa_bins_s`` [s] (lists).
+            ``distance_edges_m`` [m], ``sigma_aod_bins_rad`` [rad], ``sigma_toa_bins_s`` [s] (lists);
+            with the AOD model ``aod_angle_edges_rad``, ``aod_bias_bins_rad``,
+            ``sigma_aod_angle_bins_rad`` [rad] (lists).
         """
         out = {"q": self.q, "sigma_aod_rad": self.sigma_aod_rad, "sigma_toa_s": self.sigma_toa_s}
-        if self.distance_edges_m:
-            out |= {
-                "distance_edges_m": list(self.distance_edges_m),
-                "sigma_aod_bins_rad": list(self.sigma_aod_bins_rad),
-                "sigma_toa_bins_s": list(self.sigma_toa_bins_s),
-            }
+        for group in (_DISTANCE_BINS, _ANGLE_BINS):
+            if getattr(self, group[0]):
+                out |= {k: list(getattr(self, k)) for k in group}
         return out
 
     @classmethod
@@ -147,7 +174,7 @@ class TrackerConfig:
         ValueError
             As :class:`TrackerConfig`, for invalid values.
         """
-        bins = {k: tuple(rec[k]) for k in ("distance_edges_m", "sigma_aod_bins_rad", "sigma_toa_bins_s") if k in rec}
+        bins = {k: tuple(rec[k]) for k in (*_DISTANCE_BINS, *_ANGLE_BINS) if k in rec}
         return cls(q=rec["q"], sigma_aod_rad=rec["sigma_aod_rad"], sigma_toa_s=rec["sigma_toa_s"], **bins, **kw)
 
     def noise(self, n: int, dist_m: NDArray | None = None) -> NDArray[np.float64]:
@@ -173,7 +200,7 @@ class TrackerConfig:
             return np.diag(np.tile(self._variances, n))
         return np.diag(self.variances(np.asarray(dist_m, float).reshape(n)).ravel())
 
-    def variances(self, dist_m: NDArray) -> NDArray[np.float64]:
+    def variances(self, dist_m: NDArray, aod_pred_rad: NDArray | None = None) -> NDArray[np.float64]:
         """Measurement variances of RRHs at given 2-D distances: the diagonal of :meth:`noise`,
         for arrays of RRHs.
 
@@ -182,6 +209,8 @@ class TrackerConfig:
         dist_m : numpy.ndarray
             [...] 2-D train–RRH distances, m (a distance on a bin edge belongs to the lower
             bin; unused without distance bins).
+        aod_pred_rad : numpy.ndarray or None
+            [...] predicted azimuths [rad], the AOD model's bins (needed with it only).
 
         Returns
         -------
@@ -191,14 +220,60 @@ class TrackerConfig:
             broadcast view).
         """
         d = np.asarray(dist_m, float)
-        if not self.distance_edges_m:  # one W: the same variances for every RRH
-            return np.broadcast_to(self._variances, d.shape + self._variances.shape)
         use_aod, use_toa = MEASUREMENT_SETS[self.measurements]
-        b = np.searchsorted(self.distance_edges_m, d)
-        sig = ([np.asarray(self.sigma_aod_bins_rad)[b]] if use_aod else []) + (
-            [np.asarray(self.sigma_toa_bins_s)[b]] if use_toa else []
-        )
+        angle = use_aod and bool(self.aod_angle_edges_rad)
+        if not self.distance_edges_m and not angle:  # one W: the same variances for every RRH
+            return np.broadcast_to(self._variances, d.shape + self._variances.shape)
+        if angle and aod_pred_rad is None:
+            raise ValueError("aod_pred_rad is needed with the AOD model (aod_angle_edges_rad)")
+        b = np.searchsorted(self.distance_edges_m, d) if self.distance_edges_m else None
+        sig = []
+        if use_aod:
+            if angle:
+                psi, _ = aod_model.endfire_angle(np.asarray(aod_pred_rad, float))
+                a = np.asarray(self.sigma_aod_angle_bins_rad)[aod_model.bin_index(psi, self.aod_angle_edges_rad)]
+            else:
+                a = np.asarray(self.sigma_aod_bins_rad)[b] if b is not None else np.full(d.shape, self.sigma_aod_rad)
+            sig.append(a)
+        if use_toa:
+            sig.append(np.asarray(self.sigma_toa_bins_s)[b] if b is not None else np.full(d.shape, self.sigma_toa_s))
         return np.stack(sig, axis=-1) ** 2
+
+    def predict(self, dx: NDArray, dy: NDArray, dh_m: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """The predicted measurements and their variances of RRHs at train-minus-RRH offsets
+        ``dx``, ``dy`` [m]: h of source eq. 14 with, under the AOD model, each AOD's bias at
+        its predicted azimuth (:func:`railradio.nr.tracking.aod_model.predicted_bias`).
+
+        Parameters
+        ----------
+        dx, dy : numpy.ndarray
+            [m] offsets along and across the track [m].
+        dh_m : float
+            Height difference between the RRHs and the train antenna [m].
+
+        Returns
+        -------
+        tuple of numpy.ndarray
+            [m, per] predicted AOD [rad] and TOA [s], and [m, per] their variances [rad², s²].
+        """
+        h = h_terms(dx, dy, dh_m, self.measurements)
+        use_aod = MEASUREMENT_SETS[self.measurements][0]
+        aod = np.arctan2(dy, dx) if use_aod else None
+        var = self.variances(np.hypot(dx, dy), aod)
+        if use_aod and self.aod_angle_edges_rad:
+            h[..., 0] += aod_model.predicted_bias(aod, self.aod_angle_edges_rad, self.aod_bias_bins_rad)
+        return h, var
+
+    def hx(self, s: NDArray, rrh_xy: NDArray, dh_m: float) -> NDArray[np.float64]:
+        """:func:`railradio.nr.tracking.measurement.hx` (state ``s`` [6], RRHs ``rrh_xy`` [n, 2] [m],
+        height difference ``dh_m`` [m]) with the AOD model's bias (:meth:`predict`): [n·per]
+        (rad, s), ordered as :meth:`pick`."""
+        return self.predict(s[0] - rrh_xy[:, 0], s[1] - rrh_xy[:, 1], dh_m)[0].ravel()
+
+    def noise_at(self, s: NDArray, rrh_xy: NDArray, dh_m: float) -> NDArray[np.float64]:
+        """W [n·per, n·per] (rad², s²) of the RRHs ``rrh_xy`` [n, 2] [m] seen from state ``s``
+        [6]: :meth:`noise` at their predicted distances and azimuths (:meth:`predict`)."""
+        return np.diag(self.predict(s[0] - rrh_xy[:, 0], s[1] - rrh_xy[:, 1], dh_m)[1].ravel())
 
     @cached_property
     def _variances(self) -> NDArray[np.float64]:
@@ -364,8 +439,7 @@ def _gated_update(
     dx, dy = ekf.x[0] - xy[:, 0], ekf.x[1] - xy[:, 1]
     h_all = np.zeros((m_k, per, 6))
     h_all[..., :2] = jac_terms(dx, dy, dh_m, cfg.measurements)
-    hx_all = h_terms(dx, dy, dh_m, cfg.measurements)  # [m_k, per]
-    var_all = cfg.variances(np.hypot(dx, dy))  # [m_k, per]
+    hx_all, var_all = cfg.predict(dx, dy, dh_m)  # [m_k, per] each
     keep = np.ones(m_k, dtype=bool)
     if cfg.gate:  # per-RRH χ² test on the predicted innovation (all RRHs at once)
         s_i = np.einsum("ipa,ab,iqb->ipq", h_all, ekf.P, h_all)  # H_i P H_iᵀ

@@ -34,7 +34,7 @@ from scipy.stats import chi2
 
 from railradio.nr.tracking.dynamics import process_noise, transition
 from railradio.nr.tracking.ekf import Reacquire, Select, TrackerConfig, run_ekf
-from railradio.nr.tracking.measurement import MEASUREMENT_SETS, distances_m, hx, jacobian, residual_fn
+from railradio.nr.tracking.measurement import MEASUREMENT_SETS, jacobian, residual_fn
 from railradio.nr.tracking.track import track_setup
 
 
@@ -263,8 +263,11 @@ def run_imm(
     Raises
     ------
     ValueError
-        When ``n_epochs`` < 0 or ``reacquire_after`` < 1, or from :meth:`ImmConfig.initial`.
+        When ``n_epochs`` < 0, ``reacquire_after`` < 1, ``cfg.track_bound`` is set (the IMM's
+        models are 2-D), or from :meth:`ImmConfig.initial`.
     """
+    if cfg.track_bound:
+        raise ValueError("cfg.track_bound is not supported by the IMM (its models estimate y): use run_ekf")
     if n_epochs < 0:
         raise ValueError(f"n_epochs must be >= 0, got {n_epochs!r}")
     if reacquire_after < 1:
@@ -301,7 +304,7 @@ def run_imm(
             if keep.any():
                 sel = xy[keep]
                 zs = z[np.repeat(keep, per)]
-                r = cfg.noise(sel.shape[0], distances_m(x_pred, sel))
+                r = cfg.noise_at(x_pred, sel, dh_m)
                 loglik = _update_models(xs, ps, sel, zs, r, dh_m, cfg, res)
                 # 3. mode probabilities (log-sum-exp)
                 lw = loglik + np.log(np.maximum(cbar, 1e-300))
@@ -364,8 +367,8 @@ def _union_gate(
         ok = False
         for j in range(xs.shape[0]):
             hi = jacobian(xs[j], xy[i : i + 1], dh_m, cfg.measurements)
-            si = hi @ ps[j] @ hi.T + cfg.noise(1, distances_m(xs[j], xy[i : i + 1]))
-            ri = res(z[i * per : (i + 1) * per], hx(xs[j], xy[i : i + 1], dh_m, cfg.measurements))
+            si = hi @ ps[j] @ hi.T + cfg.noise_at(xs[j], xy[i : i + 1], dh_m)
+            ri = res(z[i * per : (i + 1) * per], cfg.hx(xs[j], xy[i : i + 1], dh_m))
             ok = ok or float(ri @ np.linalg.solve(si, ri)) <= gate
         keep[i] = ok
     return keep
@@ -384,7 +387,7 @@ def _update_models(
         pht = ps[j] @ h.T
         s = h @ pht + r
         gain = pht @ np.linalg.inv(s)
-        nu = res(zs, hx(xs[j], sel, dh_m, cfg.measurements))
+        nu = res(zs, cfg.hx(xs[j], sel, dh_m))
         loglik[j], _ = _gauss_logpdf(nu, s)
         xs[j] = xs[j] + gain @ nu
         ikh = eye - gain @ h

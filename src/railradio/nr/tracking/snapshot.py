@@ -10,7 +10,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from railradio.nr.channel.antenna import wrap_rad
-from railradio.nr.tracking.measurement import MEASUREMENT_SETS, h_terms, jac_terms
+from railradio.nr.tracking.measurement import MEASUREMENT_SETS, jac_terms
 
 if TYPE_CHECKING:  # annotations only
     from railradio.nr.tracking.ekf import TrackerConfig
@@ -117,8 +117,8 @@ def snapshot_ls_batch(
     n_e = valid.shape[0]
     p = np.asarray(x_init, float).copy()
     # weights [E, m, per] at the initial guess (0 for padding)
-    dist0 = np.hypot(p[:, :1] - xy[..., 0], p[:, 1:] - xy[..., 1])
-    var = cfg.variances(dist0)
+    dx0, dy0 = p[:, :1] - xy[..., 0], p[:, 1:] - xy[..., 1]
+    var = cfg.predict(dx0, dy0, dh_m)[1]  # at the initial guess (the AOD model's σ at its azimuth)
     w = np.where(valid[..., None], 1.0 / var, 0.0)
     z = np.stack(([np.asarray(aod, float)] if use_aod else []) + ([np.asarray(toa, float)] if use_toa else []), axis=-1)
     z = np.where(valid[..., None], z, 0.0)
@@ -129,7 +129,7 @@ def snapshot_ls_batch(
         dx = np.where(ok, p[idx, :1] - xy[idx, :, 0], 1.0)
         dy = np.where(ok, p[idx, 1:] - xy[idx, :, 1], 1.0)
         jac = jac_terms(dx, dy, dh_m, cfg.measurements)
-        h = h_terms(dx, dy, dh_m, cfg.measurements)
+        h = cfg.predict(dx, dy, dh_m)[0]  # with the AOD model's bias
         r = z[idx] - h
         if use_aod:
             r[..., 0] = wrap_rad(r[..., 0])
