@@ -8,6 +8,7 @@ import pytest
 import xarray as xr
 
 from railradio.config_checks import check_config
+from railradio.nr.study import map_diagnostics as md
 from railradio.nr.study import reproduction_map as rm
 from railradio.nr.study.figures import cell_label
 from railradio.nr.study.map_dataset import map_dataset
@@ -28,7 +29,7 @@ def _numbers(nr, cells, seed=5):
     for c in cells:
         for rx in rm.cell_receivers(c, nr):
             nums |= rm.cell_key_numbers(c, rx, *_errors(200, rng), 500.0, make_rng(1, (0,)), 50, 50, 0.95, "t")
-            nums |= rm.diagnostic_key_numbers(c, rx, *_errors(200, rng)[:1], np.zeros((200, 3)), np.ones((200, 3)), "t")
+            nums |= md.diagnostic_key_numbers(c, rx, *_errors(200, rng)[:1], np.zeros((200, 3)), np.ones((200, 3)), "t")
     return nums
 
 

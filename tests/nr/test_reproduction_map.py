@@ -7,6 +7,7 @@ import yaml
 from railradio.config import ConfigError, load_schema, validate_config
 from railradio.config_checks import check_config
 from railradio.nr.channel.geometry import Trajectory
+from railradio.nr.study import map_diagnostics as md
 from railradio.nr.study import reproduction_map as rm
 from railradio.rng import make_rng
 
@@ -165,12 +166,57 @@ def test_diagnostics_split_endfire_from_broadside():
     aod_true = np.radians(np.array([[1.0, 90.0, 178.5]] * 4))  # 1 and 1.5 deg from the track
     err = np.radians(np.array([[2.0, 0.1, 3.0]] * 4))
     n_det = np.array([[5, 3, 7]] * 4)
-    d = rm.diagnostic_key_numbers("c", "source", err, aod_true, n_det, "t")
+    d = md.diagnostic_key_numbers("c", "source", err, aod_true, n_det, "t")
     p = "nr.map.c.source.diag"
     assert d[f"{p}.aod_err_deg.median_endfire"]["value"] == pytest.approx(2.5)
     assert d[f"{p}.aod_err_deg.median_broadside"]["value"] == pytest.approx(0.1)
     assert d[f"{p}.frac_endfire"]["value"] == pytest.approx(2 / 3)
     assert d[f"{p}.n_detected.median"]["value"] == 5
+
+
+def test_endfire_bias_per_true_angle_bin():
+    rng = make_rng(3, (1,))
+    n = 400
+    # true azimuths in (-pi, 0): half ahead (theta near 0), half behind (near -pi)
+    psi = np.radians(rng.uniform(0.0, 8.0, n))
+    ahead = rng.random(n) < 0.5
+    theta = np.where(ahead, -psi, -np.pi + psi)
+    toward = np.where(ahead, -1.0, 1.0)  # broadside (-pi/2) lies at smaller theta ahead
+    bias = np.where(np.degrees(psi) < 2.0, 1.5, 0.2)  # deg toward broadside
+    err = np.radians(bias * toward + rng.normal(0.0, 0.1, n))
+    d = md.endfire_bias_key_numbers("c", "robust", err.reshape(-1, 2), theta.reshape(-1, 2), (1.0, 2.0, 5.0), "t")
+    p = "nr.map.c.robust.diag"
+    assert d[f"{p}.aod_bias_deg.b0"]["value"] == pytest.approx(1.5, abs=0.05)
+    assert d[f"{p}.aod_bias_deg.b1"]["value"] == pytest.approx(1.5, abs=0.05)
+    assert d[f"{p}.aod_bias_deg.b2"]["value"] == pytest.approx(0.2, abs=0.05)
+    assert d[f"{p}.aod_bias_deg.b3"]["value"] == pytest.approx(0.2, abs=0.05)
+    assert sum(d[f"{p}.aod_n.b{i}"]["value"] for i in range(4)) == n
+    few = md.endfire_bias_key_numbers("c", "robust", err[:10], theta[:10], (1.0, 2.0, 5.0), "t")
+    assert all(few[f"{p}.aod_bias_deg.b{i}"]["value"] is None for i in range(4))
+    with pytest.raises(ValueError, match="shape"):
+        md.endfire_bias_key_numbers("c", "robust", err, theta[:-1], (1.0, 2.0, 5.0), "t")
+
+
+def test_calibration_diag_names_each_trackers_q():
+    cal = {"robust/aod": {"q": 0.1}, "robust/aod_toa": {"q": 1000.0}, "source/aod_toa": {"q": 3.0}}
+    d = md.calibration_diag_key_numbers("c", "robust", cal, "t")
+    assert d == {
+        "nr.map.c.robust.diag.q.aod": d["nr.map.c.robust.diag.q.aod"],
+        "nr.map.c.robust.diag.q.aod_toa": d["nr.map.c.robust.diag.q.aod_toa"],
+    }
+    assert d["nr.map.c.robust.diag.q.aod_toa"]["value"] == 1000.0
+
+
+def test_along_cross_split_and_loss():
+    along = np.array([0.3, -0.4, 0.0, 0.6])
+    cross = np.array([0.4, 0.3, 1.0, 0.8])
+    d = md.along_cross_key_numbers("c", "robust", along, np.hypot(along, cross), 500.0, "t")
+    p = "nr.map.c.robust.diag.track.aod_toa"
+    assert d[f"{p}.along_m.mean"]["value"] == pytest.approx(np.mean(np.abs(along)))
+    assert d[f"{p}.cross_m.mean"]["value"] == pytest.approx(np.mean(cross))
+    lost = md.along_cross_key_numbers("c", "robust", along, np.array([0.5, 0.5, 0.5, 400.0]), 500.0, "t")
+    assert lost[f"{p}.along_m.mean"]["value"] is None
+    assert lost[f"{p}.along_m.mean"]["lost_frac"] == pytest.approx(0.25)
 
 
 def test_shard_paths_reuse_the_main_run_and_other_cells(nr_and_schema):

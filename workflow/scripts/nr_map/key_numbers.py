@@ -1,8 +1,16 @@
 """Adapter: every map cell's tracks -> results/nr/map/key_numbers.json."""
 
+import json
+
 from railradio.io import read_dataset, write_json
 from railradio.nr.study.keys import SKIP_S
-from railradio.nr.study.reproduction_map import cell_key_numbers, diagnostic_key_numbers, summary_key_numbers
+from railradio.nr.study.map_diagnostics import (
+    along_cross_key_numbers,
+    calibration_diag_key_numbers,
+    diagnostic_key_numbers,
+    endfire_bias_key_numbers,
+)
+from railradio.nr.study.reproduction_map import cell_key_numbers, summary_key_numbers
 from railradio.nr.tracking import loss
 from railradio.rng import make_rng, spawn_key
 from railradio.workflow import setup_script
@@ -39,4 +47,10 @@ for cell, path in zip(smk.params.cells, smk.input, strict=True):
         numbers |= diagnostic_key_numbers(
             cell, rx, d["aod_err"].values, d["aod_true"].values, d["n_detected"].values, where
         )
+        edges = tuple(float(e) for e in nr["tracker"]["aod_angle_edges_deg"])
+        numbers |= endfire_bias_key_numbers(cell, rx, d["aod_err"].values, d["aod_true"].values, edges, where)
+        fused = d["pos_err"].sel(measurements="aod_toa").values
+        along = d["along_err"].sel(measurements="aod_toa").values
+        numbers |= along_cross_key_numbers(cell, rx, along, fused, spacing, where)
+        numbers |= calibration_diag_key_numbers(cell, rx, json.loads(ds.attrs["config_json"])["calibration"], where)
 write_json(smk.output[0], numbers | summary_key_numbers(numbers, list(smk.params.cells), nr))

@@ -20,9 +20,9 @@ import numpy as np
 import xarray as xr
 
 from railradio.nr.study.figures import cell_label
+from railradio.nr.study.map_diagnostics import ENDFIRE_DEG
 from railradio.nr.study.reproduction_map import (
     CLAIMS,
-    ENDFIRE_DEG,
     FAILS,
     HOLDS,
     MEASUREMENT_SETS,

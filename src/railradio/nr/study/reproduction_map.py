@@ -497,69 +497,6 @@ def cell_key_numbers(
     return out
 
 
-ENDFIRE_DEG = 3.0
-"""Diagnostics: AOD errors of the RRHs seen within this angle of the track direction (the
-ULA's endfire, where neighbouring beams have nearly equal gain) apart from the others."""
-
-
-def diagnostic_key_numbers(
-    cell: str, rx: str, aod_err_rad: np.ndarray, aod_true_rad: np.ndarray, n_detected: np.ndarray, where: str
-) -> dict[str, Any]:
-    """What the AOD claim depends on, per cell and receiver: the median |AOD error| of the
-    selected RRHs within / beyond :data:`ENDFIRE_DEG` of the track direction, their share
-    within it, and the median number of SS blocks detected per selected RRH.
-
-    Parameters
-    ----------
-    cell, rx : str
-        The cell and receiver names.
-    aod_err_rad : numpy.ndarray
-        AOD errors of the selected RRHs, rad (NaN: none).
-    aod_true_rad : numpy.ndarray
-        Their true AODs (same shape), rad.
-    n_detected : numpy.ndarray
-        SS blocks detected per selected RRH.
-    where : str
-        Text appended to each key's description.
-
-    Returns
-    -------
-    dict of str to dict
-        Key name -> its JSON entry (:meth:`railradio.keynumbers.KeySpec.entry`).
-        ``nr.map.<cell>.<rx>.diag.*``: ``aod_err_deg.median_endfire`` and
-        ``aod_err_deg.median_broadside`` [deg], ``frac_endfire`` (1), ``n_detected.median``.
-    """
-    deg = np.degrees(np.asarray(aod_true_rad, float)) % 180.0
-    off = np.minimum(deg, 180.0 - deg)
-    e = np.abs(np.degrees(aod_err_rad))
-    ok = np.isfinite(e) & np.isfinite(off)
-    near = ok & (off < ENDFIRE_DEG)
-    p = f"nr.map.{cell}.{rx}.diag"
-    vals = {
-        "aod_err_deg.median_endfire": (
-            "deg",
-            f"median |AOD error| of the selected RRHs within {ENDFIRE_DEG:g} deg of the track direction",
-            np.median(e[near]) if near.any() else np.nan,
-        ),
-        "aod_err_deg.median_broadside": (
-            "deg",
-            f"median |AOD error| of the selected RRHs beyond {ENDFIRE_DEG:g} deg of the track direction",
-            np.median(e[ok & ~near]) if (ok & ~near).any() else np.nan,
-        ),
-        "frac_endfire": (
-            "1",
-            f"share of the selected RRHs seen within {ENDFIRE_DEG:g} deg of the track direction",
-            near.sum() / ok.sum() if ok.any() else np.nan,
-        ),
-        "n_detected.median": (
-            "1",
-            "median number of SS blocks detected per selected RRH",
-            np.median(n_detected[ok]) if ok.any() else np.nan,
-        ),
-    }
-    return {f"{p}.{k}": KeySpec(f"{p}.{k}", u, f"{d} ({where})").entry(_finite(v)) for k, (u, d, v) in vals.items()}
-
-
 def summary_key_numbers(numbers: dict[str, Any], cell_names: list[str], nr: dict) -> dict[str, Any]:
     """Per receiver and claim, in how many cells it holds / fails / is not resolved
     (``nr.map.<rx>.<claim>.n_holds`` …) and the number of cells.

@@ -1,0 +1,221 @@
+"""What a map cell's accuracy depends on: the AOD near endfire and the error's direction
+(docs/model/nr.md §6, §10). Scoring only: every function here reads the truth.
+
+- :func:`diagnostic_key_numbers`: the selected RRHs' |AOD error| within and beyond
+  :data:`ENDFIRE_DEG` of the track direction, their share there, and the SS blocks detected.
+- :func:`endfire_bias_key_numbers`: the AOD error's bias toward broadside per bin of the true
+  angle from endfire, measured on the cell's segment (the quantity the tracker's AOD model,
+  :mod:`railradio.nr.tracking.aod_model`, calibrates on the cell's calibration run).
+- :func:`along_cross_key_numbers`: the AOD+TOA tracker's mean |error| along and across the
+  track; :func:`calibration_diag_key_numbers`: the q each tracker was calibrated with.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+import railradio.nr.tracking.aod_model as aod_model
+from railradio.keynumbers import KeySpec
+from railradio.nr.tracking import loss
+
+ENDFIRE_DEG = 3.0
+"""Diagnostics: AOD errors of the RRHs seen within this angle of the track direction (the
+ULA's endfire, where neighbouring beams have nearly equal gain) apart from the others."""
+
+MIN_PER_BIN = 20
+"""Fewest AOD errors in an angle bin for its segment bias to be reported (else null)."""
+
+
+def _finite(v: float) -> float | None:
+    return float(v) if np.isfinite(v) else None
+
+
+def diagnostic_key_numbers(
+    cell: str, rx: str, aod_err_rad: np.ndarray, aod_true_rad: np.ndarray, n_detected: np.ndarray, where: str
+) -> dict[str, Any]:
+    """What the AOD claim depends on, per cell and receiver: the median |AOD error| of the
+    selected RRHs within / beyond :data:`ENDFIRE_DEG` of the track direction, their share
+    within it, and the median number of SS blocks detected per selected RRH.
+
+    Parameters
+    ----------
+    cell, rx : str
+        The cell and receiver names.
+    aod_err_rad : numpy.ndarray
+        AOD errors of the selected RRHs, rad (NaN: none).
+    aod_true_rad : numpy.ndarray
+        Their true AODs (same shape), rad.
+    n_detected : numpy.ndarray
+        SS blocks detected per selected RRH.
+    where : str
+        Text appended to each key's description.
+
+    Returns
+    -------
+    dict of str to dict
+        Key name -> its JSON entry (:meth:`railradio.keynumbers.KeySpec.entry`).
+        ``nr.map.<cell>.<rx>.diag.*``: ``aod_err_deg.median_endfire`` and
+        ``aod_err_deg.median_broadside`` [deg], ``frac_endfire`` (1), ``n_detected.median``.
+    """
+    deg = np.degrees(np.asarray(aod_true_rad, float)) % 180.0
+    off = np.minimum(deg, 180.0 - deg)
+    e = np.abs(np.degrees(aod_err_rad))
+    ok = np.isfinite(e) & np.isfinite(off)
+    near = ok & (off < ENDFIRE_DEG)
+    p = f"nr.map.{cell}.{rx}.diag"
+    vals = {
+        "aod_err_deg.median_endfire": (
+            "deg",
+            f"median |AOD error| of the selected RRHs within {ENDFIRE_DEG:g} deg of the track direction",
+            np.median(e[near]) if near.any() else np.nan,
+        ),
+        "aod_err_deg.median_broadside": (
+            "deg",
+            f"median |AOD error| of the selected RRHs beyond {ENDFIRE_DEG:g} deg of the track direction",
+            np.median(e[ok & ~near]) if (ok & ~near).any() else np.nan,
+        ),
+        "frac_endfire": (
+            "1",
+            f"share of the selected RRHs seen within {ENDFIRE_DEG:g} deg of the track direction",
+            near.sum() / ok.sum() if ok.any() else np.nan,
+        ),
+        "n_detected.median": (
+            "1",
+            "median number of SS blocks detected per selected RRH",
+            np.median(n_detected[ok]) if ok.any() else np.nan,
+        ),
+    }
+    return {f"{p}.{k}": KeySpec(f"{p}.{k}", u, f"{d} ({where})").entry(_finite(v)) for k, (u, d, v) in vals.items()}
+
+
+def endfire_bias_key_numbers(
+    cell: str, rx: str, aod_err_rad: np.ndarray, aod_true_rad: np.ndarray, edges_deg: tuple[float, ...], where: str
+) -> dict[str, Any]:
+    """The selected RRHs' AOD bias toward broadside per bin of the true angle from endfire,
+    measured on the cell's segment (scoring: the true angle picks the bin).
+
+    Parameters
+    ----------
+    cell, rx : str
+        The cell and receiver names.
+    aod_err_rad : numpy.ndarray
+        AOD errors θ̂ − θ of the selected RRHs, rad (NaN: none).
+    aod_true_rad : numpy.ndarray
+        Their true azimuths θ (same shape), rad, the tracker's convention.
+    edges_deg : tuple of float
+        Increasing bin edges of the angle from endfire, deg (``nr.tracker.aod_angle_edges_deg``).
+    where : str
+        Text appended to each key's description.
+
+    Returns
+    -------
+    dict of str to dict
+        ``nr.map.<cell>.<rx>.diag.aod_bias_deg.b<i>`` [deg] (bin i of ``len(edges_deg) + 1``;
+        null with fewer than :data:`MIN_PER_BIN` errors) and ``diag.aod_n.b<i>`` (errors in it).
+
+    Raises
+    ------
+    ValueError
+        When the edges are not increasing inside (0°, 90°) or the arrays differ in shape.
+    """
+    e = np.asarray(aod_err_rad, float).ravel()
+    th = np.asarray(aod_true_rad, float).ravel()
+    if np.asarray(aod_err_rad).shape != np.asarray(aod_true_rad).shape:
+        raise ValueError("aod_err_rad and aod_true_rad must share a shape")
+    edges = tuple(np.radians(np.asarray(edges_deg, float)))
+    bias, _ = aod_model.fit(e, th, edges, lambda x: 1.4826 * float(np.median(np.abs(x))), MIN_PER_BIN)
+    ok = np.isfinite(e) & np.isfinite(th)
+    counts = np.bincount(aod_model.bin_index(aod_model.endfire_angle(th[ok])[0], edges), minlength=len(edges) + 1)
+    lows = (0.0, *edges_deg)
+    highs = (*edges_deg, 90.0)
+    p = f"nr.map.{cell}.{rx}.diag"
+    out: dict[str, Any] = {}
+    for i, (b, n, lo, hi) in enumerate(zip(bias, counts, lows, highs, strict=True)):
+        span = f"{lo:g}-{hi:g} deg from endfire"
+        name = f"{p}.aod_bias_deg.b{i}"
+        out[name] = KeySpec(
+            name, "deg", f"median AOD error toward broadside of the selected RRHs seen {span}, on the segment ({where})"
+        ).entry(float(np.degrees(b)) if n >= MIN_PER_BIN else None)
+        name = f"{p}.aod_n.b{i}"
+        out[name] = KeySpec(name, "1", f"AOD errors of the selected RRHs seen {span} ({where})").entry(float(n))
+    return out
+
+
+def calibration_diag_key_numbers(cell: str, rx: str, calibration: dict[str, dict], where: str) -> dict[str, Any]:
+    """The q each of the cell's trackers was calibrated with on the cell's own calibration run
+    (``nr.map.<cell>.<rx>.diag.q.<measurements>`` [m² s⁻⁵]): the map's EKF errors follow it,
+    and its NEES cost does not identify it (docs/model/nr.md §6).
+
+    Parameters
+    ----------
+    cell, rx : str
+        The cell and receiver names.
+    calibration : dict of str to dict
+        The cell's calibration records, ``<rx>/<measurements>`` -> record with ``q``.
+    where : str
+        Text appended to each key's description.
+
+    Returns
+    -------
+    dict of str to dict
+        Key name -> its JSON entry.
+    """
+    out: dict[str, Any] = {}
+    for name, rec in calibration.items():
+        r, measurements = name.split("/")
+        if r != rx:
+            continue
+        key = f"nr.map.{cell}.{rx}.diag.q.{measurements}"
+        out[key] = KeySpec(
+            key, "m2 s-5", f"q of the EKF {measurements}, calibrated on the cell's calibration run ({where})"
+        ).entry(float(rec["q"]))
+    return out
+
+
+def along_cross_key_numbers(
+    cell: str, rx: str, along_err_m: np.ndarray, pos_err_m: np.ndarray, spacing_m: float, where: str
+) -> dict[str, Any]:
+    """The AOD+TOA tracker's mean |error| along and across the track on the cell's segment
+    (null when the track is lost: :func:`railradio.nr.tracking.loss.accuracy`).
+
+    Parameters
+    ----------
+    cell, rx : str
+        The cell and receiver names.
+    along_err_m : numpy.ndarray
+        [n] signed along-track errors x̂ − x, m.
+    pos_err_m : numpy.ndarray
+        [n] 2-D position errors, m (the cross-track error is √(pos² − along²)).
+    spacing_m : float
+        RRH spacing, m (an epoch is lost beyond half of it).
+    where : str
+        Text appended to each key's description.
+
+    Returns
+    -------
+    dict of str to dict
+        ``nr.map.<cell>.<rx>.diag.track.aod_toa.{along,cross}_m.mean`` [m], each with the
+        tracker's lost share.
+
+    Raises
+    ------
+    ValueError
+        When the arrays differ in shape.
+    """
+    a = np.asarray(along_err_m, float)
+    e = np.asarray(pos_err_m, float)
+    if a.shape != e.shape:
+        raise ValueError(f"along_err_m and pos_err_m must share a shape, got {a.shape} and {e.shape}")
+    lost = float(np.mean(loss.lost_mask(e, spacing_m))) if e.size else 1.0
+    cross = np.sqrt(np.maximum(e**2 - a**2, 0.0))
+    p = f"nr.map.{cell}.{rx}.diag.track.aod_toa"
+    out: dict[str, Any] = {}
+    for side, x in (("along", np.abs(a)), ("cross", cross)):
+        name = f"{p}.{side}_m.mean"
+        value = loss.accuracy(float(np.nanmean(x)), lost) if np.isfinite(x).any() else None
+        out[name] = KeySpec(name, "m", f"mean |{side}-track error| of the EKF AOD+TOA ({where})").entry(
+            value, lost_frac=lost
+        )
+    return out
