@@ -5,6 +5,7 @@ import json
 from railradio.io import read_dataset, write_json
 from railradio.nr.study.keys import SKIP_S
 from railradio.nr.study.map_diagnostics import (
+    ENDFIRE_EDGES_DEG,
     along_cross_key_numbers,
     calibration_diag_key_numbers,
     diagnostic_key_numbers,
@@ -47,8 +48,9 @@ for cell, path in zip(smk.params.cells, smk.input, strict=True):
         numbers |= diagnostic_key_numbers(
             cell, rx, d["aod_err"].values, d["aod_true"].values, d["n_detected"].values, where
         )
-        edges = tuple(float(e) for e in nr["tracker"]["aod_angle_edges_deg"])
-        numbers |= endfire_bias_key_numbers(cell, rx, d["aod_err"].values, d["aod_true"].values, edges, where)
+        numbers |= endfire_bias_key_numbers(
+            cell, rx, d["aod_err"].values, d["aod_true"].values, ENDFIRE_EDGES_DEG, where
+        )
         fused = d["pos_err"].sel(measurements="aod_toa").values
         along = d["along_err"].sel(measurements="aod_toa").values
         numbers |= along_cross_key_numbers(cell, rx, along, fused, spacing, where)

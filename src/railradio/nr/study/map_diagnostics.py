@@ -24,6 +24,10 @@ ENDFIRE_DEG = 3.0
 """Diagnostics: AOD errors of the RRHs seen within this angle of the track direction (the
 ULA's endfire, where neighbouring beams have nearly equal gain) apart from the others."""
 
+ENDFIRE_EDGES_DEG = (1.0, 2.0, 5.0, 10.0, 20.0)
+"""Diagnostics: bins of the angle from endfire for the AOD bias (the 1–2–5 series, fixed
+before the run; whether or not the tracker models the bias, ``nr.tracker.aod_angle_edges_deg``)."""
+
 MIN_PER_BIN = 20
 """Fewest AOD errors in an angle bin for its segment bias to be reported (else null)."""
 
@@ -105,7 +109,7 @@ def endfire_bias_key_numbers(
     aod_true_rad : numpy.ndarray
         Their true azimuths θ (same shape), rad, the tracker's convention.
     edges_deg : tuple of float
-        Increasing bin edges of the angle from endfire, deg (``nr.tracker.aod_angle_edges_deg``).
+        Increasing bin edges of the angle from endfire, deg (:data:`ENDFIRE_EDGES_DEG`).
     where : str
         Text appended to each key's description.
 
