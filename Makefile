@@ -92,7 +92,7 @@ fidelity: $(STAMP)  ## the nr shortcuts measured at paper scale (outside all) ->
 
 GALLERY := fusion_rmse_vs_distance nr_position_error_cdf nr_sensitivity tunnel_position_error_cdf \
            tunnel_source_vs_physical handover_stages_vs_speed nr_sweeps chain_success_vs_sigma \
-           nr_reproduction_map
+           nr_reproduction_map nr_conditions
 
 dag: $(STAMP)  ## docs/workflow/<target>.md: each target's rule graph (Snakemake's Mermaid output)
 	SNAKEMAKE=$(BIN)/snakemake docs/workflow/make_rulegraphs.sh

@@ -306,6 +306,17 @@ def _nr_map(
             f"cell)",
         )
         return
+    cond, bad = mp["conditions"], False
+    for i, d in enumerate(cond["data"]):
+        if d not in mp["data"]:
+            bad = True
+            yield f"nr.map.conditions.data[{i}]", d, f"one of nr.map.data: {', '.join(mp['data'])}"
+    metres = [round(float(w)) for w in cond["windows_m"]]
+    if len(set(metres)) < len(metres) or min(metres, default=1) < 1:
+        bad = True
+        yield "nr.map.conditions.windows_m", cond["windows_m"], "distinct whole metres >= 1 (each names a cell)"
+    if bad:
+        return
     try:
         cells = nr_map.cells(dict(nr), schema["properties"]["nr"])
     except ConfigError as exc:

@@ -3,7 +3,8 @@ published values on our curves."""
 
 import pytest
 
-from railradio.nr.study.figures import _source_quantiles, cell_label
+from railradio.nr.study.figures import _source_quantiles
+from railradio.nr.study.map_figures import cell_label
 
 
 @pytest.mark.parametrize(
@@ -14,6 +15,8 @@ from railradio.nr.study.figures import _source_quantiles, cell_label
         ("mt16_my_own_rule", "M_T = 16, data: my own rule"),
         ("tpl_pss_sss_sel_peak", "template PSS+SSS, selection: peak"),
         ("tpl_sss_sel_ss_rsrp", "template SSS, selection: ss-rsrp"),
+        ("win2000_none", "window 2 km, data: none (PSS, SSS only)"),
+        ("win1500_others_random", "window 1.5 km, data: others at random beams"),
         ("window_geometry", "window_geometry"),
     ],
 )

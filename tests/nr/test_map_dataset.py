@@ -10,8 +10,8 @@ import xarray as xr
 from railradio.config_checks import check_config
 from railradio.nr.study import map_diagnostics as md
 from railradio.nr.study import reproduction_map as rm
-from railradio.nr.study.figures import cell_label
 from railradio.nr.study.map_dataset import map_dataset
+from railradio.nr.study.map_figures import cell_label
 from railradio.rng import make_rng
 
 from .test_reproduction_map import SCHEMA, _errors, _paper

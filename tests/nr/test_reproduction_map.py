@@ -28,8 +28,15 @@ def nr_and_schema():
 def test_cells_and_the_bursts_they_share(nr_and_schema):
     nr, schema = nr_and_schema
     cells = rm.cells(nr, schema)
-    # M_T x data = 16, then the source receiver's template x selection less the default pair
-    assert len(cells) == 4 * 4 + 3
+    # M_T x data = 16, the conditions' windows x data = 4, then the source receiver's
+    # template x selection less the default pair
+    assert len(cells) == 4 * 4 + 2 * 2 + 3
+    assert list(cells)[16:20] == ["win2000_others_random", "win2000_none", "win1000_others_random", "win1000_none"]
+    assert cells["win1000_none"]["receiver"]["search_range_m"] == 1000.0
+    assert cells["win1000_none"]["traffic"] == cells["mt32_none"]["traffic"]
+    assert cells["mt32_none"]["receiver"]["search_range_m"] is None
+    # a window cell is its own burst owner: it reads the same channel through another window
+    assert rm.burst_owner("win2000_others_random", cells, nr) == "win2000_others_random"
     assert rm.default_cell(nr) == "mt32_others_random"
     assert cells["mt8_all_train"]["antenna"]["rrh_elements"] == 8
     assert cells["mt8_all_train"]["traffic"]["data_beam"] == "train"
@@ -42,7 +49,10 @@ def test_cells_and_the_bursts_they_share(nr_and_schema):
     assert rm.calibration_owner("tpl_pss_sss_sel_peak", cells) == "mt32_others_random"
     assert rm.burst_owner("mt16_none", cells, nr) == "mt16_none"
     assert rm.cell_receivers("tpl_sss_sel_peak", nr) == ["source"]
-    assert rm.cell_receivers("mt16_none", nr) == ["source", "robust"]
+    assert rm.cell_receivers("mt16_none", nr) == ["source", "source_gated", "robust"]
+    assert rm.cell_receivers("win1000_none", nr) == ["source", "source_gated"]
+    assert rm.receivers(nr) == {"source": False, "source_gated": True, "robust": True}
+    assert [rm.receiver_of(t) for t in rm.receivers(nr)] == ["source", "source", "robust"]
 
 
 def test_calibration_run_spans_the_segment_accelerations(nr_and_schema):

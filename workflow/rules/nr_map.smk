@@ -1,12 +1,13 @@
 # The reproduction map of the nr study (railradio.nr.study.reproduction_map): the source's claims
 # for its receiver and ours against the assumptions it leaves open (M_T x data beams, and
-# template x selection on the default bursts), every cell on the same segment of r0 with
+# template x selection on the default bursts), and the source receiver's conditions (search
+# window x gate x data, railradio.nr.study.conditions), every cell on the same segment of r0 with
 # its own short calibration run. Bursts are re-used wherever only the tracker changes, and
 # synthesized once per epoch for the cells that differ only in amplitudes or receivers.
 # The cells, their runs and the shards they read: NR_PLAN.map_* (nr.smk; railradio.nr.study.plan).
 from railradio.nr.study import records as nr_records
 
-register_figures("nr_map", ["nr_reproduction_map"])
+register_figures("nr_map", ["nr_reproduction_map", "nr_conditions"])
 # Its paper-scale key numbers are a published record (make records; railradio.published): the
 # merge reads the record while it is current (the map's code and config unchanged since it
 # was published), else the map runs here. CI's reproduction thus skips the map, whose
@@ -148,3 +149,27 @@ rule nr_map_figure:
         "../envs/railradio.yaml"
     script:
         "../scripts/nr_map/figure.py"
+
+
+rule nr_conditions_figure:
+    """The source receiver's conditions: each claim's status per window x gate x data, and
+    the fewest departures under which it holds."""
+    input:
+        "results/nr/map/key_numbers.json",
+    output:
+        pdf=report(
+            "results/figures/nr_conditions.pdf",
+            caption="../report/nr_conditions.rst",
+            category="nr",
+        ),
+        png="results/figures/nr_conditions.png",
+    params:
+        nr=NR,
+    log:
+        "results/logs/nr/map/conditions_figure.log",
+    benchmark:
+        "results/benchmarks/nr/map/conditions_figure.tsv"
+    conda:
+        "../envs/railradio.yaml"
+    script:
+        "../scripts/nr_map/conditions_figure.py"

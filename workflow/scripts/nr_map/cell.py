@@ -6,7 +6,7 @@ import xarray as xr
 
 from railradio.io import write_dataset
 from railradio.nr.engine.simulate import scenario_from_config
-from railradio.nr.study.reproduction_map import MEASUREMENT_SETS
+from railradio.nr.study.reproduction_map import MEASUREMENT_SETS, receiver_of
 from railradio.nr.study.runs import read_shards
 from railradio.nr.tracking.calibration import calibrate, measurement_errors, selected
 from railradio.nr.tracking.track import track
@@ -33,7 +33,8 @@ rng = np.full((len(receivers), n, 3), np.nan)
 aod_true = np.full((len(receivers), n, 3), np.nan)
 n_det = np.zeros((len(receivers), n, 3), dtype=np.int64)
 cal = {}
-for i, (rx, gate) in enumerate(receivers.items()):
+for i, (name, gate) in enumerate(receivers.items()):
+    rx = receiver_of(name)  # source_gated: the source's estimates, gated
     dsr, calr = seg.sel(receiver=rx), cal_ds.sel(receiver=rx)
     aod[i], rng[i] = measurement_errors(dsr, sel[rx], flat=False)
     order, ok = selected(dsr, sel[rx])  # the same RRHs: their truth and detections
@@ -56,11 +57,11 @@ for i, (rx, gate) in enumerate(receivers.items()):
             start_speed_sigma_m_s=float(smk.params.start_speed_sigma_m_s),
             aod_angle_edges_rad=tuple(np.radians(tr["aod_angle_edges_deg"])),
         )
-        cal[f"{rx}/{measurements}"] = cfg.record() | {"gate": gate, "q_search": search}
+        cal[f"{name}/{measurements}"] = cfg.record() | {"gate": gate, "q_search": search}
         out = track(dsr, dep.x_m, dep.offset_m, dep.h_bs_m - dep.h_ut_m, dt, cfg, strength=sel[rx], snapshot=False)
         along[i, j] = out["state"][:, 0] - seg["x_true"].values  # scoring only (the track: y = 0)
         err[i, j] = np.hypot(along[i, j], out["state"][:, 1])
-        log.info("%s %s (gate %s): q %.3g, mean error %.3f m", rx, measurements, gate, cfg.q, np.nanmean(err[i, j]))
+        log.info("%s %s (gate %s): q %.3g, mean error %.3f m", name, measurements, gate, cfg.q, np.nanmean(err[i, j]))
 res = xr.Dataset(
     {
         "pos_err": (("receiver", "measurements", "epoch"), err, {"units": "m", "long_name": "2-D EKF position error"}),
@@ -98,7 +99,11 @@ res = xr.Dataset(
         ),
     },
     coords={
-        "receiver": ("receiver", list(receivers), {"units": "1", "long_name": "receiver"}),
+        "receiver": (
+            "receiver",
+            list(receivers),
+            {"units": "1", "long_name": "tracker: the receiver read, _gated when gated"},
+        ),
         "measurements": (
             "measurements",
             list(MEASUREMENT_SETS),

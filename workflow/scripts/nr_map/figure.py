@@ -2,7 +2,7 @@
 
 import json
 
-from railradio.nr.study.figures import plot_reproduction_map
+from railradio.nr.study.map_figures import plot_reproduction_map
 from railradio.nr.study.reproduction_map import cell_receivers, receivers
 from railradio.workflow import setup_script
 

@@ -1,8 +1,10 @@
-"""Adapter: every map cell's tracks -> results/nr/map/key_numbers.json."""
+"""Adapter: every map cell's tracks -> results/nr/map/key_numbers.json (with the source
+receiver's conditions, railradio.nr.study.conditions)."""
 
 import json
 
 from railradio.io import read_dataset, write_json
+from railradio.nr.study import conditions
 from railradio.nr.study.keys import SKIP_S
 from railradio.nr.study.map_diagnostics import (
     ENDFIRE_EDGES_DEG,
@@ -55,4 +57,5 @@ for cell, path in zip(smk.params.cells, smk.input, strict=True):
         along = d["along_err"].sel(measurements="aod_toa").values
         numbers |= along_cross_key_numbers(cell, rx, along, fused, spacing, where)
         numbers |= calibration_diag_key_numbers(cell, rx, json.loads(ds.attrs["config_json"])["calibration"], where)
-write_json(smk.output[0], numbers | summary_key_numbers(numbers, list(smk.params.cells), nr))
+numbers |= summary_key_numbers(numbers, list(smk.params.cells), nr)
+write_json(smk.output[0], numbers | conditions.key_numbers(numbers, nr))

@@ -1,8 +1,7 @@
-"""Figures of the nr study (source Fig. 3–5 and the error-vs-time view)."""
+"""Figures of the nr study (source Fig. 3–5 and the error-vs-time view; the reproduction
+map's and the conditions' claim grids: :mod:`railradio.nr.study.map_figures`)."""
 
 from __future__ import annotations
-
-import re
 
 import numpy as np
 import xarray as xr
@@ -20,43 +19,6 @@ MEASUREMENTS_LABEL = {"aod": "AOD", "toa": "TOA", "aod_toa": "AOD+TOA"}
 
 SOURCE_STYLE = {"marker": "x", "color": "black", "linestyle": "none", "markersize": 6, "zorder": 5}
 """How the source's published values are drawn on our curves."""
-
-
-DATA_LABELS = {
-    "others_random": "others at random beams",
-    "all_train": "all beamed at the train",
-    "serving_only": "serving cell only",
-    "none": "none (PSS, SSS only)",
-}
-"""Readable names of the map's data assumptions (``nr.map.data``; another name is shown with
-its underscores as spaces)."""
-
-_MT_CELL = re.compile(r"^mt(\d+)_(.+)$")
-_TPL_CELL = re.compile(r"^tpl_(.+)_sel_(.+)$")
-
-
-def cell_label(name: str) -> str:
-    """A map cell's name as a figure or table shows it: ``mt32_others_random`` ->
-    ``M_T = 32, data: others at random beams``; ``tpl_sss_sel_peak`` -> ``template SSS,
-    selection: peak``.
-
-    Parameters
-    ----------
-    name : str
-        The cell's name (:func:`railradio.nr.study.reproduction_map.cells`).
-
-    Returns
-    -------
-    str
-        The label (the name itself when it follows neither pattern).
-    """
-    if m := _MT_CELL.match(name):
-        data = DATA_LABELS.get(m.group(2), m.group(2).replace("_", " "))
-        return f"M_T = {m.group(1)}, data: {data}"
-    if m := _TPL_CELL.match(name):
-        tpl = m.group(1).upper().replace("_", "+")
-        return f"template {tpl}, selection: {m.group(2).replace('_', '-')}"
-    return name
 
 
 def _source_quantiles(prefix: str) -> list[tuple[float, float]]:
@@ -399,89 +361,6 @@ def plot_sweeps(numbers: dict, sweeps: dict, sync_sigma_s: dict, pdf: str, png: 
             handles.setdefault(lab, h)
     axes[0][0].legend(list(handles.values()), list(handles), fontsize=6)
     plotting.save(fig, pdf, png)
-
-
-def plot_reproduction_map(numbers: dict, receivers: dict[str, list[str]], pdf: str, png: str) -> None:
-    """The reproduction map (key numbers ``nr.map.<cell>.<receiver>.*``): one grid per
-    receiver, a row per map cell and a column per source claim, each square coloured by
-    the claim's status (holds / not resolved / fails) and labelled with the measured value
-    (its bootstrap interval in the key numbers); a lost tracker is labelled with its lost
-    share.
-
-    Parameters
-    ----------
-    numbers : dict
-        Key numbers (name -> entry with ``value``, optional ``lost_frac``),
-        :func:`railradio.nr.study.reproduction_map.cell_key_numbers` and ``summary_key_numbers``.
-    receivers : dict of str to list of str
-        Receiver name -> the map cells it ran on (rows), :func:`railradio.nr.study.reproduction_map.cell_receivers`.
-    pdf : str
-        Path of the PDF figure.
-    png : str
-        Path of the PNG copy.
-
-    Raises
-    ------
-    KeyError
-        When a cell's claim or metric key is missing from ``numbers``.
-    """
-    from matplotlib.patches import Patch
-
-    from railradio.nr.study.reproduction_map import CLAIMS, FAILS, HOLDS, STATUS_NAMES, UNRESOLVED
-
-    colours = {HOLDS: "#9ecae1", UNRESOLVED: "#e8e8e8", FAILS: "#fdae6b"}  # blue / grey / orange
-    names = list(receivers)
-    n_rows = [len(receivers[r]) for r in names]
-    height = 0.3 * max(n_rows) + 2.0
-    fig, axes = plotting.figure(
-        ncols=len(names),
-        figsize=(6.4 * len(names), height),
-        squeeze=False,
-        gridspec_kw={"width_ratios": [1] * len(names)},
-    )
-    for ax, rx in zip(axes[0], names, strict=True):
-        rows = receivers[rx]
-        for i, cell in enumerate(rows):
-            for j, (cname, claim) in enumerate(CLAIMS.items()):
-                p = f"nr.map.{cell}.{rx}"
-                st = numbers[f"{p}.claim.{cname}"]["value"]
-                e = numbers[f"{p}.{claim.metric}"]
-                if e["value"] is None and e.get("lost_frac"):
-                    text = f"lost\n{100 * e['lost_frac']:.0f}%"
-                elif e["value"] is None:
-                    text = "--"
-                elif claim.unit == "1":
-                    text = f"{100 * e['value']:.0f}%"
-                else:
-                    text = f"{e['value']:.2g}" if abs(e["value"]) < 10 else f"{e['value']:.0f}"
-                ax.add_patch(_square(j, i, colours[st]))
-                ax.text(j + 0.5, i + 0.5, text, ha="center", va="center", fontsize=5.5, linespacing=0.9)
-        ax.set_xlim(0, len(CLAIMS))
-        ax.set_ylim(len(rows), 0)
-        ax.set_xticks(np.arange(len(CLAIMS)) + 0.5)
-        ax.set_xticklabels([c.label for c in CLAIMS.values()], rotation=45, ha="right", fontsize=7)
-        ax.set_yticks(np.arange(len(rows)) + 0.5)
-        ax.set_yticklabels([cell_label(c) for c in rows], fontsize=6.5)
-        ax.tick_params(length=0)
-        ax.grid(False)
-        ax.set_title("source's receiver (no gate)" if rx == "source" else f"our receiver ({rx}, gated)", fontsize=9)
-    fig.legend(
-        handles=[Patch(facecolor=colours[s], label=STATUS_NAMES[s]) for s in (HOLDS, UNRESOLVED, FAILS)],
-        loc="lower center",
-        ncol=3,
-        fontsize=7,
-        frameon=False,
-        bbox_to_anchor=(0.5, 0.0),
-    )
-    fig.subplots_adjust(left=0.14, bottom=1.5 / height, top=1 - 0.35 / height, wspace=0.75)
-    plotting.save(fig, pdf, png)
-
-
-def _square(x: float, y: float, colour: str):
-    """A unit square of the map at (x, y)."""
-    from matplotlib.patches import Rectangle
-
-    return Rectangle((x, y), 1, 1, facecolor=colour, edgecolor="white", linewidth=1.0)
 
 
 def plot_fidelity(summary: dict, pdf: str, png: str) -> None:

@@ -2,7 +2,7 @@
 ``nr.map.<cell>.<receiver>.*`` as one xarray dataset, cell × receiver × claim, each claim's
 metric with its block-bootstrap interval and status, every cell described by what it assumes
 (M_T, where the data are beamed, the source receiver's template and cell selection) and the
-label the map's figure gives it (:func:`railradio.nr.study.figures.cell_label`).
+label the map's figure gives it (:func:`railradio.nr.study.map_figures.cell_label`).
 
     >>> import xarray as xr
     >>> ds = xr.open_dataset("results/nr/reproduction_map.nc")
@@ -19,8 +19,8 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from railradio.nr.study.figures import cell_label
 from railradio.nr.study.map_diagnostics import ENDFIRE_DEG
+from railradio.nr.study.map_figures import cell_label
 from railradio.nr.study.reproduction_map import (
     CLAIMS,
     FAILS,

@@ -39,7 +39,7 @@ from railradio.nr.study.workflow import sim_config
 from railradio.nr.tracking import loss
 
 HOLDS, UNRESOLVED, FAILS = 1.0, 0.0, -1.0
-CELL_KEY = re.compile(r"^nr\.map\.(mt\d+|tpl)_")
+CELL_KEY = re.compile(r"^nr\.map\.(mt\d+|tpl|win\d+)_")
 """A per-cell key of the map (``nr.map.<cell>.*``; the per-receiver counts are not)."""
 STATUS_NAMES = {HOLDS: "holds", UNRESOLVED: "not resolved", FAILS: "fails"}
 
@@ -90,9 +90,15 @@ MEASUREMENT_SETS = ("aod", "toa", "aod_toa")
 """The trackers every map cell runs per receiver (the rankings need all three)."""
 
 
+GATED = "_gated"
+"""Suffix of a tracker that gates a receiver the map otherwise tracks ungated (``source_gated``)."""
+
+
 def receivers(nr: dict) -> dict[str, bool]:
-    """The map's receivers -> whether their trackers are gated: the source's (``source``,
-    no gate, as the source) and ours (every ``extra_receivers`` entry, gated).
+    """The map's trackers, each named after the receiver it reads -> whether it is gated:
+    the source's receiver as the source tracks it (``source``, no gate) and with our χ² gate
+    (``source_gated``, the conditions' gate axis), and ours (every ``extra_receivers``
+    entry, gated).
 
     Parameters
     ----------
@@ -102,16 +108,52 @@ def receivers(nr: dict) -> dict[str, bool]:
     Returns
     -------
     dict of str to bool
-        Receiver name -> gated (``source`` first, then the extra receivers in config order).
+        Tracker name -> gated (``source``, ``source_gated``, then the extra receivers in config order).
     """
-    return {"source": False} | {name: True for name in nr.get("extra_receivers", {})}
+    return {"source": False, f"source{GATED}": True} | {name: True for name in nr.get("extra_receivers", {})}
+
+
+def receiver_of(tracker: str) -> str:
+    """The receiver whose estimates a map tracker reads: ``source_gated`` -> ``source``.
+
+    Parameters
+    ----------
+    tracker : str
+        A tracker name of :func:`receivers`.
+
+    Returns
+    -------
+    str
+        The receiver name (the tracker's without :data:`GATED`).
+    """
+    return tracker.removesuffix(GATED)
+
+
+def window_cell(window_m: float, data: str) -> str:
+    """The name of a conditions cell: ``win<metres>_<data>`` (``win2000_none``).
+
+    Parameters
+    ----------
+    window_m : float
+        The source receiver's search window [m] (``nr.receiver.search_range_m``).
+    data : str
+        The data assumption (a key of ``nr.map.data``).
+
+    Returns
+    -------
+    str
+        The cell's name.
+    """
+    return f"win{round(float(window_m))}_{data}"
 
 
 def cells(nr: dict, nr_schema: dict) -> dict[str, dict[str, Any]]:
     """Every map cell as a whole nr config (validated): ``mt<M>_<data>`` for each M_T of
-    ``map.rrh_elements`` and data assumption of ``map.data``, then ``tpl_<t>_sel_<s>`` for
-    the source receiver's template × selection on the default bursts (the main run's M_T
-    and the first data assumption), except the main config's own pair (the default cell).
+    ``map.rrh_elements`` and data assumption of ``map.data``, then ``win<m>_<data>`` for each
+    search window of ``map.conditions.windows_m`` and data assumption of
+    ``map.conditions.data`` on the main run's M_T, then ``tpl_<t>_sel_<s>`` for the source
+    receiver's template × selection on the default bursts (the main run's M_T and the first
+    data assumption), except the main config's own pair (the default cell).
 
     Parameters
     ----------
@@ -136,6 +178,12 @@ def cells(nr: dict, nr_schema: dict) -> dict[str, dict[str, Any]]:
     for m in mp["rrh_elements"]:
         for data, traffic in mp["data"].items():
             out[f"mt{m}_{data}"] = {"antenna": {"rrh_elements": m}, "traffic": dict(traffic)}
+    m_main = nr["antenna"]["rrh_elements"]
+    for w in mp.get("conditions", {}).get("windows_m", []):
+        for data in mp["conditions"]["data"]:
+            out[window_cell(w, data)] = deep_merge(
+                out[f"mt{m_main}_{data}"], {"receiver": {"search_range_m": float(w)}}
+            )
     default = dict(out[default_cell(nr)])
     for t in mp["templates"]:
         for s in mp["selections"]:
@@ -161,8 +209,9 @@ def default_cell(nr: dict) -> str:
 
 
 def cell_receivers(name: str, nr: dict) -> list[str]:
-    """Receivers reported in a cell: a template/selection cell changes the source's
-    receiver only (ours equals the default cell's).
+    """Trackers reported in a cell: a template/selection cell changes the source's
+    receiver only (ours equals the default cell's), tracked as the source does; a window
+    cell changes the source's receiver only, tracked ungated and gated.
 
     Parameters
     ----------
@@ -177,7 +226,9 @@ def cell_receivers(name: str, nr: dict) -> list[str]:
         The receiver names.
     """
     rx = list(receivers(nr))
-    return ["source"] if name.startswith("tpl_") else rx
+    if name.startswith("tpl_"):
+        return ["source"]
+    return [r for r in rx if receiver_of(r) == "source"] if name.startswith("win") else rx
 
 
 def burst_config(cfg: dict) -> dict:
