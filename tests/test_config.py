@@ -66,7 +66,8 @@ def test_every_key_has_a_default_and_a_description():
 def test_every_array_bounds_its_length_or_says_why_empty_is_meaningful():
     """An array without minItems must be one whose empty value means something (stated in
     its description): the distance bins of W (one W), the AOD model's angle bins (the
-    source's unbiased W) and the handover switches (not varied)."""
+    source's unbiased W), the conditions' search windows (the source's K alone) and the
+    handover switches (not varied)."""
 
     def arrays(node, key=""):
         if "array" in ([node.get("type")] if isinstance(node.get("type"), str) else node.get("type", [])):
@@ -75,7 +76,7 @@ def test_every_array_bounds_its_length_or_says_why_empty_is_meaningful():
             yield from arrays(sub, f"{key}.{name}" if key else name)
 
     free = sorted(k for k, n in arrays(SCHEMA) if "minItems" not in n)
-    empty_means = {"nr.tracker.w_distance_edges_m", "nr.tracker.aod_angle_edges_deg"}
+    empty_means = {"nr.tracker.w_distance_edges_m", "nr.tracker.aod_angle_edges_deg", "nr.map.conditions.windows_m"}
     assert all(k in empty_means or k.startswith("handover.sensitivity.switches.") for k in free), free
 
 
