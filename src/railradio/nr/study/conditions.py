@@ -131,6 +131,7 @@ def key_numbers(numbers: dict[str, Any], nr: dict) -> dict[str, Any]:
         When a condition's claim status is missing from ``numbers``.
     """
     conds = conditions(nr)
+    least = smallest(numbers, nr)
     out: dict[str, Any] = {
         "nr.map.conditions.n": KeySpec(
             "nr.map.conditions.n", "1", "conditions of the source's receiver (window x gate x data)"
@@ -138,14 +139,13 @@ def key_numbers(numbers: dict[str, Any], nr: dict) -> dict[str, Any]:
     }
     for cname, claim in CLAIMS.items():
         st = [numbers[f"{c.prefix}.claim.{cname}"]["value"] for c in conds]
-        holds = [c.departures for c, s in zip(conds, st, strict=True) if s == HOLDS]
         p = f"nr.map.conditions.{cname}"
         out[f"{p}.min_departures"] = KeySpec(
             f"{p}.min_departures",
             "1",
             f"fewest departures (bounded window, gate) of the source's receiver under which '{claim.label}' "
             "holds (null: under none)",
-        ).entry(float(min(holds)) if holds else None)
+        ).entry(float(least[cname][0].departures) if least[cname] else None)
         for code, word in ((HOLDS, "holds"), (FAILS, "fails")):
             out[f"{p}.n_{word}"] = KeySpec(
                 f"{p}.n_{word}", "1", f"conditions of the source's receiver under which '{claim.label}' {word}"
@@ -169,9 +169,8 @@ def smallest(numbers: dict[str, Any], nr: dict) -> dict[str, list[Condition]]:
     dict of str to list of Condition
         Claim name (:data:`railradio.nr.study.reproduction_map.CLAIMS`) -> conditions.
     """
-    conds = conditions(nr)
-    out = {}
+    conds, out = conditions(nr), {}
     for cname in CLAIMS:
         ok = [c for c in conds if numbers[f"{c.prefix}.claim.{cname}"]["value"] == HOLDS]
-        out[cname] = [c for c in ok if c.departures == min(x.departures for x in ok)] if ok else []
+        out[cname] = [c for c in ok if c.departures == ok[0].departures]  # sorted by departures
     return out
