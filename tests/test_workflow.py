@@ -78,7 +78,7 @@ def test_paper_scale_dag_resolves(tmp_path):
     # 10 distances + 12 TDOA errors + 10 AOA errors + the reference point
     assert counts["fusion_point"] == 33 and counts["fusion_figure"] == 3
     # the figures of the published nr records: `all` runs their targets
-    assert counts["nr_map_cell"] == 23 and counts["nr_map_key_numbers"] == 1 and counts["nr_case_key_numbers"] == 1
+    assert counts["nr_map_cell"] == 24 and counts["nr_map_key_numbers"] == 1 and counts["nr_case_key_numbers"] == 1
 
 
 def test_reproduction_reads_the_nr_records_only_while_they_are_current(tmp_path):
@@ -100,7 +100,7 @@ def test_reproduction_reads_the_nr_records_only_while_they_are_current(tmp_path)
     text = cfg.read_text(encoding="utf-8")
     cfg.write_text(text.replace("n_boot: 1000", "n_boot: 999"), encoding="utf-8")
     counts = numbers_jobs()
-    assert counts["nr_map_key_numbers"] == 1 and counts["nr_map_cell"] == 23
+    assert counts["nr_map_key_numbers"] == 1 and counts["nr_map_cell"] == 24
     assert not [r for r in counts if r.startswith("nr_case_")], counts
     cfg.write_text(text.replace("epochs: 2500 ", "epochs: 2400 "), encoding="utf-8")
     counts = numbers_jobs()
@@ -204,11 +204,11 @@ def test_intermediates_are_self_explaining(ci_run):
     # panels_200m_point): their track only
     assert len(case_paths) == 14 * (2 + 1 + 1) + 7
     map_paths = sorted((ci_run / "results/nr/map").rglob("*.nc"))
-    # the map's 23 cells: 20 with their own segment bursts (one shard each at CI scale: 15
-    # M_T x data cells, the 4 search-window cells and the SSS template; the default and the
-    # selection-only cells read others'), 21 calibration runs (one per burst set), 23 tracks,
-    # and the map as one dataset
-    assert len(map_paths) == 20 + 21 + 23 + 1
+    # the map's 24 cells: 21 with their own segment bursts (one shard each at CI scale: 15
+    # M_T x data cells, the 4 search-window cells, the SSS template and the sanity row; the
+    # default and the selection-only cells read others'), 22 calibration runs (one per burst
+    # set), 24 tracks, and the map as one dataset
+    assert len(map_paths) == 21 + 22 + 24 + 1
     assert ci_run / "results/nr/map/reproduction_map.nc" in map_paths
     paths += nr_paths + case_paths + map_paths
     for study, n_min in (("handover", 10), ("tunnel", 10), ("sens/fusion", 5), ("chain", 1)):

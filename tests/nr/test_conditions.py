@@ -91,3 +91,13 @@ def test_config_checks_name_the_key():
     cfg["nr"]["map"]["conditions"]["windows_m"] = [2000.0, 2000.2]
     with pytest.raises(ConfigError, match=r"nr\.map\.conditions\.windows_m"):
         check_config(validate_config(cfg, SCHEMA), SCHEMA)
+
+
+def test_sanity_rows_are_the_single_cells_source_trackers(nr):
+    rows = co.sanity_rows(nr)
+    assert [p for p, _ in rows] == [f"nr.map.{rm.SINGLE_CELL}.source", f"nr.map.{rm.SINGLE_CELL}.source_gated"]
+    assert "nearest RRH alone" in rows[0][1] and "no gate" in rows[0][1] and "gated" in rows[1][1]
+    # not a condition: the departures and the smallest sets ignore it
+    assert all(c.cell != rm.SINGLE_CELL for c in co.conditions(nr))
+    off = {**nr, "map": {**nr["map"], "conditions": {**nr["map"]["conditions"], "single_rrh": False}}}
+    assert co.sanity_rows(off) == []

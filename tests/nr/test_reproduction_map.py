@@ -28,10 +28,24 @@ def nr_and_schema():
 def test_cells_and_the_bursts_they_share(nr_and_schema):
     nr, schema = nr_and_schema
     cells = rm.cells(nr, schema)
-    # M_T x data = 16, the conditions' windows x data = 4, then the source receiver's
-    # template x selection less the default pair
-    assert len(cells) == 4 * 4 + 2 * 2 + 3
-    assert list(cells)[16:20] == ["win2000_others_random", "win2000_none", "win1000_others_random", "win1000_none"]
+    # M_T x data = 16, the conditions' windows x data = 4, the sanity row, then the source
+    # receiver's template x selection less the default pair
+    assert len(cells) == 4 * 4 + 2 * 2 + 1 + 3
+    assert list(cells)[16:21] == [
+        "win2000_others_random",
+        "win2000_none",
+        "win1000_others_random",
+        "win1000_none",
+        rm.SINGLE_CELL,
+    ]
+    # the sanity row: the main run's settings, the nearest RRH alone in range, no data
+    single = cells[rm.SINGLE_CELL]
+    assert single["radio"]["range_m"] == pytest.approx(np.hypot(250.0, 15.0))
+    assert single["traffic"]["data_beam"] == "none" and single["antenna"]["rrh_elements"] == 32
+    assert single["receiver"] == cells["mt32_none"]["receiver"]
+    assert rm.burst_owner(rm.SINGLE_CELL, cells, nr) == rm.SINGLE_CELL
+    assert rm.cell_receivers(rm.SINGLE_CELL, nr) == ["source", "source_gated", "robust"]
+    assert rm.CELL_KEY.match(f"nr.map.{rm.SINGLE_CELL}.source.claim.toa_p95")
     assert cells["win1000_none"]["receiver"]["search_range_m"] == 1000.0
     assert cells["win1000_none"]["traffic"] == cells["mt32_none"]["traffic"]
     assert cells["mt32_none"]["receiver"]["search_range_m"] is None
@@ -241,3 +255,61 @@ def test_shard_paths_reuse_the_main_run_and_other_cells(nr_and_schema):
     assert rm.shard_paths("tpl_pss_sss_sel_peak", "cal", cells, nr, n_main) == [
         "results/nr/map/mt32_others_random/estimates/cal/s0.nc"
     ]
+
+
+def test_single_rrh_range_leaves_the_nearest_rrh_alone():
+    """Along the whole track exactly one RRH lies within the sanity row's range, except at the
+    midpoint between two, where both lie on its edge."""
+    dep = {"spacing_m": 500.0, "offset_m": 15.0}
+    r = rm.single_rrh_range_m(dep)
+    rrh_x = np.arange(0.0, 5001.0, 500.0)
+    x = np.r_[np.linspace(0.3, 4999.7, 20001), np.arange(250.0, 4750.0, 500.0) - 0.01]
+    d2d = np.hypot(x[:, None] - rrh_x[None, :], dep["offset_m"])
+    assert np.all((d2d <= r).sum(axis=1) == 1)
+    mid = np.hypot(250.0 - rrh_x[:2], dep["offset_m"])
+    assert np.all(mid <= r) and np.all(mid >= r - 1e-9)
+
+
+def test_sanity_row_off():
+    cfg = _paper()
+    cfg["nr"]["map"]["conditions"]["single_rrh"] = False
+    cells = rm.cells(cfg["nr"], SCHEMA["properties"]["nr"])
+    assert rm.SINGLE_CELL not in cells and len(cells) == 4 * 4 + 2 * 2 + 3
+
+
+def test_nearest_rrh_errors_follow_the_truth_not_the_selection():
+    import xarray as xr
+
+    from railradio.constants import SPEED_OF_LIGHT_M_S
+
+    rrh_x = np.array([0.0, 500.0, 1000.0])
+    x = np.array([10.0, 260.0, 740.0, 990.0])  # nearest: 0, 1, 1, 2
+    rrh = np.array([[0, 1], [0, 1], [2, 0], [1, 2]])  # epoch 2: RRH 1 not a candidate
+    aod_true = np.zeros((4, 2))
+    toa_true = np.full((4, 2), 1e-6)
+    aod_hat = aod_true + np.array([[0.01, 0.5], [0.5, 0.02], [0.5, 0.5], [0.5, np.nan]])
+    toa_hat = toa_true + np.array([[1e-9, 0.0], [0.0, -2e-9], [0.0, 0.0], [0.0, 1e-9]])
+    dims = ("epoch", "cand")
+    ds = xr.Dataset(
+        {
+            "rrh": (dims, rrh),
+            "aod_hat": (dims, aod_hat),
+            "aod_true": (dims, aod_true),
+            "toa_hat": (dims, toa_hat),
+            "toa_true": (dims, toa_true),
+            "x_true": (("epoch",), x),
+        }
+    )
+    aod, rng = md.nearest_errors(ds, rrh_x)
+    np.testing.assert_allclose(aod[:2], [0.01, 0.02])
+    np.testing.assert_allclose(rng[:2], [1e-9 * SPEED_OF_LIGHT_M_S, -2e-9 * SPEED_OF_LIGHT_M_S])
+    assert np.isnan(aod[2]) and np.isnan(rng[2])  # not among the candidates
+    assert np.isnan(aod[3])  # a candidate, but its AOD not measured
+    k = md.nearest_key_numbers("c", "source", aod, rng, "t")
+    p = "nr.map.c.source.diag.nearest"
+    assert k[f"{p}.measured_frac"]["value"] == pytest.approx(0.5)
+    assert k[f"{p}.aod_err_deg.p95"]["value"] == pytest.approx(np.percentile(np.degrees([0.01, 0.02]), 95))
+    never = md.nearest_key_numbers("c", "source", np.full(3, np.nan), np.full(3, np.nan), "t")
+    assert never[f"{p}.toa_err_m.p95"]["value"] is None and never[f"{p}.measured_frac"]["value"] == 0.0
+    with pytest.raises(ValueError, match="aod_err_rad"):
+        md.nearest_key_numbers("c", "source", aod, rng[:-1], "t")

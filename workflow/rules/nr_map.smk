@@ -5,6 +5,7 @@
 # its own short calibration run. Bursts are re-used wherever only the tracker changes, and
 # synthesized once per epoch for the cells that differ only in amplitudes or receivers.
 # The cells, their runs and the shards they read: NR_PLAN.map_* (nr.smk; railradio.nr.study.plan).
+from railradio.nr.engine.variants import variant_groups
 from railradio.nr.study import records as nr_records
 
 register_figures("nr_map", ["nr_reproduction_map", "nr_conditions"])
@@ -16,19 +17,26 @@ register_figures("nr_map", ["nr_reproduction_map", "nr_conditions"])
 KEY_NUMBER_FRAGMENTS.append(nr_records.MAP.fragment(REPO_ROOT, config, "results/nr/map/key_numbers.json"))
 
 
-# The cells owning each run's bursts (the others read another cell's or the main run's): one
-# job per run and shard makes all their estimate shards, those differing only in amplitudes
-# (M_T, the data's beam and load) or receivers from one synthesis per epoch
-# (railradio.nr.engine.variants.simulate_cells). "_none": no owner, a path nothing asks for.
-MAP_OWNERS = {
+# The cells owning each run's bursts (the others read another cell's or the main run's). The
+# owners differing only in amplitudes (M_T, the data's beam and load) or receivers share one
+# synthesis per epoch (railradio.nr.engine.variants.simulate_cells): one job per run and shard
+# makes all their estimate shards. An owner in no such group (the sanity row, another range)
+# has its own jobs, so that adding or changing it leaves the shared shards as they are.
+# "_none": no owner, a path nothing asks for.
+_OWNERS = {
     real: [
         c
         for c in NR_PLAN.map_cells
         if any(f"results/nr/map/{c}/estimates/{real}/" in p for i in NR_PLAN.map_inputs.values() for p in i[real])
     ]
-    or ["_none"]
     for real in ("r0", "cal")
 }
+_SHARED = {
+    real: {c for g in variant_groups({c: NR_PLAN.map_burst_config[c] for c in owners}) for c in g}
+    for real, owners in _OWNERS.items()
+}
+MAP_OWNERS = {real: [c for c in owners if c in _SHARED[real]] or ["_none"] for real, owners in _OWNERS.items()}
+MAP_SOLO = sorted({c for real, owners in _OWNERS.items() for c in owners if c not in _SHARED[real]})
 
 
 rule nr_map_segment_shard:
@@ -72,6 +80,34 @@ rule nr_map_calibration_shard:
         "results/logs/nr/map/calibration_s{shard}.log",
     benchmark:
         "results/benchmarks/nr/map/calibration_s{shard}.tsv"
+    conda:
+        "../envs/railradio.yaml"
+    script:
+        "../scripts/nr_map/shard.py"
+
+
+rule nr_map_solo_shard:
+    """A shard of the segment (real r0) or of the calibration run (cal) of a cell owning
+    bursts no other cell shares (MAP_SOLO)."""
+    output:
+        "results/nr/map/{cell}/estimates/{real}/s{shard}.nc",
+    params:
+        sims=lambda w: [plain(NR_PLAN.map_burst_config[w.cell])],
+        cells=lambda w: [w.cell],
+        real=lambda w: w.real,
+        seed=config["seed"],
+        epochs=lambda w: plain(NR_PLAN.map_epochs[w.real]),
+        n_shards=lambda w: NR_PLAN.map_n_shards[w.real],
+        calibration=lambda w: plain(NR_PLAN.map_calibration) if w.real == "cal" else None,
+        rid=lambda w: NR_PLAN.map_rid[w.real],
+    wildcard_constraints:
+        cell="|".join(MAP_SOLO) or "_none",
+        real="r0|cal",
+        shard=r"\d+",
+    log:
+        "results/logs/nr/map/{cell}_{real}_s{shard}.log",
+    benchmark:
+        "results/benchmarks/nr/map/{cell}_{real}_s{shard}.tsv"
     conda:
         "../envs/railradio.yaml"
     script:

@@ -6,6 +6,7 @@ import xarray as xr
 
 from railradio.io import write_dataset
 from railradio.nr.engine.simulate import scenario_from_config
+from railradio.nr.study.map_diagnostics import nearest_errors
 from railradio.nr.study.reproduction_map import MEASUREMENT_SETS, receiver_of
 from railradio.nr.study.runs import read_shards
 from railradio.nr.tracking.calibration import calibrate, measurement_errors, selected
@@ -32,6 +33,7 @@ aod = np.full((len(receivers), n, 3), np.nan)
 rng = np.full((len(receivers), n, 3), np.nan)
 aod_true = np.full((len(receivers), n, 3), np.nan)
 n_det = np.zeros((len(receivers), n, 3), dtype=np.int64)
+near = np.full((2, len(receivers), n), np.nan)  # the nearest RRH's AOD [rad] and range [m] errors
 cal = {}
 for i, (name, gate) in enumerate(receivers.items()):
     rx = receiver_of(name)  # source_gated: the source's estimates, gated
@@ -40,6 +42,7 @@ for i, (name, gate) in enumerate(receivers.items()):
     order, ok = selected(dsr, sel[rx])  # the same RRHs: their truth and detections
     aod_true[i] = np.where(ok, np.take_along_axis(dsr["aod_true"].values, order, axis=1), np.nan)
     n_det[i] = np.where(ok, np.take_along_axis(dsr["n_detected"].values, order, axis=1), 0)
+    near[:, i] = nearest_errors(dsr, dep.x_m)  # scoring only
     for j, measurements in enumerate(MEASUREMENT_SETS):
         search = {}
         cfg = calibrate(
@@ -89,6 +92,16 @@ res = xr.Dataset(
             ("receiver", "epoch", "slot"),
             n_det,
             {"units": "1", "long_name": "SS blocks detected of the 3 selected RRHs"},
+        ),
+        "nearest_aod_err": (
+            ("receiver", "epoch"),
+            near[0],
+            {"units": "rad", "long_name": "AOD error of the RRH nearest the train (NaN: not measured)"},
+        ),
+        "nearest_range_err": (
+            ("receiver", "epoch"),
+            near[1],
+            {"units": "m", "long_name": "TOA range error of the RRH nearest the train (NaN: not measured)"},
         ),
         "t": (("epoch",), seg["t"].values, {"units": "s", "long_name": "time"}),
         "v_true": (("epoch",), seg["v_true"].values, {"units": "m s-1", "long_name": "true speed"}),

@@ -12,6 +12,7 @@ from railradio.nr.study.map_diagnostics import (
     calibration_diag_key_numbers,
     diagnostic_key_numbers,
     endfire_bias_key_numbers,
+    nearest_key_numbers,
 )
 from railradio.nr.study.reproduction_map import cell_key_numbers, summary_key_numbers
 from railradio.nr.tracking import loss
@@ -56,6 +57,7 @@ for cell, path in zip(smk.params.cells, smk.input, strict=True):
         fused = d["pos_err"].sel(measurements="aod_toa").values
         along = d["along_err"].sel(measurements="aod_toa").values
         numbers |= along_cross_key_numbers(cell, rx, along, fused, spacing, where)
+        numbers |= nearest_key_numbers(cell, rx, d["nearest_aod_err"].values, d["nearest_range_err"].values, where)
         numbers |= calibration_diag_key_numbers(cell, rx, json.loads(ds.attrs["config_json"])["calibration"], where)
 numbers |= summary_key_numbers(numbers, list(smk.params.cells), nr)
 write_json(smk.output[0], numbers | conditions.key_numbers(numbers, nr))

@@ -25,6 +25,13 @@ claim's status there is the map's: its block-bootstrap interval wholly on the cl
 window, the gate — 0 to 2; the data are an assumption the source leaves open, not a
 departure. For each claim, the **smallest set of conditions** under which it holds are those
 with the fewest departures among the conditions where it holds.
+
+The **sanity row** (``map.conditions.single_rrh``, cell
+:data:`railradio.nr.study.reproduction_map.SINGLE_CELL`) is not a condition on the main run's
+deployment but its easiest case: the nearest RRH alone in range and no data, so no
+interference at all, with the source's K, tracked ungated and gated. A claim that fails there
+is out of the source receiver's reach in any deployment of this model; the receiver's
+measurements of that one RRH (``diag.nearest.*``) are its accuracy without interference.
 """
 
 from __future__ import annotations
@@ -33,7 +40,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from railradio.keynumbers import KeySpec
-from railradio.nr.study.reproduction_map import CLAIMS, FAILS, GATED, HOLDS, window_cell
+from railradio.nr.study.reproduction_map import CLAIMS, FAILS, GATED, HOLDS, SINGLE_CELL, window_cell
 
 
 @dataclass(frozen=True)
@@ -174,3 +181,28 @@ def smallest(numbers: dict[str, Any], nr: dict) -> dict[str, list[Condition]]:
         ok = [c for c in conds if numbers[f"{c.prefix}.claim.{cname}"]["value"] == HOLDS]
         out[cname] = [c for c in ok if c.departures == ok[0].departures]  # sorted by departures
     return out
+
+
+def sanity_rows(nr: dict) -> list[tuple[str, str]]:
+    """The sanity row's trackers of the source's receiver (none when
+    ``map.conditions.single_rrh`` is off): key prefix and label each, ungated first.
+
+    Parameters
+    ----------
+    nr : dict
+        The ``nr`` section of the workflow config (with its ``map`` section).
+
+    Returns
+    -------
+    list of (str, str)
+        ``(nr.map.<SINGLE_CELL>.<tracker>, label)`` for the trackers ``source`` and ``source_gated``.
+    """
+    if not nr["map"].get("conditions", {}).get("single_rrh", False):
+        return []
+    return [
+        (
+            f"nr.map.{SINGLE_CELL}.source{GATED if gated else ''}",
+            f"nearest RRH alone, window K, {'gated' if gated else 'no gate'}, data: none",
+        )
+        for gated in (False, True)
+    ]

@@ -8,6 +8,8 @@
   :mod:`railradio.nr.tracking.aod_model`, calibrates on the cell's calibration run).
 - :func:`along_cross_key_numbers`: the AOD+TOA tracker's mean |error| along and across the
   track; :func:`calibration_diag_key_numbers`: the q each tracker was calibrated with.
+- :func:`nearest_key_numbers`: the measurements of the RRH nearest the train, whichever the
+  receiver selects (the sanity row's one RRH in range).
 """
 
 from __future__ import annotations
@@ -17,7 +19,9 @@ from typing import Any
 import numpy as np
 
 import railradio.nr.tracking.aod_model as aod_model
+from railradio.constants import SPEED_OF_LIGHT_M_S
 from railradio.keynumbers import KeySpec
+from railradio.nr.channel.antenna import wrap_rad
 from railradio.nr.tracking import loss
 
 ENDFIRE_DEG = 3.0
@@ -222,4 +226,87 @@ def along_cross_key_numbers(
         out[name] = KeySpec(name, "m", f"mean |{side}-track error| of the EKF AOD+TOA ({where})").entry(
             value, lost_frac=lost
         )
+    return out
+
+
+def nearest_errors(ds, rrh_x_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The AOD and TOA range errors of the RRH nearest the train along the track, per epoch
+    (NaN where it is not among the candidates or not measured). Scoring: reads the truth.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        One receiver's estimates (dims ``epoch`` × ``cand``: ``rrh``, ``aod_hat`` [rad],
+        ``aod_true``, ``toa_hat`` [s], ``toa_true``; ``x_true`` [m] per epoch).
+    rrh_x_m : numpy.ndarray
+        [n_rrh] along-track positions of the RRHs, m.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ([n] AOD errors [rad, wrapped to (-π, π]], [n] TOA range errors c·Δτ [m]).
+    """
+    x = np.asarray(ds["x_true"].values, float)
+    nearest = np.argmin(np.abs(np.asarray(rrh_x_m, float)[None, :] - x[:, None]), axis=1)
+    hit = ds["rrh"].values == nearest[:, None]
+    col = np.argmax(hit, axis=1)[:, None]
+    has = hit.any(axis=1)
+
+    def at(v):
+        return np.take_along_axis(ds[v].values, col, axis=1)[:, 0]
+
+    aod = np.where(has, wrap_rad(at("aod_hat") - at("aod_true")), np.nan)
+    rng = np.where(has, (at("toa_hat") - at("toa_true")) * SPEED_OF_LIGHT_M_S, np.nan)
+    return aod, rng
+
+
+def nearest_key_numbers(
+    cell: str, rx: str, aod_err_rad: np.ndarray, range_err_m: np.ndarray, where: str
+) -> dict[str, Any]:
+    """The receiver's measurements of the RRH nearest the train, whatever the selection: the
+    95th percentiles of its |AOD error| and |TOA range error| over the epochs it was measured,
+    and the share of epochs it was (in the sanity row, :data:`railradio.nr.study.reproduction_map.SINGLE_CELL`,
+    the one RRH in range: the receiver's accuracy without interference).
+
+    Parameters
+    ----------
+    cell, rx : str
+        The cell and receiver names.
+    aod_err_rad, range_err_m : numpy.ndarray
+        [n] the nearest RRH's AOD error [rad] and TOA range error [m] per epoch (NaN: not
+        measured).
+    where : str
+        Text appended to each key's description.
+
+    Returns
+    -------
+    dict of str to dict
+        ``nr.map.<cell>.<rx>.diag.nearest.{aod_err_deg.p95, toa_err_m.p95, measured_frac}``
+        [deg, m, 1] (a percentile null when never measured).
+
+    Raises
+    ------
+    ValueError
+        When the arrays differ in shape.
+    """
+    a = np.abs(np.degrees(np.asarray(aod_err_rad, float)))
+    r = np.abs(np.asarray(range_err_m, float))
+    if a.shape != r.shape:
+        raise ValueError(f"aod_err_rad and range_err_m must share a shape, got {a.shape} and {r.shape}")
+    ok = np.isfinite(a) & np.isfinite(r)
+    p = f"nr.map.{cell}.{rx}.diag.nearest"
+    vals = {
+        "aod_err_deg.p95": ("deg", "95th percentile of the nearest RRH's |AOD error|", a[ok]),
+        "toa_err_m.p95": ("m", "95th percentile of the nearest RRH's |TOA range error|", r[ok]),
+    }
+    out = {
+        f"{p}.{k}": KeySpec(f"{p}.{k}", u, f"{d}, over the epochs it was measured ({where})").entry(
+            float(np.percentile(x, 95)) if x.size else None
+        )
+        for k, (u, d, x) in vals.items()
+    }
+    name = f"{p}.measured_frac"
+    out[name] = KeySpec(name, "1", f"share of epochs with the nearest RRH measured (AOD and TOA) ({where})").entry(
+        float(ok.mean()) if ok.size else None
+    )
     return out

@@ -9,7 +9,7 @@ import re
 import numpy as np
 
 from railradio import plotting
-from railradio.nr.study.reproduction_map import CLAIMS, FAILS, HOLDS, STATUS_NAMES, UNRESOLVED
+from railradio.nr.study.reproduction_map import CLAIMS, FAILS, HOLDS, SINGLE_CELL, STATUS_NAMES, UNRESOLVED
 
 _STATUS_COLOURS = {HOLDS: "#9ecae1", UNRESOLVED: "#e8e8e8", FAILS: "#fdae6b"}  # blue / grey / orange
 
@@ -31,7 +31,8 @@ _WIN_CELL = re.compile(r"^win(\d+)_(.+)$")
 def cell_label(name: str) -> str:
     """A map cell's name as a figure or table shows it: ``mt32_others_random`` ->
     ``M_T = 32, data: others at random beams``; ``tpl_sss_sel_peak`` -> ``template SSS,
-    selection: peak``; ``win2000_none`` -> ``window 2 km, data: none (PSS, SSS only)``.
+    selection: peak``; ``win2000_none`` -> ``window 2 km, data: none (PSS, SSS only)``; the sanity row
+    ``single_none`` -> ``nearest RRH alone, data: none``.
 
     Parameters
     ----------
@@ -52,6 +53,8 @@ def cell_label(name: str) -> str:
     if m := _TPL_CELL.match(name):
         tpl = m.group(1).upper().replace("_", "+")
         return f"template {tpl}, selection: {m.group(2).replace('_', '-')}"
+    if name == SINGLE_CELL:
+        return "nearest RRH alone, data: none"
     return name
 
 
@@ -91,11 +94,19 @@ def plot_reproduction_map(numbers: dict, receivers: dict[str, list[str]], pdf: s
     plotting.save(fig, pdf, png)
 
 
-def plot_conditions(numbers: dict, rows: list[tuple[str, str]], smallest: dict[str, list[str]], pdf: str, png: str):
+def plot_conditions(
+    numbers: dict,
+    rows: list[tuple[str, str]],
+    smallest: dict[str, list[str]],
+    pdf: str,
+    png: str,
+    sanity: list[tuple[str, str]] | None = None,
+):
     """The source receiver's conditions: a row per condition (window × gate × data), a
     column per source claim, each square coloured by the claim's status there and labelled
-    with the measured value and its bootstrap interval; under each claim, the fewest
-    departures (bounded window, gate) under which it holds.
+    with the measured value and its bootstrap interval; under them the sanity rows, set
+    apart; under each claim, the fewest departures (bounded window, gate) under which it
+    holds.
 
     Parameters
     ----------
@@ -108,6 +119,9 @@ def plot_conditions(numbers: dict, rows: list[tuple[str, str]], smallest: dict[s
         Claim -> the prefixes of its smallest set of conditions (framed).
     pdf, png : str
         Paths of the PDF figure and its PNG copy.
+    sanity : list of (str, str), optional
+        The sanity row's trackers (:func:`railradio.nr.study.conditions.sanity_rows`), drawn
+        below a rule.
 
     Raises
     ------
@@ -116,16 +130,19 @@ def plot_conditions(numbers: dict, rows: list[tuple[str, str]], smallest: dict[s
     """
     from matplotlib.patches import Rectangle
 
-    height = 0.42 * len(rows) + 2.4
+    grid = rows + list(sanity or [])
+    height = 0.42 * len(grid) + 2.4
     fig, ax = plotting.figure(figsize=(7.6, height))
-    _claim_grid(ax, numbers, rows, interval=True)
+    _claim_grid(ax, numbers, grid, interval=True)
+    if sanity:
+        ax.axhline(len(rows), color="black", linewidth=1.6)
     prefixes = [p for p, _ in rows]
     for j, cname in enumerate(CLAIMS):
         for p in smallest.get(cname, []):
             ax.add_patch(Rectangle((j, prefixes.index(p)), 1, 1, fill=False, edgecolor="black", linewidth=1.4))
         d = numbers[f"nr.map.conditions.{cname}.min_departures"]["value"]
-        ax.text(j + 0.5, len(rows) + 0.45, "never" if d is None else f"{d:.0f}", ha="center", va="center", fontsize=7)
-    ax.set_ylim(len(rows) + 0.9, 0)
+        ax.text(j + 0.5, len(grid) + 0.45, "never" if d is None else f"{d:.0f}", ha="center", va="center", fontsize=7)
+    ax.set_ylim(len(grid) + 0.9, 0)
     ax.set_title("source's receiver: fewest departures under which each claim holds (framed; bottom row)", fontsize=8)
     _status_legend(fig)
     fig.subplots_adjust(left=0.36, bottom=1.6 / height, top=1 - 0.35 / height)

@@ -27,7 +27,6 @@ from __future__ import annotations
 
 import copy
 import re
-import warnings
 from dataclasses import dataclass
 from typing import Any
 
@@ -35,11 +34,12 @@ import numpy as np
 
 from railradio.config import deep_merge, validate_config
 from railradio.keynumbers import KeySpec
+from railradio.nr.study.block_bootstrap import block_indices, nanpercentile
 from railradio.nr.study.workflow import sim_config
 from railradio.nr.tracking import loss
 
 HOLDS, UNRESOLVED, FAILS = 1.0, 0.0, -1.0
-CELL_KEY = re.compile(r"^nr\.map\.(mt\d+|tpl|win\d+)_")
+CELL_KEY = re.compile(r"^nr\.map\.(mt\d+|tpl|win\d+|single)_")
 """A per-cell key of the map (``nr.map.<cell>.*``; the per-receiver counts are not)."""
 STATUS_NAMES = {HOLDS: "holds", UNRESOLVED: "not resolved", FAILS: "fails"}
 
@@ -147,11 +147,35 @@ def window_cell(window_m: float, data: str) -> str:
     return f"win{round(float(window_m))}_{data}"
 
 
+SINGLE_CELL = "single_none"
+"""The sanity row of the conditions (``nr.map.conditions.single_rrh``): the nearest RRH alone
+in range and no data."""
+
+
+def single_rrh_range_m(deployment: dict) -> float:
+    """The range that keeps the nearest RRH alone in range: its 2-D distance from the track's
+    point midway between two RRHs, √((spacing/2)² + offset²) (only that point has two).
+
+    Parameters
+    ----------
+    deployment : dict
+        The nr ``deployment`` section (``spacing_m``, ``offset_m``; m).
+
+    Returns
+    -------
+    float
+        ``nr.radio.range_m`` of the sanity row, m.
+    """
+    return float(np.hypot(deployment["spacing_m"] / 2, deployment["offset_m"]))
+
+
 def cells(nr: dict, nr_schema: dict) -> dict[str, dict[str, Any]]:
     """Every map cell as a whole nr config (validated): ``mt<M>_<data>`` for each M_T of
     ``map.rrh_elements`` and data assumption of ``map.data``, then ``win<m>_<data>`` for each
     search window of ``map.conditions.windows_m`` and data assumption of
-    ``map.conditions.data`` on the main run's M_T, then ``tpl_<t>_sel_<s>`` for the source
+    ``map.conditions.data`` on the main run's M_T, then the sanity row :data:`SINGLE_CELL`
+    (``map.conditions.single_rrh``: the main run's settings with the range
+    :func:`single_rrh_range_m` and no data), then ``tpl_<t>_sel_<s>`` for the source
     receiver's template × selection on the default bursts (the main run's M_T and the first
     data assumption), except the main config's own pair (the default cell).
 
@@ -184,6 +208,12 @@ def cells(nr: dict, nr_schema: dict) -> dict[str, dict[str, Any]]:
             out[window_cell(w, data)] = deep_merge(
                 out[f"mt{m_main}_{data}"], {"receiver": {"search_range_m": float(w)}}
             )
+    if mp.get("conditions", {}).get("single_rrh", False):
+        out[SINGLE_CELL] = {
+            "antenna": {"rrh_elements": m_main},
+            "radio": {"range_m": single_rrh_range_m(nr["deployment"])},
+            "traffic": {"data_beam": "none"},
+        }
     default = dict(out[default_cell(nr)])
     for t in mp["templates"]:
         for s in mp["selections"]:
@@ -211,12 +241,13 @@ def default_cell(nr: dict) -> str:
 def cell_receivers(name: str, nr: dict) -> list[str]:
     """Trackers reported in a cell: a template/selection cell changes the source's
     receiver only (ours equals the default cell's), tracked as the source does; a window
-    cell changes the source's receiver only, tracked ungated and gated.
+    cell changes the source's receiver only, tracked ungated and gated; every other cell
+    (``mt<M>_<data>``, the sanity row) has its own bursts and reports every tracker.
 
     Parameters
     ----------
     name : str
-        The cell name (``mt<M>_<data>`` or ``tpl_<t>_sel_<s>``).
+        The cell name (``mt<M>_<data>``, ``win<m>_<data>``, :data:`SINGLE_CELL` or ``tpl_<t>_sel_<s>``).
     nr : dict
         The ``nr`` section of the workflow config.
 
@@ -328,44 +359,7 @@ def calibration_section(nr: dict) -> dict:
     return {"epochs": c["epochs"], "trajectory": {"v0_m_s": c["v0_m_s"], "phases": c["phases"]}}
 
 
-# ---------------------------------------------------------------- bootstrap and claims
-
-
-def block_indices(rng: np.random.Generator, n: int, block: int, n_boot: int) -> np.ndarray:
-    """Moving-block-bootstrap resamples of ``n`` epochs: [n_boot, n] indices, each row
-    ⌈n/block⌉ blocks of ``block`` consecutive epochs with uniform starts, cut to n.
-
-    Parameters
-    ----------
-    rng : numpy.random.Generator
-        Generator of the block starts.
-    n, block, n_boot : int
-        Epochs, block length [epochs] (in 1..n) and resamples (≥ 1).
-
-    Returns
-    -------
-    numpy.ndarray of int
-        [n_boot, n] epoch indices.
-
-    Raises
-    ------
-    ValueError
-        When ``block`` is outside 1..n or ``n_boot`` < 1.
-    """
-    if not 1 <= block <= n:
-        raise ValueError(f"block must be in 1..n={n}, got {block!r}")
-    if n_boot < 1:
-        raise ValueError(f"n_boot must be >= 1, got {n_boot!r}")
-    k = -(-n // block)
-    starts = rng.integers(0, n - block + 1, size=(n_boot, k))
-    return (starts[:, :, None] + np.arange(block)).reshape(n_boot, -1)[:, :n]
-
-
-def _nanq(x: np.ndarray, q: float) -> np.ndarray:
-    """q-th percentile along the last axis, ignoring NaN (NaN where nothing is finite)."""
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)  # "All-NaN slice": NaN is the answer
-        return np.nanpercentile(x, q, axis=-1)
+# ---------------------------------------------------------------- claims
 
 
 def cell_metrics(
@@ -400,8 +394,8 @@ def cell_metrics(
         idx = np.arange(n)[None, :]
     b = idx.shape[0]
     out = {
-        "meas.aod_err_deg.p95": _nanq(np.abs(np.degrees(aod_err_rad[idx])).reshape(b, -1), 95),
-        "meas.toa_err_m.p95": _nanq(np.abs(range_err_m[idx]).reshape(b, -1), 95),
+        "meas.aod_err_deg.p95": nanpercentile(np.abs(np.degrees(aod_err_rad[idx])).reshape(b, -1), 95),
+        "meas.toa_err_m.p95": nanpercentile(np.abs(range_err_m[idx]).reshape(b, -1), 95),
         "meas.toa_err_m.frac_lt_5m": (np.abs(range_err_m[idx]) < 5.0).reshape(b, -1).mean(axis=1),
     }
     half = spacing_m / 2
