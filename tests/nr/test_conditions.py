@@ -95,7 +95,8 @@ def test_config_checks_name_the_key():
 
 def test_sanity_rows_are_the_single_cells_source_trackers(nr):
     rows = co.sanity_rows(nr)
-    assert [p for p, _ in rows] == [f"nr.map.{rm.SINGLE_CELL}.source", f"nr.map.{rm.SINGLE_CELL}.source_gated"]
+    p = f"nr.map.{rm.SINGLE_CELL}.source"
+    assert [p for p, _ in rows] == [p, f"{p}_gated", f"{p}.diag.nearest"]
     assert "nearest RRH alone" in rows[0][1] and "no gate" in rows[0][1] and "gated" in rows[1][1]
     # not a condition: the departures and the smallest sets ignore it
     assert all(c.cell != rm.SINGLE_CELL for c in co.conditions(nr))

@@ -305,11 +305,57 @@ def test_nearest_rrh_errors_follow_the_truth_not_the_selection():
     np.testing.assert_allclose(rng[:2], [1e-9 * SPEED_OF_LIGHT_M_S, -2e-9 * SPEED_OF_LIGHT_M_S])
     assert np.isnan(aod[2]) and np.isnan(rng[2])  # not among the candidates
     assert np.isnan(aod[3])  # a candidate, but its AOD not measured
-    k = md.nearest_key_numbers("c", "source", aod, rng, "t")
+    idx = np.tile(np.arange(4), (5, 1))  # every resample the sample itself
+    k = md.nearest_key_numbers("c", "source", aod, rng, idx, 0.95, "t")
     p = "nr.map.c.source.diag.nearest"
     assert k[f"{p}.measured_frac"]["value"] == pytest.approx(0.5)
-    assert k[f"{p}.aod_err_deg.p95"]["value"] == pytest.approx(np.percentile(np.degrees([0.01, 0.02]), 95))
-    never = md.nearest_key_numbers("c", "source", np.full(3, np.nan), np.full(3, np.nan), "t")
-    assert never[f"{p}.toa_err_m.p95"]["value"] is None and never[f"{p}.measured_frac"]["value"] == 0.0
+    p95 = np.percentile(np.degrees([0.01, 0.02]), 95)
+    assert k[f"{p}.meas.aod_err_deg.p95"]["value"] == pytest.approx(p95)
+    assert (
+        k[f"{p}.meas.aod_err_deg.p95.lo"]["value"] == pytest.approx(p95) == k[f"{p}.meas.aod_err_deg.p95.hi"]["value"]
+    )
+    # 1.15 deg and 0.6 m: within the source's 1.3 deg and 1.6 m
+    assert k[f"{p}.claim.aod_p95"]["value"] == rm.HOLDS and k[f"{p}.claim.toa_p95"]["value"] == rm.HOLDS
+    far = md.nearest_key_numbers("c", "source", aod * 10, rng * 10, idx, 0.95, "t")
+    assert far[f"{p}.claim.aod_p95"]["value"] == rm.FAILS and far[f"{p}.claim.toa_p95"]["value"] == rm.FAILS
+    never = md.nearest_key_numbers("c", "source", np.full(4, np.nan), np.full(4, np.nan), idx, 0.95, "t")
+    assert never[f"{p}.meas.toa_err_m.p95"]["value"] is None and never[f"{p}.measured_frac"]["value"] == 0.0
+    assert never[f"{p}.claim.toa_p95"]["value"] == rm.UNRESOLVED
     with pytest.raises(ValueError, match="aod_err_rad"):
-        md.nearest_key_numbers("c", "source", aod, rng[:-1], "t")
+        md.nearest_key_numbers("c", "source", aod, rng[:-1], idx, 0.95, "t")
+    with pytest.raises(ValueError, match="idx"):
+        md.nearest_key_numbers("c", "source", aod, rng, idx[:, :3], 0.95, "t")
+
+
+def test_off_air_selections_name_the_pss_lock():
+    import xarray as xr
+
+    from railradio.constants import SPEED_OF_LIGHT_M_S
+
+    rrh_x = np.arange(0.0, 2001.0, 500.0)  # N_ID2 = k mod 3: 0 1 2 0 1
+    n_id2 = np.arange(rrh_x.size) % 3
+    x = np.array([1480.0, 1510.0])  # nearest RRH 3 (N_ID2 0), alone within 260 m
+    rrh = np.array([[3, 0, 2], [3, 4, 0]])
+    t3 = np.hypot(20.0, 15.0) / SPEED_OF_LIGHT_M_S
+    toa_true = np.full((2, 3), 1e-6)
+    toa_true[:, 0] = t3
+    toa_hat = np.array([[t3, t3 + 5.0 / SPEED_OF_LIGHT_M_S, 2e-6], [t3, 3e-6, t3 + 50.0 / SPEED_OF_LIGHT_M_S]])
+    dims = ("epoch", "cand")
+    ds = xr.Dataset(
+        {"rrh": (dims, rrh), "toa_hat": (dims, toa_hat), "toa_true": (dims, toa_true), "x_true": (("epoch",), x)}
+    )
+    order = np.tile(np.arange(3), (2, 1))
+    ok = np.array([[True, True, True], [True, True, False]])
+    off, pss, locked = md.off_air_selections(ds, order, ok, rrh_x, 15.0, 260.0, n_id2)
+    np.testing.assert_array_equal(off, [[False, True, True], [False, True, False]])
+    # RRH 0 shares RRH 3's N_ID2 and sits at its delay (5 m); RRH 2 and 4 do not
+    np.testing.assert_array_equal(pss, [[False, True, False], [False, False, False]])
+    np.testing.assert_array_equal(locked, [[False, True, False], [False, False, False]])
+    k = md.off_air_key_numbers("c", "source", ok, off, pss, locked, "t")
+    p = "nr.map.c.source.diag.off_air"
+    assert k[f"{p}.frac"]["value"] == pytest.approx(3 / 5)
+    assert k[f"{p}.pss_frac"]["value"] == pytest.approx(1 / 3) == k[f"{p}.locked_frac"]["value"]
+    none = md.off_air_key_numbers("c", "source", ok, off & False, pss & False, locked & False, "t")
+    assert none[f"{p}.frac"]["value"] == 0.0 and none[f"{p}.pss_frac"]["value"] is None
+    with pytest.raises(ValueError, match="share a shape"):
+        md.off_air_key_numbers("c", "source", ok, off[:1], pss, locked, "t")

@@ -6,7 +6,7 @@ import xarray as xr
 
 from railradio.io import write_dataset
 from railradio.nr.engine.simulate import scenario_from_config
-from railradio.nr.study.map_diagnostics import nearest_errors
+from railradio.nr.study.map_diagnostics import nearest_errors, off_air_selections
 from railradio.nr.study.reproduction_map import MEASUREMENT_SETS, receiver_of
 from railradio.nr.study.runs import read_shards
 from railradio.nr.tracking.calibration import calibrate, measurement_errors, selected
@@ -34,6 +34,7 @@ rng = np.full((len(receivers), n, 3), np.nan)
 aod_true = np.full((len(receivers), n, 3), np.nan)
 n_det = np.zeros((len(receivers), n, 3), dtype=np.int64)
 near = np.full((2, len(receivers), n), np.nan)  # the nearest RRH's AOD [rad] and range [m] errors
+off_air = np.zeros((3, len(receivers), n, 3), dtype=bool)  # off-air selections, sharing the PSS, locked
 cal = {}
 for i, (name, gate) in enumerate(receivers.items()):
     rx = receiver_of(name)  # source_gated: the source's estimates, gated
@@ -43,6 +44,9 @@ for i, (name, gate) in enumerate(receivers.items()):
     aod_true[i] = np.where(ok, np.take_along_axis(dsr["aod_true"].values, order, axis=1), np.nan)
     n_det[i] = np.where(ok, np.take_along_axis(dsr["n_detected"].values, order, axis=1), 0)
     near[:, i] = nearest_errors(dsr, dep.x_m)  # scoring only
+    off_air[:, i] = off_air_selections(
+        dsr, order, ok, dep.x_m, dep.offset_m, float(smk.params.sim["radio"]["range_m"]), dep.n_id()[1]
+    )
     for j, measurements in enumerate(MEASUREMENT_SETS):
         search = {}
         cfg = calibrate(
@@ -102,6 +106,21 @@ res = xr.Dataset(
             ("receiver", "epoch"),
             near[1],
             {"units": "m", "long_name": "TOA range error of the RRH nearest the train (NaN: not measured)"},
+        ),
+        "selected_off_air": (
+            ("receiver", "epoch", "slot"),
+            off_air[0],
+            {"units": "1", "long_name": "selected RRH not on the air (beyond radio.range_m)"},
+        ),
+        "selected_off_air_pss": (
+            ("receiver", "epoch", "slot"),
+            off_air[1],
+            {"units": "1", "long_name": "off-air selected RRH sharing its N_ID2 (PSS) with the nearest RRH"},
+        ),
+        "selected_off_air_locked": (
+            ("receiver", "epoch", "slot"),
+            off_air[2],
+            {"units": "1", "long_name": "off-air selected RRH whose TOA lies at the nearest RRH's delay"},
         ),
         "t": (("epoch",), seg["t"].values, {"units": "s", "long_name": "time"}),
         "v_true": (("epoch",), seg["v_true"].values, {"units": "m s-1", "long_name": "true speed"}),

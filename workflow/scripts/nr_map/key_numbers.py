@@ -5,6 +5,7 @@ import json
 
 from railradio.io import read_dataset, write_json
 from railradio.nr.study import conditions
+from railradio.nr.study.block_bootstrap import block_indices
 from railradio.nr.study.keys import SKIP_S
 from railradio.nr.study.map_diagnostics import (
     ENDFIRE_EDGES_DEG,
@@ -13,6 +14,7 @@ from railradio.nr.study.map_diagnostics import (
     diagnostic_key_numbers,
     endfire_bias_key_numbers,
     nearest_key_numbers,
+    off_air_key_numbers,
 )
 from railradio.nr.study.reproduction_map import cell_key_numbers, summary_key_numbers
 from railradio.nr.tracking import loss
@@ -57,7 +59,29 @@ for cell, path in zip(smk.params.cells, smk.input, strict=True):
         fused = d["pos_err"].sel(measurements="aod_toa").values
         along = d["along_err"].sel(measurements="aod_toa").values
         numbers |= along_cross_key_numbers(cell, rx, along, fused, spacing, where)
-        numbers |= nearest_key_numbers(cell, rx, d["nearest_aod_err"].values, d["nearest_range_err"].values, where)
+        numbers |= nearest_key_numbers(
+            cell,
+            rx,
+            d["nearest_aod_err"].values,
+            d["nearest_range_err"].values,
+            block_indices(
+                make_rng(int(smk.params.seed), spawn_key("nr", 2000)),
+                ds.sizes["epoch"],
+                int(mp["block_epochs"]),
+                int(mp["n_boot"]),
+            ),
+            float(mp["confidence"]),
+            where,
+        )
+        numbers |= off_air_key_numbers(
+            cell,
+            rx,
+            d["aod_err"].notnull().values,
+            d["selected_off_air"].values.astype(bool),
+            d["selected_off_air_pss"].values.astype(bool),
+            d["selected_off_air_locked"].values.astype(bool),
+            where,
+        )
         numbers |= calibration_diag_key_numbers(cell, rx, json.loads(ds.attrs["config_json"])["calibration"], where)
 numbers |= summary_key_numbers(numbers, list(smk.params.cells), nr)
 write_json(smk.output[0], numbers | conditions.key_numbers(numbers, nr))

@@ -185,7 +185,8 @@ def smallest(numbers: dict[str, Any], nr: dict) -> dict[str, list[Condition]]:
 
 def sanity_rows(nr: dict) -> list[tuple[str, str]]:
     """The sanity row's trackers of the source's receiver (none when
-    ``map.conditions.single_rrh`` is off): key prefix and label each, ungated first.
+    ``map.conditions.single_rrh`` is off), ungated first, then its measurements of the one
+    RRH in range (the measurement claims only, ``diag.nearest``): key prefix and label each.
 
     Parameters
     ----------
@@ -195,14 +196,14 @@ def sanity_rows(nr: dict) -> list[tuple[str, str]]:
     Returns
     -------
     list of (str, str)
-        ``(nr.map.<SINGLE_CELL>.<tracker>, label)`` for the trackers ``source`` and ``source_gated``.
+        ``(nr.map.<SINGLE_CELL>.<tracker>, label)`` for the trackers ``source`` and
+        ``source_gated``, then ``(nr.map.<SINGLE_CELL>.source.diag.nearest, label)``.
     """
     if not nr["map"].get("conditions", {}).get("single_rrh", False):
         return []
-    return [
-        (
-            f"nr.map.{SINGLE_CELL}.source{GATED if gated else ''}",
-            f"nearest RRH alone, window K, {'gated' if gated else 'no gate'}, data: none",
-        )
+    p = f"nr.map.{SINGLE_CELL}.source"
+    trackers = [
+        (f"{p}{GATED if gated else ''}", f"nearest RRH alone, window K, {'gated' if gated else 'no gate'}, data: none")
         for gated in (False, True)
     ]
+    return trackers + [(f"{p}.diag.nearest", "nearest RRH alone: its own AOD and TOA (whatever is selected)")]

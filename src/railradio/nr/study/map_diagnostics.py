@@ -9,7 +9,9 @@
 - :func:`along_cross_key_numbers`: the AOD+TOA tracker's mean |error| along and across the
   track; :func:`calibration_diag_key_numbers`: the q each tracker was calibrated with.
 - :func:`nearest_key_numbers`: the measurements of the RRH nearest the train, whichever the
-  receiver selects (the sanity row's one RRH in range).
+  receiver selects (the sanity row's one RRH in range); :func:`off_air_key_numbers`: how many
+  of the selected measurements are of RRHs not on the air (beyond the range synthesized), and
+  how many of those lock onto the nearest RRH through the PSS they share with it.
 """
 
 from __future__ import annotations
@@ -22,6 +24,8 @@ import railradio.nr.tracking.aod_model as aod_model
 from railradio.constants import SPEED_OF_LIGHT_M_S
 from railradio.keynumbers import KeySpec
 from railradio.nr.channel.antenna import wrap_rad
+from railradio.nr.study.block_bootstrap import nanpercentile
+from railradio.nr.study.reproduction_map import CLAIMS, status
 from railradio.nr.tracking import loss
 
 ENDFIRE_DEG = 3.0
@@ -31,6 +35,10 @@ ULA's endfire, where neighbouring beams have nearly equal gain) apart from the o
 ENDFIRE_EDGES_DEG = (1.0, 2.0, 5.0, 10.0, 20.0)
 """Diagnostics: bins of the angle from endfire for the AOD bias (the 1–2–5 series, fixed
 before the run; whether or not the tracker models the bias, ``nr.tracker.aod_angle_edges_deg``)."""
+
+LOCK_M = 10.0
+"""An off-air selection whose TOA lies within this range [m] of the nearest RRH's true delay
+is counted as locked onto that RRH (4 lags of the correlation's 2.44 m search grid)."""
 
 MIN_PER_BIN = 20
 """Fewest AOD errors in an angle bin for its segment bias to be reported (else null)."""
@@ -261,12 +269,14 @@ def nearest_errors(ds, rrh_x_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def nearest_key_numbers(
-    cell: str, rx: str, aod_err_rad: np.ndarray, range_err_m: np.ndarray, where: str
+    cell: str, rx: str, aod_err_rad: np.ndarray, range_err_m: np.ndarray, idx: np.ndarray, confidence: float, where: str
 ) -> dict[str, Any]:
     """The receiver's measurements of the RRH nearest the train, whatever the selection: the
     95th percentiles of its |AOD error| and |TOA range error| over the epochs it was measured,
-    and the share of epochs it was (in the sanity row, :data:`railradio.nr.study.reproduction_map.SINGLE_CELL`,
-    the one RRH in range: the receiver's accuracy without interference).
+    each with its block-bootstrap interval and the status of the source's claim on it (AOD
+    p95 < 1.3°, TOA p95 < 1.6 m, by the map's claim rule), and the share of epochs it was
+    measured. In the sanity row (:data:`railradio.nr.study.reproduction_map.SINGLE_CELL`) the
+    nearest RRH is the one in range: the receiver's accuracy without interference.
 
     Parameters
     ----------
@@ -275,38 +285,161 @@ def nearest_key_numbers(
     aod_err_rad, range_err_m : numpy.ndarray
         [n] the nearest RRH's AOD error [rad] and TOA range error [m] per epoch (NaN: not
         measured).
+    idx : numpy.ndarray of int
+        [n_boot, n] the bootstrap's resampled epochs
+        (:func:`railradio.nr.study.block_bootstrap.block_indices`).
+    confidence : float
+        Confidence of the interval, in (0, 1).
     where : str
         Text appended to each key's description.
 
     Returns
     -------
     dict of str to dict
-        ``nr.map.<cell>.<rx>.diag.nearest.{aod_err_deg.p95, toa_err_m.p95, measured_frac}``
-        [deg, m, 1] (a percentile null when never measured).
+        ``nr.map.<cell>.<rx>.diag.nearest.meas.{aod_err_deg,toa_err_m}.p95`` [deg, m] (the
+        map's metric names) with ``.lo``/``.hi`` and ``claim.{aod_p95,toa_p95}`` (1 holds, 0 not resolved, -1 fails;
+        a percentile null when never measured), and ``measured_frac`` (1).
+
+    Raises
+    ------
+    ValueError
+        When the arrays differ in shape or ``idx`` does not index them.
+    """
+    a = np.abs(np.degrees(np.asarray(aod_err_rad, float)))
+    r = np.abs(np.asarray(range_err_m, float))
+    if a.shape != r.shape:
+        raise ValueError(f"aod_err_rad and range_err_m must share a shape, got {a.shape} and {r.shape}")
+    idx = np.asarray(idx)
+    if idx.ndim != 2 or idx.shape[1] != a.size:
+        raise ValueError(f"idx must be [n_boot, {a.size}] resampled epochs, got shape {idx.shape}")
+    ok = np.isfinite(a) & np.isfinite(r)
+    a, r = np.where(ok, a, np.nan), np.where(ok, r, np.nan)
+    lo_q, hi_q = (1 - confidence) / 2, 1 - (1 - confidence) / 2
+    p = f"nr.map.{cell}.{rx}.diag.nearest"
+    out: dict[str, Any] = {}
+    for metric, claim, desc, x in (
+        ("meas.aod_err_deg.p95", "aod_p95", "95th percentile of the nearest RRH's |AOD error|", a),
+        ("meas.toa_err_m.p95", "toa_p95", "95th percentile of the nearest RRH's |TOA range error|", r),
+    ):
+        unit = CLAIMS[claim].unit
+        point = float(np.percentile(x[ok], 95)) if ok.any() else None
+        boot = nanpercentile(x[idx], 95)
+        lo, hi = (
+            (float(np.quantile(boot, lo_q)), float(np.quantile(boot, hi_q)))
+            if point is not None and np.all(np.isfinite(boot))
+            else (None, None)
+        )
+        name = f"{p}.{metric}"
+        out[name] = KeySpec(name, unit, f"{desc}, over the epochs it was measured ({where})").entry(point)
+        for end, v in (("lo", lo), ("hi", hi)):
+            out[f"{name}.{end}"] = KeySpec(
+                f"{name}.{end}",
+                unit,
+                f"{'lower' if end == 'lo' else 'upper'} end of the {confidence:.0%} block-bootstrap interval of "
+                f"the nearest RRH's {metric} ({where})",
+            ).entry(v)
+        out[f"{p}.claim.{claim}"] = KeySpec(
+            f"{p}.claim.{claim}",
+            "1",
+            f"source claim '{CLAIMS[claim].label}' on the nearest RRH's measurements: 1 holds, 0 not resolved, "
+            f"-1 fails ({where})",
+        ).entry(status(CLAIMS[claim], lo, hi, False))
+    name = f"{p}.measured_frac"
+    out[name] = KeySpec(name, "1", f"share of epochs with the nearest RRH measured (AOD and TOA) ({where})").entry(
+        float(ok.mean()) if ok.size else None
+    )
+    return out
+
+
+def off_air_selections(
+    ds, order: np.ndarray, ok: np.ndarray, rrh_x_m: np.ndarray, offset_m: float, range_m: float, n_id2: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Which selected measurements are of RRHs not on the air (2-D distance beyond the range
+    synthesized, ``nr.radio.range_m``), which of those share their N_ID2 (their PSS) with the
+    RRH nearest the train, and which lie at that RRH's delay (within :data:`LOCK_M`). Scoring:
+    reads the truth.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        One receiver's estimates (``rrh``, ``toa_hat`` [s], ``toa_true`` [s] per (``epoch``,
+        ``cand``); ``x_true`` [m] per epoch).
+    order, ok : numpy.ndarray
+        [n, n_use] the selected candidate columns and whether each holds a measurement
+        (:func:`railradio.nr.tracking.calibration.selected`).
+    rrh_x_m : numpy.ndarray
+        [n_rrh] along-track positions of the RRHs, m.
+    offset_m : float
+        The RRHs' lateral offset from the track, m.
+    range_m : float
+        The range within which RRHs are synthesized, m (2-D distance).
+    n_id2 : numpy.ndarray of int
+        [n_rrh] each RRH's N_ID2.
+
+    Returns
+    -------
+    tuple of numpy.ndarray of bool
+        (off_air, shares_pss, locked), each [n, n_use]; the last two within the first.
+    """
+    x = np.asarray(ds["x_true"].values, float)
+    rrh_x = np.asarray(rrh_x_m, float)
+    cand = np.take_along_axis(ds["rrh"].values, order, axis=1)
+    off = ok & (np.hypot(rrh_x[np.maximum(cand, 0)] - x[:, None], offset_m) > range_m)
+    nearest = np.argmin(np.abs(rrh_x[None, :] - x[:, None]), axis=1)
+    pss = off & (np.asarray(n_id2)[np.maximum(cand, 0)] == np.asarray(n_id2)[nearest][:, None])
+    hit = ds["rrh"].values == nearest[:, None]
+    col = np.argmax(hit, axis=1)[:, None]
+    t_near = np.where(hit.any(axis=1), np.take_along_axis(ds["toa_true"].values, col, axis=1)[:, 0], np.nan)
+    toa = np.take_along_axis(ds["toa_hat"].values, order, axis=1)
+    with np.errstate(invalid="ignore"):
+        locked = off & (np.abs(toa - t_near[:, None]) * SPEED_OF_LIGHT_M_S <= LOCK_M)
+    return off, pss, locked
+
+
+def off_air_key_numbers(
+    cell: str, rx: str, ok: np.ndarray, off_air: np.ndarray, shares_pss: np.ndarray, locked: np.ndarray, where: str
+) -> dict[str, Any]:
+    """The selected measurements of RRHs not on the air (:func:`off_air_selections`): their
+    share of all selected measurements, and among them the shares that share the nearest
+    RRH's PSS and that lie at its delay (null when there are none).
+
+    Parameters
+    ----------
+    cell, rx : str
+        The cell and receiver names.
+    ok, off_air, shares_pss, locked : numpy.ndarray of bool
+        [n, n_use] the selected slots holding a measurement, and :func:`off_air_selections`.
+    where : str
+        Text appended to each key's description.
+
+    Returns
+    -------
+    dict of str to dict
+        ``nr.map.<cell>.<rx>.diag.off_air.{frac, pss_frac, locked_frac}`` (1).
 
     Raises
     ------
     ValueError
         When the arrays differ in shape.
     """
-    a = np.abs(np.degrees(np.asarray(aod_err_rad, float)))
-    r = np.abs(np.asarray(range_err_m, float))
-    if a.shape != r.shape:
-        raise ValueError(f"aod_err_rad and range_err_m must share a shape, got {a.shape} and {r.shape}")
-    ok = np.isfinite(a) & np.isfinite(r)
-    p = f"nr.map.{cell}.{rx}.diag.nearest"
+    if not ok.shape == off_air.shape == shares_pss.shape == locked.shape:
+        raise ValueError("ok, off_air, shares_pss and locked must share a shape")
+    n_ok, n_off = int(ok.sum()), int(off_air.sum())
+    p = f"nr.map.{cell}.{rx}.diag.off_air"
     vals = {
-        "aod_err_deg.p95": ("deg", "95th percentile of the nearest RRH's |AOD error|", a[ok]),
-        "toa_err_m.p95": ("m", "95th percentile of the nearest RRH's |TOA range error|", r[ok]),
+        "frac": ("share of the selected measurements of RRHs not on the air (beyond nr.radio.range_m)", n_off, n_ok),
+        "pss_frac": (
+            "share of the off-air selections sharing their N_ID2 (PSS) with the nearest RRH",
+            shares_pss.sum(),
+            n_off,
+        ),
+        "locked_frac": (
+            f"share of the off-air selections whose TOA lies within {LOCK_M:g} m of the nearest RRH's delay",
+            locked.sum(),
+            n_off,
+        ),
     }
-    out = {
-        f"{p}.{k}": KeySpec(f"{p}.{k}", u, f"{d}, over the epochs it was measured ({where})").entry(
-            float(np.percentile(x, 95)) if x.size else None
-        )
-        for k, (u, d, x) in vals.items()
+    return {
+        f"{p}.{k}": KeySpec(f"{p}.{k}", "1", f"{d} ({where})").entry(float(a) / b if b else None)
+        for k, (d, a, b) in vals.items()
     }
-    name = f"{p}.measured_frac"
-    out[name] = KeySpec(name, "1", f"share of epochs with the nearest RRH measured (AOD and TOA) ({where})").entry(
-        float(ok.mean()) if ok.size else None
-    )
-    return out

@@ -152,9 +152,13 @@ def plot_conditions(
 def _claim_grid(ax, numbers: dict, rows: list[tuple[str, str]], interval: bool) -> None:
     """Squares of a claim grid on ``ax``: row i is the key prefix ``rows[i][0]`` (labelled
     ``rows[i][1]``), column j the claim j of ``CLAIMS``; ``interval``: the bootstrap
-    interval under each value."""
+    interval under each value. A row with the statuses of some claims only leaves the others
+    blank; a row with none raises KeyError."""
     for i, (p, _) in enumerate(rows):
+        some = any(k.startswith(f"{p}.claim.") for k in numbers)
         for j, (cname, claim) in enumerate(CLAIMS.items()):
+            if some and f"{p}.claim.{cname}" not in numbers:
+                continue  # a row with some claims only (the sanity row's measurements): blank
             st = numbers[f"{p}.claim.{cname}"]["value"]
             e = numbers[f"{p}.{claim.metric}"]
             text = _claim_text(e, claim.unit)
