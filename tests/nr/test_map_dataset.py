@@ -81,6 +81,17 @@ def test_the_published_map_as_a_dataset(paper_cells):
     runs = np.array([[rx in rm.cell_receivers(c, nr) for rx in ds.receiver.values] for c in ds.cell.values])
     assert np.isfinite(ds.status.values[runs]).all() and np.isnan(ds.status.values[~runs]).all()
     assert len(set(ds.label.values)) == ds.sizes["cell"]  # a label names one cell
+    # the sanity row: its range and the receiver's own measurements of the one RRH in range
+    single = ds.sel(cell=rm.SINGLE_CELL)
+    assert float(single.range_m) == pytest.approx(np.hypot(250.0, 15.0)) and float(ds.range_m.max()) == 5000.0
+    assert np.isnan(single.search_range_m) and float(ds.search_range_m.sel(cell="win1000_none")) == 1000.0
+    assert 0 < float(single.nearest_aod_err_p95_deg.sel(receiver="source")) < 180
+    assert float(single.nearest_measured_frac.sel(receiver="robust")) > 0.5
+    assert (
+        float(single.off_air_frac.sel(receiver="source"))
+        > 0
+        == float(ds.off_air_frac.sel(cell="mt32_none", receiver="source"))
+    )
 
 
 @pytest.mark.slow

@@ -38,6 +38,10 @@ DIAGNOSTICS = {
     "aod_err_deg.median_broadside": ("aod_err_median_broadside_deg", "deg"),
     "frac_endfire": ("frac_endfire", "1"),
     "n_detected.median": ("n_detected_median", "1"),
+    "nearest.meas.aod_err_deg.p95": ("nearest_aod_err_p95_deg", "deg"),
+    "nearest.meas.toa_err_m.p95": ("nearest_toa_err_p95_m", "m"),
+    "nearest.measured_frac": ("nearest_measured_frac", "1"),
+    "off_air.frac": ("off_air_frac", "1"),
 }
 """Diagnostic key ``nr.map.<cell>.<rx>.diag.<name>`` -> (dataset variable, unit)."""
 
@@ -76,7 +80,7 @@ def map_dataset(
         metric and its interval, in ``claim_unit``) per (cell, receiver, claim); ``lost_frac``
         per (cell, receiver, tracker); the diagnostics and the other metrics per (cell,
         receiver); cell coordinates ``label``, ``rrh_elements``, ``data_beam``, ``load``,
-        ``template``, ``selection``, ``is_default``; claim coordinates ``claim_label``,
+        ``template``, ``selection``, ``search_range_m``, ``range_m``, ``is_default``; claim coordinates ``claim_label``,
         ``claimed_value``, ``claim_unit``, ``metric``, ``better``. NaN: the receiver was not
         run in that cell.
 
@@ -159,6 +163,15 @@ def _assemble(out, lost, extra, names, rxs, claims, cells, nr) -> xr.Dataset:
         "load": ([float(c["traffic"]["load"]) for c in cfgs], "1", "share of slots a non-serving RRH sends data"),
         "template": ([c["receiver"]["template"] for c in cfgs], "1", "the source receiver's correlation template"),
         "selection": ([c["receiver"]["selection"] for c in cfgs], "1", "the source receiver's cell selection"),
+        "search_range_m": (
+            [
+                np.nan if c["receiver"]["search_range_m"] is None else float(c["receiver"]["search_range_m"])
+                for c in cfgs
+            ],
+            "m",
+            "the source receiver's search window (NaN: the source's K, the SS-block spacing)",
+        ),
+        "range_m": ([float(c["radio"]["range_m"]) for c in cfgs], "m", "RRHs on the air within this 2-D distance"),
         "is_default": ([c == default for c in names], "1", "the cell with the main run's settings"),
     }
     claim_coords = {
@@ -188,6 +201,10 @@ def _long_name(var: str) -> str:
         "aod_err_median_broadside_deg": f"median |AOD error| of the selected RRHs beyond {near}",
         "frac_endfire": f"share of the selected RRHs seen within {ENDFIRE_DEG:g} deg of the track direction",
         "n_detected_median": "median number of SS blocks detected per selected RRH",
+        "nearest_aod_err_p95_deg": "95th percentile of the |AOD error| of the RRH nearest the train",
+        "nearest_toa_err_p95_m": "95th percentile of the |TOA range error| of the RRH nearest the train",
+        "nearest_measured_frac": "share of epochs with the RRH nearest the train measured",
+        "off_air_frac": "share of the selected measurements of RRHs not on the air (beyond range_m)",
         "toa_frac_lt_5m": "share of (epoch, selected RRH) pairs with a TOA range error below 5 m",
     }
     for end, word in (("_lo", "lower"), ("_hi", "upper")):
