@@ -101,4 +101,5 @@ def test_sanity_rows_are_the_single_cells_source_trackers(nr):
     # not a condition: the departures and the smallest sets ignore it
     assert all(c.cell != rm.SINGLE_CELL for c in co.conditions(nr))
     off = {**nr, "map": {**nr["map"], "conditions": {**nr["map"]["conditions"], "single_rrh": False}}}
-    assert co.sanity_rows(off) == []
+    assert co.sanity_rows(off) == [] and co.partial_rows(off) == set()
+    assert co.partial_rows(nr) == {f"{p}.diag.nearest"}  # the measurement claims only

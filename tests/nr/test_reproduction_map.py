@@ -163,7 +163,12 @@ def test_summary_counts_cells(nr_and_schema):
     for c in cells:
         for rx in rm.cell_receivers(c, nr):
             nums |= rm.cell_key_numbers(c, rx, *_errors(300, rng), 500.0, make_rng(1, (0,)), 50, 100, 0.95, "t")
-    s = rm.summary_key_numbers(nums, cells, nr)
+    # the sanity row is another deployment: the summary counts leave it out
+    for rx in rm.cell_receivers(rm.SINGLE_CELL, nr):
+        nums |= rm.cell_key_numbers(
+            rm.SINGLE_CELL, rx, *_errors(300, rng), 500.0, make_rng(1, (0,)), 50, 100, 0.95, "t"
+        )
+    s = rm.summary_key_numbers(nums, [*cells, rm.SINGLE_CELL], nr)
     assert s["nr.map.source.n_cells"]["value"] == 2 and s["nr.map.robust.n_cells"]["value"] == 1
     for rx in ("source", "robust"):
         for c in rm.CLAIMS:
@@ -359,3 +364,62 @@ def test_off_air_selections_name_the_pss_lock():
     assert none[f"{p}.frac"]["value"] == 0.0 and none[f"{p}.pss_frac"]["value"] is None
     with pytest.raises(ValueError, match="share a shape"):
         md.off_air_key_numbers("c", "source", ok, off[:1], pss, locked, "t")
+
+
+def test_the_link_budget_puts_one_rrh_in_the_sanity_rows_range(nr_and_schema):
+    """The link code itself (not a copy of its rule) synthesizes one RRH along the sanity
+    row's track, two at the midpoint between RRHs (on the range's edge)."""
+    from railradio.nr.channel.link import ShadowingMap, link_budget
+    from railradio.nr.engine.simulate import scenario_from_config
+
+    nr, schema = nr_and_schema
+    scn = scenario_from_config(rm.cells(nr, schema)[rm.SINGLE_CELL])
+    dep = scn.deployment
+    shadow = ShadowingMap(1, (0,), dep, scn.radio)
+    x_mid = float(dep.x_m[10] + dep.x_m[11]) / 2
+    for x in (float(dep.x_m[10]), float(dep.x_m[10]) + 100.0, x_mid - 0.5, x_mid + 0.5, float(dep.x_m[11]) - 249.0):
+        lb = link_budget(x, 80.0, dep, scn.radio, scn.rrh_array, scn.train_array, shadow, False)
+        assert lb.rrh.size == 1, (x, lb.rrh)
+    lb = link_budget(x_mid, 80.0, dep, scn.radio, scn.rrh_array, scn.train_array, shadow, False)
+    assert sorted(lb.rrh.tolist()) == [10, 11]
+
+
+def test_the_sanity_rows_helpers_name_their_bad_input():
+    with pytest.raises(ValueError, match="spacing_m"):
+        rm.single_rrh_range_m({"spacing_m": 0.0, "offset_m": 15.0})
+    with pytest.raises(ValueError, match="offset_m"):
+        rm.single_rrh_range_m({"spacing_m": 500.0, "offset_m": -1.0})
+    import xarray as xr
+
+    ds = xr.Dataset(
+        {
+            "rrh": (("epoch", "cand"), np.zeros((2, 2), int)),
+            "toa_hat": (("epoch", "cand"), np.zeros((2, 2))),
+            "toa_true": (("epoch", "cand"), np.zeros((2, 2))),
+            "aod_hat": (("epoch", "cand"), np.zeros((2, 2))),
+            "aod_true": (("epoch", "cand"), np.zeros((2, 2))),
+            "x_true": (("epoch",), np.zeros(2)),
+        }
+    )
+    with pytest.raises(ValueError, match="rrh_x_m"):
+        md.nearest_errors(ds, np.zeros(0))
+    order, ok = np.zeros((2, 2), int), np.ones((2, 2), bool)
+    with pytest.raises(ValueError, match="order and ok"):
+        md.off_air_selections(ds, order, ok[:1], np.zeros(3), 15.0, 250.0, np.zeros(3, int))
+    with pytest.raises(ValueError, match="n_id2"):
+        md.off_air_selections(ds, order, ok, np.zeros(3), 15.0, 250.0, np.zeros(2, int))
+    with pytest.raises(ValueError, match="range_m"):
+        md.off_air_selections(ds, order, ok, np.zeros(3), 15.0, 0.0, np.zeros(3, int))
+    with pytest.raises(ValueError, match="confidence"):
+        md.nearest_key_numbers("c", "source", np.zeros(2), np.zeros(2), np.zeros((3, 2), int), 1.0, "t")
+
+
+def test_a_resample_without_a_measurement_leaves_the_claim_unresolved():
+    aod = np.array([0.001, np.nan, np.nan, np.nan])
+    rng = np.array([0.1, np.nan, np.nan, np.nan])
+    idx = np.array([[0, 1, 2, 3], [1, 2, 3, 1]])  # the second resample never sees epoch 0
+    k = md.nearest_key_numbers("c", "source", aod, rng, idx, 0.95, "t")
+    p = "nr.map.c.source.diag.nearest"
+    assert k[f"{p}.meas.toa_err_m.p95"]["value"] == pytest.approx(0.1)
+    assert k[f"{p}.meas.toa_err_m.p95.lo"]["value"] is None
+    assert k[f"{p}.claim.toa_p95"]["value"] == rm.UNRESOLVED

@@ -36,7 +36,9 @@ _SHARED = {
     for real, owners in _OWNERS.items()
 }
 MAP_OWNERS = {real: [c for c in owners if c in _SHARED[real]] or ["_none"] for real, owners in _OWNERS.items()}
-MAP_SOLO = sorted({c for real, owners in _OWNERS.items() for c in owners if c not in _SHARED[real]})
+# per run: a cell may share one run's synthesis and not the other's (the default cell owns
+# only its calibration run), so each run's solo cells have their own rule
+MAP_SOLO = {real: [c for c in owners if c not in _SHARED[real]] for real, owners in _OWNERS.items()}
 
 
 rule nr_map_segment_shard:
@@ -86,28 +88,54 @@ rule nr_map_calibration_shard:
         "../scripts/nr_map/shard.py"
 
 
-rule nr_map_solo_shard:
-    """A shard of the segment (real r0) or of the calibration run (cal) of a cell owning
-    bursts no other cell shares (MAP_SOLO)."""
+rule nr_map_solo_segment_shard:
+    """A shard of the segment (r0's key) of a cell owning bursts no other cell shares
+    (MAP_SOLO["r0"])."""
     output:
-        "results/nr/map/{cell}/estimates/{real}/s{shard}.nc",
+        "results/nr/map/{cell}/estimates/r0/s{shard}.nc",
     params:
         sims=lambda w: [plain(NR_PLAN.map_burst_config[w.cell])],
         cells=lambda w: [w.cell],
-        real=lambda w: w.real,
+        real="r0",
         seed=config["seed"],
-        epochs=lambda w: plain(NR_PLAN.map_epochs[w.real]),
-        n_shards=lambda w: NR_PLAN.map_n_shards[w.real],
-        calibration=lambda w: plain(NR_PLAN.map_calibration) if w.real == "cal" else None,
-        rid=lambda w: NR_PLAN.map_rid[w.real],
+        epochs=plain(NR_PLAN.map_epochs["r0"]),
+        n_shards=NR_PLAN.map_n_shards["r0"],
+        calibration=None,
+        rid=NR_PLAN.map_rid["r0"],
     wildcard_constraints:
-        cell="|".join(MAP_SOLO) or "_none",
-        real="r0|cal",
+        cell="|".join(MAP_SOLO["r0"]) or "_none",
         shard=r"\d+",
     log:
-        "results/logs/nr/map/{cell}_{real}_s{shard}.log",
+        "results/logs/nr/map/{cell}_r0_s{shard}.log",
     benchmark:
-        "results/benchmarks/nr/map/{cell}_{real}_s{shard}.tsv"
+        "results/benchmarks/nr/map/{cell}_r0_s{shard}.tsv"
+    conda:
+        "../envs/railradio.yaml"
+    script:
+        "../scripts/nr_map/shard.py"
+
+
+rule nr_map_solo_calibration_shard:
+    """The short calibration run of a cell owning bursts no other cell shares
+    (MAP_SOLO["cal"])."""
+    output:
+        "results/nr/map/{cell}/estimates/cal/s{shard}.nc",
+    params:
+        sims=lambda w: [plain(NR_PLAN.map_burst_config[w.cell])],
+        cells=lambda w: [w.cell],
+        real="cal",
+        seed=config["seed"],
+        epochs=plain(NR_PLAN.map_epochs["cal"]),
+        n_shards=NR_PLAN.map_n_shards["cal"],
+        calibration=plain(NR_PLAN.map_calibration),
+        rid=NR_PLAN.map_rid["cal"],
+    wildcard_constraints:
+        cell="|".join(MAP_SOLO["cal"]) or "_none",
+        shard=r"\d+",
+    log:
+        "results/logs/nr/map/{cell}_cal_s{shard}.log",
+    benchmark:
+        "results/benchmarks/nr/map/{cell}_cal_s{shard}.tsv"
     conda:
         "../envs/railradio.yaml"
     script:

@@ -14,4 +14,12 @@ with open(smk.input[0], encoding="utf-8") as fh:
 nr = dict(smk.params.nr)
 rows = [(c.prefix, c.label(DATA_LABELS)) for c in conditions.conditions(nr)]
 smallest = {k: [c.prefix for c in v] for k, v in conditions.smallest(numbers, nr).items()}
-plot_conditions(numbers, rows, smallest, smk.output.pdf, smk.output.png, sanity=conditions.sanity_rows(nr))
+plot_conditions(
+    numbers,
+    rows,
+    smallest,
+    smk.output.pdf,
+    smk.output.png,
+    sanity=conditions.sanity_rows(nr),
+    partial=conditions.partial_rows(nr),
+)

@@ -10,8 +10,8 @@
   track; :func:`calibration_diag_key_numbers`: the q each tracker was calibrated with.
 - :func:`nearest_key_numbers`: the measurements of the RRH nearest the train, whichever the
   receiver selects (the sanity row's one RRH in range); :func:`off_air_key_numbers`: how many
-  of the selected measurements are of RRHs not on the air (beyond the range synthesized), and
-  how many of those lock onto the nearest RRH through the PSS they share with it.
+  of the selected measurements are of RRHs not on the air (beyond the range synthesized), how
+  many of those share the nearest RRH's PSS, and how many lie at its delay.
 """
 
 from __future__ import annotations
@@ -38,7 +38,7 @@ before the run; whether or not the tracker models the bias, ``nr.tracker.aod_ang
 
 LOCK_M = 10.0
 """An off-air selection whose TOA lies within this range [m] of the nearest RRH's true delay
-is counted as locked onto that RRH (4 lags of the correlation's 2.44 m search grid)."""
+is counted as locked onto that RRH (≈ 4 lags of the correlation's 2.44 m search grid)."""
 
 MIN_PER_BIN = 20
 """Fewest AOD errors in an angle bin for its segment bias to be reported (else null)."""
@@ -253,7 +253,14 @@ def nearest_errors(ds, rrh_x_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     -------
     tuple of numpy.ndarray
         ([n] AOD errors [rad, wrapped to (-π, π]], [n] TOA range errors c·Δτ [m]).
+
+    Raises
+    ------
+    ValueError
+        When ``rrh_x_m`` is empty.
     """
+    if np.asarray(rrh_x_m).size == 0:
+        raise ValueError("rrh_x_m must hold at least one RRH position")
     x = np.asarray(ds["x_true"].values, float)
     nearest = np.argmin(np.abs(np.asarray(rrh_x_m, float)[None, :] - x[:, None]), axis=1)
     hit = ds["rrh"].values == nearest[:, None]
@@ -303,8 +310,11 @@ def nearest_key_numbers(
     Raises
     ------
     ValueError
-        When the arrays differ in shape or ``idx`` does not index them.
+        When the arrays differ in shape, ``idx`` does not index them or ``confidence`` is
+        outside (0, 1).
     """
+    if not 0 < confidence < 1:
+        raise ValueError(f"confidence must be in (0, 1), got {confidence!r}")
     a = np.abs(np.degrees(np.asarray(aod_err_rad, float)))
     r = np.abs(np.asarray(range_err_m, float))
     if a.shape != r.shape:
@@ -380,9 +390,23 @@ def off_air_selections(
     -------
     tuple of numpy.ndarray of bool
         (off_air, shares_pss, locked), each [n, n_use]; the last two within the first.
+
+    Raises
+    ------
+    ValueError
+        When ``order`` and ``ok`` differ in shape, ``rrh_x_m`` is empty, ``n_id2`` does not
+        give one N_ID2 per RRH, or ``range_m`` is not positive.
     """
-    x = np.asarray(ds["x_true"].values, float)
     rrh_x = np.asarray(rrh_x_m, float)
+    if np.shape(order) != np.shape(ok):
+        raise ValueError(f"order and ok must share a shape, got {np.shape(order)} and {np.shape(ok)}")
+    if rrh_x.size == 0:
+        raise ValueError("rrh_x_m must hold at least one RRH position")
+    if np.size(n_id2) != rrh_x.size:
+        raise ValueError(f"n_id2 must give one N_ID2 per RRH ({rrh_x.size}), got {np.size(n_id2)}")
+    if not range_m > 0:
+        raise ValueError(f"range_m must be > 0, got {range_m!r}")
+    x = np.asarray(ds["x_true"].values, float)
     cand = np.take_along_axis(ds["rrh"].values, order, axis=1)
     off = ok & (np.hypot(rrh_x[np.maximum(cand, 0)] - x[:, None], offset_m) > range_m)
     nearest = np.argmin(np.abs(rrh_x[None, :] - x[:, None]), axis=1)

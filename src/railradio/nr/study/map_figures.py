@@ -101,6 +101,7 @@ def plot_conditions(
     pdf: str,
     png: str,
     sanity: list[tuple[str, str]] | None = None,
+    partial: set[str] | None = None,
 ):
     """The source receiver's conditions: a row per condition (window × gate × data), a
     column per source claim, each square coloured by the claim's status there and labelled
@@ -122,6 +123,9 @@ def plot_conditions(
     sanity : list of (str, str), optional
         The sanity row's trackers (:func:`railradio.nr.study.conditions.sanity_rows`), drawn
         below a rule.
+    partial : set of str, optional
+        Prefixes of rows with some claims only (the sanity row's own measurements,
+        :func:`railradio.nr.study.conditions.partial_rows`): their other squares stay blank.
 
     Raises
     ------
@@ -133,7 +137,7 @@ def plot_conditions(
     grid = rows + list(sanity or [])
     height = 0.42 * len(grid) + 2.4
     fig, ax = plotting.figure(figsize=(7.6, height))
-    _claim_grid(ax, numbers, grid, interval=True)
+    _claim_grid(ax, numbers, grid, interval=True, partial=frozenset(partial or ()))
     if sanity:
         ax.axhline(len(rows), color="black", linewidth=1.6)
     prefixes = [p for p, _ in rows]
@@ -149,15 +153,16 @@ def plot_conditions(
     plotting.save(fig, pdf, png)
 
 
-def _claim_grid(ax, numbers: dict, rows: list[tuple[str, str]], interval: bool) -> None:
+def _claim_grid(
+    ax, numbers: dict, rows: list[tuple[str, str]], interval: bool, partial: frozenset[str] = frozenset()
+) -> None:
     """Squares of a claim grid on ``ax``: row i is the key prefix ``rows[i][0]`` (labelled
     ``rows[i][1]``), column j the claim j of ``CLAIMS``; ``interval``: the bootstrap
-    interval under each value. A row with the statuses of some claims only leaves the others
-    blank; a row with none raises KeyError."""
+    interval under each value. A row whose prefix is in ``partial`` leaves the claims it has
+    no status for blank; any other missing status raises KeyError."""
     for i, (p, _) in enumerate(rows):
-        some = any(k.startswith(f"{p}.claim.") for k in numbers)
         for j, (cname, claim) in enumerate(CLAIMS.items()):
-            if some and f"{p}.claim.{cname}" not in numbers:
+            if p in partial and f"{p}.claim.{cname}" not in numbers:
                 continue  # a row with some claims only (the sanity row's measurements): blank
             st = numbers[f"{p}.claim.{cname}"]["value"]
             e = numbers[f"{p}.{claim.metric}"]

@@ -165,8 +165,18 @@ def single_rrh_range_m(deployment: dict) -> float:
     -------
     float
         ``nr.radio.range_m`` of the sanity row, m.
+
+    Raises
+    ------
+    ValueError
+        When ``spacing_m`` is not positive or ``offset_m`` is negative.
     """
-    return float(np.hypot(deployment["spacing_m"] / 2, deployment["offset_m"]))
+    spacing, offset = float(deployment["spacing_m"]), float(deployment["offset_m"])
+    if not spacing > 0:
+        raise ValueError(f"deployment spacing_m must be > 0, got {spacing!r}")
+    if not offset >= 0:
+        raise ValueError(f"deployment offset_m must be >= 0, got {offset!r}")
+    return float(np.hypot(spacing / 2, offset))
 
 
 def cells(nr: dict, nr_schema: dict) -> dict[str, dict[str, Any]]:
@@ -544,7 +554,8 @@ def cell_key_numbers(
 
 def summary_key_numbers(numbers: dict[str, Any], cell_names: list[str], nr: dict) -> dict[str, Any]:
     """Per receiver and claim, in how many cells it holds / fails / is not resolved
-    (``nr.map.<rx>.<claim>.n_holds`` …) and the number of cells.
+    (``nr.map.<rx>.<claim>.n_holds`` …) and the number of cells; the sanity row
+    (:data:`SINGLE_CELL`, another deployment) is not counted.
 
     Parameters
     ----------
@@ -562,9 +573,11 @@ def summary_key_numbers(numbers: dict[str, Any], cell_names: list[str], nr: dict
     """
     out: dict[str, Any] = {}
     for rx in receivers(nr):
-        names = [c for c in cell_names if rx in cell_receivers(c, nr)]
+        names = [c for c in cell_names if rx in cell_receivers(c, nr) and c != SINGLE_CELL]
         key = f"nr.map.{rx}.n_cells"
-        out[key] = KeySpec(key, "1", f"map cells of the {rx} receiver").entry(float(len(names)))
+        out[key] = KeySpec(key, "1", f"map cells of the {rx} receiver (the sanity row not counted)").entry(
+            float(len(names))
+        )
         for cname, claim in CLAIMS.items():
             st = [numbers[f"nr.map.{c}.{rx}.claim.{cname}"]["value"] for c in names]
             for code, word in ((HOLDS, "holds"), (FAILS, "fails"), (UNRESOLVED, "unresolved")):
