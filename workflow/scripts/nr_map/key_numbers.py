@@ -30,6 +30,13 @@ for cell, path in zip(smk.params.cells, smk.input, strict=True):
     ds = read_dataset(path)
     ds = ds.isel(epoch=ds["t"].values >= ds["t"].values[0] + SKIP_S)  # the trackers' start skipped
     spacing = loss.rrh_spacing_m(ds)
+    # the resamples cell_key_numbers draws from the same key (paired across the map)
+    idx = block_indices(
+        make_rng(int(smk.params.seed), spawn_key("nr", 2000)),
+        ds.sizes["epoch"],
+        int(mp["block_epochs"]),
+        int(mp["n_boot"]),
+    )
     for rx in [str(r) for r in ds["receiver"].values]:
         d = ds.sel(receiver=rx)
         where = (
@@ -60,18 +67,7 @@ for cell, path in zip(smk.params.cells, smk.input, strict=True):
         along = d["along_err"].sel(measurements="aod_toa").values
         numbers |= along_cross_key_numbers(cell, rx, along, fused, spacing, where)
         numbers |= nearest_key_numbers(
-            cell,
-            rx,
-            d["nearest_aod_err"].values,
-            d["nearest_range_err"].values,
-            block_indices(
-                make_rng(int(smk.params.seed), spawn_key("nr", 2000)),
-                ds.sizes["epoch"],
-                int(mp["block_epochs"]),
-                int(mp["n_boot"]),
-            ),
-            float(mp["confidence"]),
-            where,
+            cell, rx, d["nearest_aod_err"].values, d["nearest_range_err"].values, idx, float(mp["confidence"]), where
         )
         numbers |= off_air_key_numbers(
             cell,

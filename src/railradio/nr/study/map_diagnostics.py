@@ -237,6 +237,15 @@ def along_cross_key_numbers(
     return out
 
 
+def _nearest_column(ds, rrh_x_m: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The RRH nearest the train along the track per epoch (ties: the lower index), its
+    candidate column and whether it is a candidate: ([n], [n, 1], [n])."""
+    x = np.asarray(ds["x_true"].values, float)
+    nearest = np.argmin(np.abs(np.asarray(rrh_x_m, float)[None, :] - x[:, None]), axis=1)
+    hit = ds["rrh"].values == nearest[:, None]
+    return nearest, np.argmax(hit, axis=1)[:, None], hit.any(axis=1)
+
+
 def nearest_errors(ds, rrh_x_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The AOD and TOA range errors of the RRH nearest the train along the track, per epoch
     (NaN where it is not among the candidates or not measured). Scoring: reads the truth.
@@ -261,11 +270,7 @@ def nearest_errors(ds, rrh_x_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """
     if np.asarray(rrh_x_m).size == 0:
         raise ValueError("rrh_x_m must hold at least one RRH position")
-    x = np.asarray(ds["x_true"].values, float)
-    nearest = np.argmin(np.abs(np.asarray(rrh_x_m, float)[None, :] - x[:, None]), axis=1)
-    hit = ds["rrh"].values == nearest[:, None]
-    col = np.argmax(hit, axis=1)[:, None]
-    has = hit.any(axis=1)
+    _, col, has = _nearest_column(ds, rrh_x_m)
 
     def at(v):
         return np.take_along_axis(ds[v].values, col, axis=1)[:, 0]
@@ -409,11 +414,9 @@ def off_air_selections(
     x = np.asarray(ds["x_true"].values, float)
     cand = np.take_along_axis(ds["rrh"].values, order, axis=1)
     off = ok & (np.hypot(rrh_x[np.maximum(cand, 0)] - x[:, None], offset_m) > range_m)
-    nearest = np.argmin(np.abs(rrh_x[None, :] - x[:, None]), axis=1)
+    nearest, col, has = _nearest_column(ds, rrh_x)
     pss = off & (np.asarray(n_id2)[np.maximum(cand, 0)] == np.asarray(n_id2)[nearest][:, None])
-    hit = ds["rrh"].values == nearest[:, None]
-    col = np.argmax(hit, axis=1)[:, None]
-    t_near = np.where(hit.any(axis=1), np.take_along_axis(ds["toa_true"].values, col, axis=1)[:, 0], np.nan)
+    t_near = np.where(has, np.take_along_axis(ds["toa_true"].values, col, axis=1)[:, 0], np.nan)
     toa = np.take_along_axis(ds["toa_hat"].values, order, axis=1)
     with np.errstate(invalid="ignore"):
         locked = off & (np.abs(toa - t_near[:, None]) * SPEED_OF_LIGHT_M_S <= LOCK_M)
