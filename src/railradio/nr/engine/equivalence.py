@@ -13,6 +13,14 @@ selection rule.
 
     python -m railradio.nr.engine.equivalence --config config/config.yaml --first 1500 --epochs 300 --out eq.json
 
+Across a change of the engine (:func:`engine_decisions`, :func:`compare_decisions`): the
+engine's decisions on the same epochs dumped by each version of the code, then counted as
+above (the older version runs this file with its own ``railradio`` on the path):
+
+    PYTHONPATH=<old>/src python src/railradio/nr/engine/equivalence.py --dump old.pkl
+    python -m railradio.nr.engine.equivalence --dump new.pkl
+    python -m railradio.nr.engine.equivalence --against old.pkl new.pkl --out eq.json
+
 The reproduction map's cells that share one synthesis per epoch, each synthesized on its
 own against :class:`railradio.nr.engine.variants.VariantSynthesis` (:func:`compare_variants`):
 ``python -m railradio.nr.study.map_equivalence``.
@@ -22,7 +30,9 @@ from __future__ import annotations
 
 import argparse
 import json
+import pickle
 import time
+from types import SimpleNamespace
 
 import numpy as np
 import yaml
@@ -108,6 +118,77 @@ def compare(scn, seed: int, key: tuple[int, ...], epochs: np.ndarray) -> dict:
     return _shares(epochs.size, lists, names, count, sel) | {
         "ms_per_epoch": {k: 1e3 * v / epochs.size for k, v in cost.items()}
     }
+
+
+DECISION_FIELDS = ("cand", "n_detected", "toa_s", "aod_rad", "ss_rsrp_db", "peak", "best_score")
+"""What :func:`engine_decisions` keeps of each epoch's measurements."""
+
+
+def engine_decisions(scn, seed: int, key: tuple[int, ...], epochs: np.ndarray) -> dict:
+    """The burst engine's measurements of ``epochs`` (consecutive, one cell search from the
+    first), as plain arrays: what :func:`compare_decisions` counts between two versions.
+
+    Parameters
+    ----------
+    scn : railradio.nr.engine.simulate.Scenario
+        The scenario.
+    seed, key : int, tuple of int
+        The config seed and the realization's spawn key.
+    epochs : numpy.ndarray of int
+        Consecutive epoch indices.
+
+    Returns
+    -------
+    dict
+        ``epochs``, ``names`` (the receivers), ``decisions`` (per epoch, a dict of
+        :data:`DECISION_FIELDS`) and ``ms_per_epoch`` (process time).
+
+    Raises
+    ------
+    ValueError
+        When ``epochs`` are not consecutive.
+    """
+    epochs = _consecutive(epochs)
+    syn, est = SpectralSynthesis(scn, seed, key), SharedEstimator(scn, on_lag_grid=True)
+    est.start(int(epochs[0]))
+    out, t0 = [], time.process_time()
+    for e in epochs:
+        b = syn(int(e))
+        m = est(int(e), b.z, b.s_min)
+        out.append({f: np.array(getattr(m, f)) for f in DECISION_FIELDS})
+    cost = 1e3 * (time.process_time() - t0) / epochs.size
+    names = [n for n, _, _ in est.receivers]
+    return {"epochs": epochs, "names": names, "decisions": out, "ms_per_epoch": cost}
+
+
+def compare_decisions(old: dict, new: dict) -> dict:
+    """What differs between two :func:`engine_decisions` of the same epochs, counted as
+    :func:`compare` counts it.
+
+    Parameters
+    ----------
+    old, new : dict
+        :func:`engine_decisions` of two versions of the engine.
+
+    Returns
+    -------
+    dict
+        As :func:`compare`, with ``ms_per_epoch`` of each version.
+
+    Raises
+    ------
+    ValueError
+        When the two ran other epochs or other receivers.
+    """
+    if not np.array_equal(old["epochs"], new["epochs"]) or list(old["names"]) != list(new["names"]):
+        raise ValueError("old and new must hold the same epochs and receivers")
+    names = list(old["names"])
+    count, sel = _tally(names)
+    lists = 0
+    for do, dn in zip(old["decisions"], new["decisions"], strict=True):
+        lists += _count(SimpleNamespace(**do), SimpleNamespace(**dn), names, count, sel)
+    shares = _shares(len(old["epochs"]), lists, names, count, sel)
+    return shares | {"ms_per_epoch": {"old": old["ms_per_epoch"], "new": new["ms_per_epoch"]}}
 
 
 def _count(mo, mn, names, count, sel) -> int:
@@ -202,11 +283,25 @@ def main() -> None:  # pragma: no cover - command line
     ap.add_argument("--first", type=int, default=1500)
     ap.add_argument("--epochs", type=int, default=300)
     ap.add_argument("--out", default=None)
+    ap.add_argument("--dump", default=None, help="write this version's engine decisions here (pickle)")
+    ap.add_argument("--against", nargs=2, default=None, metavar=("OLD", "NEW"), help="compare two dumps")
     a = ap.parse_args()
-    with open(a.config, encoding="utf-8") as fh:
-        cfg = yaml.safe_load(fh)
-    epochs, key = np.arange(a.first, a.first + a.epochs), spawn_key("nr", a.realization)
-    res = compare(scenario_from_config(cfg["nr"]), cfg["seed"], key, epochs)
+    if a.against:
+        dumps = []
+        for path in a.against:
+            with open(path, "rb") as fh:
+                dumps.append(pickle.load(fh))
+        res = compare_decisions(*dumps)
+    else:
+        with open(a.config, encoding="utf-8") as fh:
+            cfg = yaml.safe_load(fh)
+        epochs, key = np.arange(a.first, a.first + a.epochs), spawn_key("nr", a.realization)
+        scn = scenario_from_config(cfg["nr"])
+        if a.dump:
+            with open(a.dump, "wb") as fh:
+                pickle.dump(engine_decisions(scn, cfg["seed"], key, epochs), fh)
+            return
+        res = compare(scn, cfg["seed"], key, epochs)
     text = json.dumps(res, indent=2)
     if a.out:
         with open(a.out, "w", encoding="utf-8") as fh:

@@ -99,7 +99,9 @@ def between_lags(
     ``offset_cs_t``) and the root table for the integer part k0.
 
     With q[f] = zf[b, f] spec[cell, f] e^{j2π f k0/N}, A = Σ q cos θ_h and S = Σ q sin θ_h,
-    θ_h = 2π f δ_h/N, give c(k0 ± δ_h) = (A ± jS)/N. Sums in complex128 in bin order.
+    θ_h = 2π f δ_h/N, give c(k0 ± δ_h) = (A ± jS)/N. Products and sums in float32 in bin
+    order, as the correlator's float32 product with ``offset_cs_t`` (its refinement) rounds;
+    the magnitudes in float64.
 
     Parameters
     ----------
@@ -113,7 +115,7 @@ def between_lags(
         Per evaluation, the lag on the correlation grid, [R].
     roots : numpy.ndarray of complex64
         e^{j2π q/N}, q = 0 … N - 1, [N].
-    cs : numpy.ndarray of float64
+    cs : numpy.ndarray of float32
         cos θ_h over sin θ_h per positive offset δ_h, [2H, N].
 
     Returns
@@ -131,31 +133,26 @@ def between_lags(
         cell = cells[i]
         step = k0[i] % n
         for h in range(n_h):
-            ar = 0.0
-            ai = 0.0
-            sr = 0.0
-            si = 0.0
+            ar = np.float32(0.0)
+            ai = np.float32(0.0)
+            sr = np.float32(0.0)
+            si = np.float32(0.0)
             q = 0
             for f in range(n):
-                p = zf[b, f] * spec[cell, f]
-                pr = np.float64(p.real)
-                pim = np.float64(p.imag)
-                rr = np.float64(roots[q].real)
-                ri = np.float64(roots[q].imag)
-                vr = pr * rr - pim * ri
-                vi = pr * ri + pim * rr
+                v = zf[b, f] * spec[cell, f] * roots[q]
                 co = cs[h, f]
                 si_f = cs[n_h + h, f]
-                ar += vr * co
-                ai += vi * co
-                sr += vr * si_f
-                si += vi * si_f
+                ar += v.real * co
+                ai += v.imag * co
+                sr += v.real * si_f
+                si += v.imag * si_f
                 q += step
                 if q >= n:
                     q -= n
             # c(k0 + δ) = A + jS, c(k0 - δ) = A - jS with A = ar + j ai, S = sr + j si
-            out[i, n_h + h] = np.sqrt((ar - si) ** 2 + (ai + sr) ** 2) / n
-            out[i, n_h - 1 - h] = np.sqrt((ar + si) ** 2 + (ai - sr) ** 2) / n
+            a_r, a_i, s_r, s_i = np.float64(ar), np.float64(ai), np.float64(sr), np.float64(si)
+            out[i, n_h + h] = np.sqrt((a_r - s_i) ** 2 + (a_i + s_r) ** 2) / n
+            out[i, n_h - 1 - h] = np.sqrt((a_r + s_i) ** 2 + (a_i - s_r) ** 2) / n
     return out
 
 

@@ -93,7 +93,7 @@ class SharedCorrelation:
         self.n_win, self.lags, self.d = base.n_win, base.cfg.lags, base.cfg.decimation
         h = np.arange(1, self.d) / self.d  # the offsets between grid lags [lags]
         theta = 2 * np.pi * np.outer(h, np.fft.fftfreq(self.n_win, 1.0 / self.n_win)) / self.n_win
-        self.cs = np.ascontiguousarray(np.concatenate([np.cos(theta), np.sin(theta)]))  # [2H, N]
+        self.cs = np.ascontiguousarray(np.concatenate([np.cos(theta), np.sin(theta)]), dtype=np.float32)  # [2H, N]
         self._parts: dict[tuple[str, int, int], NDArray[np.complex64]] = {}
         self._buf = np.empty((base.cfg.n_blocks, self.n_win), dtype=np.complex64)
 

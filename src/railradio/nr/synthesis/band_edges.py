@@ -51,7 +51,7 @@ from railradio.nr.synthesis.edge_math import (
 )
 from railradio.nr.synthesis.edge_tables import ChebyshevEdges
 from railradio.nr.synthesis.synthesizer import Synthesizer, _LinkGrid
-from railradio.nr.waveform.numerology import N_ACTIVE, N_FFT, SAMPLE_RATE_HZ
+from railradio.nr.waveform.numerology import N_ACTIVE, N_FFT, SAMPLE_RATE_HZ, period_length
 
 
 class BandEdges(ChebyshevEdges):
@@ -192,7 +192,7 @@ class BandEdges(ChebyshevEdges):
         m_full = total * self.d_s
         if m_full % self.d_fe:
             raise ValueError(f"the burst's {m_full} full-rate samples are not a multiple of d_fe = {self.d_fe}")
-        acc = np.zeros((m_full // self.d_fe, self.x_nodes.size), np.complex128)
+        acc = np.zeros((period_length(m_full // self.d_fe), self.x_nodes.size), np.complex128)
         t_sym = (num.symbol_start(sp["symbols"]) + sp["cps"] + n / 2) / fs + t0_s
         at_train = at_train_mask(syn.data_beam, links, serving)
         g_syms, geo_h = symbol_gains(links, draws, at_train, sp, t_sym, motion, syn.f_k)
@@ -310,9 +310,10 @@ class BandEdges(ChebyshevEdges):
 
     def _add(self, acc, pos, vals, m_full, end: bool = False) -> None:
         """Add edge values at the nodes ``vals`` [E, n_nodes] at full-rate samples ``pos`` [E]
-        (those inside the burst; ``end``: the burst's end ``m_full``, sample 0 of the
-        circular burst) to the accumulator on the F_s/D_fe grid, the offset from the grid a
-        phase at each node."""
+        (those inside the burst; ``end``: the burst's end ``m_full``, where the front end's
+        zero padding begins) to the accumulator on the F_s/D_fe grid (the front end's period,
+        :func:`railradio.nr.waveform.numerology.period_length`), the offset from the grid a phase
+        at each node."""
         pos = np.asarray(pos)
         keep = pos <= m_full if end else pos < m_full
         pos, vals = pos[keep], vals[keep]
@@ -324,7 +325,7 @@ class BandEdges(ChebyshevEdges):
     def _spectrum(self, acc, m_full) -> NDArray[np.complex64]:
         """The edges' sum through the front end: each node's DFT, the nodes interpolated at
         every bin of the front end's band (barycentric Lagrange), back to time at F_s/D_fe."""
-        m = m_full // self.d_fe
+        m = acc.shape[0]
         per_node = sfft.fft(np.ascontiguousarray(acc.T).astype(np.complex64), axis=1, workers=1)  # m-point order
         if self._weights is None or self._weights.shape[1] != m:  # ν_q / (π/D_fe) at each bin
             lag = _chebyshev_lagrange(sfft.fftfreq(m, 1.0 / m) / (m / 2.0), self.x_nodes.size)[1]
@@ -363,7 +364,7 @@ class SpectralBandEdges(BandEdges):
         kernels.scatter_rows(acc, np.asarray(base, dtype=np.int64), int(lo), np.ascontiguousarray(local))
 
     def _spectrum(self, acc, m_full) -> NDArray[np.complex64]:
-        m = m_full // self.d_fe
+        m = acc.shape[0]
         per_node = sfft.fft(np.ascontiguousarray(acc.T).astype(np.complex64), axis=1, workers=1)
         if self._weights is None or self._weights.shape[1] != m:  # ν_q / (π/D_fe) at each bin
             lag = _chebyshev_lagrange(sfft.fftfreq(m, 1.0 / m) / (m / 2.0), self.x_nodes.size)[1]

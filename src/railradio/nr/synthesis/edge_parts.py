@@ -20,7 +20,7 @@ from numpy.typing import NDArray
 from railradio.nr.channel.link import Links
 from railradio.nr.synthesis.band_edges import SpectralBandEdges
 from railradio.nr.synthesis.edge_math import _ceil_samples, _los_phasor
-from railradio.nr.waveform.numerology import SAMPLE_RATE_HZ
+from railradio.nr.waveform.numerology import SAMPLE_RATE_HZ, period_length
 
 
 class LinkEdges(NamedTuple):
@@ -230,14 +230,14 @@ class EdgeParts(SpectralBandEdges):
         Returns
         -------
         numpy.ndarray of complex64
-            [m_full / D_fe] the edges' spectrum (m-point order).
+            [period_length(m_full / D_fe)] the edges' spectrum (m-point order).
         """
-        acc = np.zeros((m_full // self.d_fe, self.x_nodes.size), np.complex128)
+        acc = np.zeros((period_length(m_full // self.d_fe), self.x_nodes.size), np.complex128)
         for le in links_edges:
             g = w[le.r].astype(np.float64)  # [2, S]
             gp = np.zeros_like(g)
             gp[:, 1:] = g[:, :-1]
             local = np.einsum("ps,pswj->swj", g, le.cur) + np.einsum("ps,pswj->swj", gp, le.prev)
-            acc[0] += np.einsum("pe,pej->j", g[:, le.end_sym], le.end_val)
+            acc[(m_full // self.d_fe) % acc.shape[0]] += np.einsum("pe,pej->j", g[:, le.end_sym], le.end_val)
             self._scatter(acc, le.base, le.lo, local)
         return self._spectrum(acc, m_full)

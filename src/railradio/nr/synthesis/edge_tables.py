@@ -147,9 +147,12 @@ class ChebyshevEdges:
         frac = prof.delays_s * fs - tap_shift
         kern = self._point_kernels(kern0, np.full(frac.size, nc_full % d), (nc_full - tau0_s * fs) - frac, rho_b)
         w = (dg * (-g[:-1] * los(b) * (b < m_full))[:, None]).astype(np.complex64)  # [S-1, L]
-        spill = np.take(rows[:-1], [shifts.index(int(t)) for t in tap_shift], axis=1)  # [S-1, L, R]
-        spill *= w[:, :, None]
-        local[1:, nc_off - lo] += spill.reshape(b.size, -1) @ kern.reshape(-1, n_nodes)
+        # Σ_l w[s, l] (rows[s, shift_l] @ kern[l]): one small product per tap on a view of
+        # the rows (no [S-1, L, R] copy of them)
+        spill = np.zeros((b.size, n_nodes), np.complex64)
+        for l, t in enumerate(tap_shift):
+            spill += w[:, l, None] * (rows[:-1, shifts.index(int(t))] @ kern[l])
+        local[1:, nc_off - lo] += spill
         self._scatter(acc, base, lo, local)
 
     def _scatter(self, acc, base, lo: int, local) -> None:
@@ -181,8 +184,9 @@ class ChebyshevEdges:
                 acc[(base[a:b, None] + lo + np.arange(width)[None, :]) % m] += local[a:b]
 
     def _burst_end(self, acc, pool_idx, g, cell, copies, first, sp, m_full, tau0_s, kern0, los) -> None:
-        """The burst's end at sample M (sample 0 of the circular burst): every copy's piece
-        there ends, the tones summed over the copies on the symbol each holds there."""
+        """The burst's end at sample M (where the front end's zero padding begins): every
+        copy's piece there ends, the tones summed over the copies on the symbol each holds
+        there."""
         d, fs = self.d_s, SAMPLE_RATE_HZ
         starts, cps = sp["starts"], sp["cps"]
         nc_full = int(_ceil_samples(tau0_s))
@@ -198,4 +202,4 @@ class ChebyshevEdges:
                 src = src * ~self._masks[mtype[sl]] + distinct[vrow[sl]]
             y = m_full - tau0_s * fs - d * (starts[sl] + cps[sl])  # the tones' phase reference
             row += g[sl] * src * np.exp(1j * self.w_k * y) * (gains_c[s_end, on] @ basis[on])
-        acc[0] += (row @ self.psi) @ kern0[0] * los(m_full)
+        acc[(m_full // self.d_fe) % acc.shape[0]] += (row @ self.psi) @ kern0[0] * los(m_full)

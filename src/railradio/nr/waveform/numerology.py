@@ -140,6 +140,42 @@ class Numerology:
         return self.cp_length(symbol) + self.n_fft
 
 
+def period_length(m: int) -> int:
+    """The front end's period [samples at its output rate] for a burst of ``m`` samples there:
+    the smallest integer ≥ ``m`` whose prime factors are 2, 3 and 5, the radices pocketfft
+    transforms fastest (:func:`railradio.nr.receiver.frontend.project`).
+
+    Parameters
+    ----------
+    m : int
+        The burst's length at the front end's output rate (≥ 1).
+
+    Returns
+    -------
+    int
+        The period, ≥ ``m`` (``m`` itself when it has no other prime factor).
+
+    Raises
+    ------
+    ValueError
+        When ``m`` is not an integer ≥ 1.
+    """
+    if isinstance(m, bool) or not isinstance(m, (int, np.integer)) or m < 1:
+        raise ValueError(f"m must be an integer >= 1, got {m!r}")
+    best = None
+    p2 = 1
+    while p2 < 2 * m:
+        p3 = p2
+        while p3 < 2 * m:
+            p5 = p3
+            while p5 < m:
+                p5 *= 5
+            best = p5 if best is None else min(best, p5)
+            p3 *= 3
+        p2 *= 2
+    return int(best)
+
+
 def ssb_first_symbols(pattern: str = "source", n_blocks: int = 64) -> NDArray[np.int64]:
     """First OFDM symbol (from the burst's first subframe start) of each SS block.
 
