@@ -12,6 +12,7 @@ import scipy.fft as sfft
 import yaml
 
 from railradio.nr.engine import SharedEstimator, SpectralSynthesis
+from railradio.nr.engine.equivalence import compare_decisions, engine_decisions
 from railradio.nr.engine.simulate import Estimator, Synthesis, scenario_from_config
 from railradio.nr.receiver import SharedCorrelation, front_end, kernels
 from railradio.nr.receiver import kernels as study_kernels
@@ -171,3 +172,27 @@ def test_scatter_rows_adds_as_band_edges_scatter(rng):
     got = np.zeros((100, 3), np.complex128)
     synthesis_kernels.scatter_rows(got, base, 2, local)
     np.testing.assert_array_equal(got, want)
+
+
+def test_engine_decisions_are_compared_across_versions():
+    """Two dumps of the engine's decisions count what differs; dumps of another run refuse."""
+    cfg = yaml.safe_load((ROOT / "config/config.yaml").read_text(encoding="utf-8"))
+    scn = scenario_from_config(cfg["nr"])
+    a = engine_decisions(scn, cfg["seed"], spawn_key("nr", 0), np.arange(2500, 2503))
+    same = compare_decisions(a, a)
+    assert same["lists_changed"] == 0 and same["source"]["pairs"] > 0
+    assert all(same[n][k] == 0 for n in a["names"] for k in ("detections_changed", "toa_changed", "aod_changed"))
+    b = {**a, "decisions": [dict(d) for d in a["decisions"]]}
+    toa = b["decisions"][1]["toa_s"].copy()
+    j = np.flatnonzero(np.isfinite(toa[0]))[0]
+    toa[0, j] += 2.0 / SAMPLE_RATE_HZ
+    b["decisions"][1]["toa_s"] = toa
+    moved = compare_decisions(a, b)
+    assert moved["source"]["toa_changed"] == 1 / moved["source"]["pairs"]
+    assert moved["robust"]["toa_changed"] == 0
+    with pytest.raises(ValueError, match="same seed"):
+        compare_decisions(a, {**a, "run": {**a["run"], "seed": a["run"]["seed"] + 1}})
+    with pytest.raises(ValueError, match="same epochs"):
+        compare_decisions(a, {**a, "epochs": a["epochs"] + 1})
+    with pytest.raises(ValueError, match="consecutive"):
+        engine_decisions(scn, cfg["seed"], spawn_key("nr", 0), np.array([2500, 2502]))

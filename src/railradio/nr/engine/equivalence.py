@@ -140,7 +140,8 @@ def engine_decisions(scn, seed: int, key: tuple[int, ...], epochs: np.ndarray) -
     Returns
     -------
     dict
-        ``epochs``, ``names`` (the receivers), ``decisions`` (per epoch, a dict of
+        ``epochs``, ``names`` (the receivers), ``run`` (the seed, the spawn key and the
+        scenario, as text: what must match to compare), ``decisions`` (per epoch, a dict of
         :data:`DECISION_FIELDS`) and ``ms_per_epoch`` (process time).
 
     Raises
@@ -158,7 +159,8 @@ def engine_decisions(scn, seed: int, key: tuple[int, ...], epochs: np.ndarray) -
         out.append({f: np.array(getattr(m, f)) for f in DECISION_FIELDS})
     cost = 1e3 * (time.process_time() - t0) / epochs.size
     names = [n for n, _, _ in est.receivers]
-    return {"epochs": epochs, "names": names, "decisions": out, "ms_per_epoch": cost}
+    run = {"seed": int(seed), "key": [int(k) for k in key], "scenario": repr(scn)}
+    return {"epochs": epochs, "names": names, "run": run, "decisions": out, "ms_per_epoch": cost}
 
 
 def compare_decisions(old: dict, new: dict) -> dict:
@@ -178,10 +180,12 @@ def compare_decisions(old: dict, new: dict) -> dict:
     Raises
     ------
     ValueError
-        When the two ran other epochs or other receivers.
+        When the two ran other epochs, receivers, seeds, realizations or scenarios.
     """
     if not np.array_equal(old["epochs"], new["epochs"]) or list(old["names"]) != list(new["names"]):
         raise ValueError("old and new must hold the same epochs and receivers")
+    if old["run"] != new["run"]:
+        raise ValueError("old and new must come from the same seed, realization and scenario")
     names = list(old["names"])
     count, sel = _tally(names)
     lists = 0

@@ -3,8 +3,9 @@ front end's band (:func:`railradio.nr.receiver.frontend.project`), the band's ed
 (:class:`railradio.nr.synthesis.band_edges.BandEdges`, whose sum is already a spectrum before its last
 IFFT) and the result interpolated to the correlation's lag grid
 (:func:`railradio.nr.receiver.frontend.upsample`) — two FFTs instead of the five of project, the
-edges' return to time and upsample. The burst is still one period of the ideal filter, of the
-same length: the result equals the three steps to float32 rounding.
+edges' return to time and upsample. The period of the ideal filter is project's (the burst
+zero-padded to :func:`railradio.nr.waveform.numerology.period_length`): the result equals the
+three steps to float32 rounding.
 """
 
 from __future__ import annotations

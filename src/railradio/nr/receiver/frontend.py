@@ -42,7 +42,8 @@ def project(z: NDArray, factor: int) -> NDArray[np.complex64]:
     Parameters
     ----------
     z : numpy.ndarray
-        Complex samples at a rate F (one burst, treated as circular).
+        Complex samples at a rate F (one burst; zero-padded to the period, which the filter
+        treats as circular).
     factor : int
         Decimation D (integer ≥ 1).
 
@@ -70,12 +71,13 @@ def project(z: NDArray, factor: int) -> NDArray[np.complex64]:
 
 def upsample(z: NDArray, factor: int) -> NDArray[np.complex64]:
     """Band-limited interpolation by ``factor`` (zero spectrum outside the input's band):
-    ``project(upsample(z, D), D) == z``.
+    ``project(upsample(z, D), D) == z`` when ``len(z)`` has no prime factor but 2, 3 and 5
+    (otherwise ``project`` pads to a longer period).
 
     Parameters
     ----------
     z : numpy.ndarray
-        Complex samples at a rate F (one burst, treated as circular).
+        Complex samples at a rate F (one period, circular).
     factor : int
         Interpolation factor D (integer ≥ 1).
 
@@ -112,7 +114,8 @@ def front_end(
     Parameters
     ----------
     z : numpy.ndarray of complex64
-        The burst at the synthesis rate F, [n] (n a multiple of ``down``; one period).
+        The burst at the synthesis rate F, [n] (n a multiple of ``down``; zero-padded to the
+        period m·down).
     down, up : int
         The front end's decimation from F and the interpolation to the lag grid (integers ≥ 1).
     edges : numpy.ndarray of complex64 or None

@@ -73,8 +73,9 @@ def noise_false_alarms(
     scn: Scenario, n_bursts: int, rng: np.random.Generator, n_cells: int = 6
 ) -> dict[str, tuple[int, int]]:
     """False alarms of every receiver on noise-only bursts: ``{receiver: (detections,
-    block tests)}``. Each burst is complex white noise at the front end's rate with the
-    production burst's length, tested for ``n_cells`` cells drawn from the deployment.
+    block tests)}``. Each burst is complex white noise at the front end's rate over the
+    production burst's unpadded length (white noise: its period does not matter), tested for
+    ``n_cells`` cells drawn from the deployment.
 
     Parameters
     ----------

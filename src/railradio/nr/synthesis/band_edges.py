@@ -177,7 +177,8 @@ class BandEdges(ChebyshevEdges):
         Returns
         -------
         numpy.ndarray of complex64
-            [total·D_s/D_fe] samples at F_s/D_fe [√W].
+            [period_length(total·D_s/D_fe)] samples at F_s/D_fe [√W] (the front end's
+            period, :func:`railradio.nr.waveform.numerology.period_length`).
 
         Raises
         ------

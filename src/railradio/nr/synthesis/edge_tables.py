@@ -158,7 +158,7 @@ class ChebyshevEdges:
     def _scatter(self, acc, base, lo: int, local) -> None:
         """Add ``local`` [S, width, J] at grid samples base[s] + lo + 0..width-1 (disjoint):
         through a strided view of ``acc`` over each run of equally spaced symbol starts, by
-        index for a run that reaches past the burst's end (wrapped)."""
+        index for a run that reaches past the end of ``acc`` (the front end's period; wrapped)."""
         m, width = acc.shape[0], local.shape[1]
         key = ("runs", base.size, int(base[0]), int(base[-1]))
         runs = self._rows.get(key)

@@ -366,7 +366,8 @@ def place_symbols(z: np.ndarray, y: np.ndarray, first: np.ndarray) -> None:
 
 @njit(cache=True, nogil=True)
 def scatter_rows(acc: np.ndarray, base: np.ndarray, lo: int, local: np.ndarray) -> None:
-    """acc[(base[s] + lo + w) mod M, :] += local[s, w, :] for every symbol s and offset w, in
+    """acc[(base[s] + lo + w) mod M, :] += local[s, w, :] (M = len(acc), the front end's
+    period) for every symbol s and offset w, in
     place: one link's edge values added around each symbol start on the F_s/D_fe grid, as
     :meth:`railradio.nr.synthesis.band_edges.BandEdges._scatter` adds them (each element of ``acc``
     receives at most one value per symbol, in the same complex128 arithmetic).
