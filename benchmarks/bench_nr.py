@@ -12,8 +12,11 @@ choice of what to keep is measured; and the band's exact completion by its symbo
 (railradio.nr.synthesis.band_edges: ``exact_path_ms.band_edges``, and ``band_edges_vs_band`` against
 what the full band adds to the production's time); and one burst through the reference path
 (railradio.nr.engine.simulate) against the burst engine the study runs (railradio.nr.engine:
-``burst_ms.*``, ``engine_speedup``); and the reproduction map's amplitude variants from one
-synthesis of the links' unit parts against each variant's own (``variants.*``).
+``burst_ms.*``, ``engine_speedup``); the shard-like run of the study's code now against the
+same run of the engine the study ran before the burst engine (commit ``FILED_COMMIT``, its own
+tree and config, extracted with ``git archive``: ``filed_engine.*``); and the reproduction map's
+amplitude variants from one synthesis of the links' unit parts against each variant's own
+(``variants.*``).
 
     python benchmarks/bench_nr.py --out results/benchmarks/nr_bench.json
 """
@@ -26,6 +29,7 @@ import json
 import os
 import subprocess
 import sys
+import tempfile
 import time
 
 import numpy as np
@@ -79,6 +83,78 @@ def shard_run(config: str, n_epochs: int, tunables: bool, exact_spill: bool = Fa
         timeout=1800,
     ).stdout
     return json.loads(out.strip().splitlines()[-1])
+
+
+FILED_COMMIT = "39e1c11168ca666fb688b15e0a5034fdfef6ae9e"
+"""The last commit whose nr shards ran the engine before the burst engine (2026-12-05 00:06):
+``railradio.nr.simulate.simulate_epochs`` (Synthesis with the exact spill and the band's edges,
+the front end, the Estimator's cell search and both receivers, each correlating on its own),
+on a paper-scale config whose nr bursts are the current one's (the same deployment, channel,
+traffic and receivers; the differences since are comments and study keys outside the bursts)."""
+
+# Consecutive bursts of realization r0 from epoch 2 500 (an acquisition epoch first, as a
+# shard starts) through a tree's own simulate_epochs and config, in a fresh process: the
+# process's CPU time per burst (user + system; the BLAS on one thread).
+_TREE_RUN = """
+import json, resource, sys, time, yaml
+sys.path.insert(0, sys.argv[1])
+try:
+    from railradio.nr.engine.epochs import simulate_epochs
+    from railradio.nr.engine.simulate import scenario_from_config
+except ImportError:  # the flat nr package of FILED_COMMIT
+    from railradio.nr.simulate import scenario_from_config, simulate_epochs
+from railradio.rng import spawn_key
+cfg = yaml.safe_load(open(sys.argv[2]))
+scn = scenario_from_config(cfg["nr"])
+ep = list(range(2500, 2500 + int(sys.argv[3])))
+simulate_epochs(scn, ep[:3], cfg["seed"], spawn_key("nr", 0))  # warm-up: kernels, caches
+r0 = resource.getrusage(resource.RUSAGE_SELF)
+simulate_epochs(scn, ep, cfg["seed"], spawn_key("nr", 0))
+r1 = resource.getrusage(resource.RUSAGE_SELF)
+cpu = (r1.ru_utime - r0.ru_utime) + (r1.ru_stime - r0.ru_stime)
+print(json.dumps({"cpu_s": cpu, "n": len(ep), "module": simulate_epochs.__module__}))
+"""
+
+
+def filed_engine(config: str, n_epochs: int, repeat: int = 2) -> dict:
+    """The shard-like run (:data:`_TREE_RUN`) of the code in this tree against the same run of
+    :data:`FILED_COMMIT`'s tree (``src`` and ``config`` from ``git archive``), in fresh
+    processes with the jobs' environment, alternated, the smaller CPU time of ``repeat`` each:
+    ``filed_engine.ms_per_burst.{filed,now}`` and their ratio ``filed_engine.speedup``. Empty
+    (with a line saying why) when the commit is not in this clone's history."""
+    root = subprocess.run(["git", "rev-parse", "--show-toplevel"], capture_output=True, text=True).stdout.strip()
+    have = root and subprocess.run(["git", "-C", root, "cat-file", "-e", FILED_COMMIT + "^{commit}"]).returncode == 0
+    if not have:
+        print(f"filed_engine: commit {FILED_COMMIT[:7]} not in this clone's history, not measured")
+        return {}
+    env = {**os.environ, **JOB_ENV, "OPENBLAS_NUM_THREADS": "1"}
+    with tempfile.TemporaryDirectory() as tmp:
+        archive = subprocess.run(
+            ["git", "-C", root, "archive", FILED_COMMIT, "src", "config"], capture_output=True, check=True
+        ).stdout
+        subprocess.run(["tar", "-x", "-C", tmp], input=archive, check=True)
+        trees = {"filed": (f"{tmp}/src", f"{tmp}/config/config.yaml"), "now": (f"{root}/src", os.path.abspath(config))}
+        best: dict[str, float] = {}
+        for _ in range(repeat):
+            for name, (src, cfg) in trees.items():
+                out = subprocess.run(
+                    [sys.executable, "-c", _TREE_RUN, src, cfg, str(n_epochs)],
+                    env=env,
+                    check=True,
+                    capture_output=True,
+                    text=True,
+                    timeout=3600,
+                    cwd=tmp,
+                ).stdout
+                run = json.loads(out.strip().splitlines()[-1])
+                best[name] = min(best.get(name, np.inf), 1e3 * run["cpu_s"] / run["n"])
+    return {
+        "filed_engine.commit": FILED_COMMIT,
+        "filed_engine.bursts": n_epochs,
+        "filed_engine.ms_per_burst.filed": best["filed"],
+        "filed_engine.ms_per_burst.now": best["now"],
+        "filed_engine.speedup": best["filed"] / best["now"],
+    }
 
 
 def naive_correlation(z: np.ndarray, s_min: int, cfg, n_id1: np.ndarray, n_id2: np.ndarray) -> np.ndarray:
@@ -234,8 +310,13 @@ def main() -> None:
         "--exact-epochs", type=int, default=3, help="epochs of the fidelity paths (the exact reference costs ~6 s each)"
     )
     ap.add_argument("--variant-epochs", type=int, default=3, help="epochs of the map's variants from one synthesis")
+    ap.add_argument("--filed-epochs", type=int, default=100, help="bursts of the runs against FILED_COMMIT's engine")
+    ap.add_argument("--filed-only", action="store_true", help="only the run against FILED_COMMIT's engine")
     ap.add_argument("--out", default=None)
     args = ap.parse_args()
+    if args.filed_only:
+        emit(filed_engine(args.config, args.filed_epochs), args.out)
+        return
     with open(args.config, encoding="utf-8") as fh:
         scn = scenario_from_config(yaml.safe_load(fh)["nr"])
     dep = scn.deployment
@@ -320,6 +401,7 @@ def main() -> None:
     report["exact_spill_cost_ratio"] = report["malloc_tuned_ms_per_burst"] / report["wrapped_spill_ms_per_burst"]
     report.update(fft_backends())
     report.update(burst_engine(args.config, max(args.epochs, 2) * 5))
+    report.update(filed_engine(args.config, args.filed_epochs))
     report.update(variant_bursts(args.config, args.variant_epochs))
     report.update(exact_costs(args.config, args.exact_epochs))
     emit(report, args.out)

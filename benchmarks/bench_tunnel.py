@@ -17,6 +17,7 @@ import platform
 import time
 
 import numpy as np
+import yaml
 from _report import best_of, emit
 
 from railradio.tunnel.channel import offset_grid_m, received, slot_powers, tabulate
@@ -24,11 +25,13 @@ from railradio.tunnel.geometry import Cable, Tunnel
 from railradio.tunnel.lifting import lift
 from railradio.tunnel.materials import CONCRETE_900MHZ
 from railradio.tunnel.rays import image_families, sbr_families, trace_2d
+from railradio.tunnel.study import local_mean_window
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", default=None)
+    ap.add_argument("--config", default="config/config.yaml", help="its tunnel section's local-mean window")
     ap.add_argument("--order", type=int, default=16, help="reflection order (paper scale: 16)")
     ap.add_argument("--n-rays", type=int, default=100_000)
     ap.add_argument("--n-direct", type=int, default=20, help="receivers traced directly")
@@ -50,7 +53,11 @@ def main() -> None:
     # tabulated channel vs direct tracing of every slot-receiver pair
     grid = offset_grid_m(0.04, 1000.0, rect.slot_spacing_m)
     t0 = time.perf_counter()
-    table = tabulate(fam_img, rect, cab, grid, eps=CONCRETE_900MHZ, polarization="paraxial")
+    with open(args.config, encoding="utf-8") as fh:
+        window_m = local_mean_window(yaml.safe_load(fh)["tunnel"])
+    table = tabulate(
+        fam_img, rect, cab, grid, eps=CONCRETE_900MHZ, polarization="paraxial", local_mean_window_m=window_m
+    )
     t_build = time.perf_counter() - t0
     rng = np.random.default_rng(1)
     x_tab = np.round(rng.uniform(1000, 4000, args.n_table) / 0.04) * 0.04
