@@ -21,7 +21,7 @@ SMK_PATHS  := workflow
 export HDF5_USE_FILE_LOCKING := FALSE
 export MPLBACKEND := Agg
 
-.PHONY: all figures numbers paper test test-fast bench reproduce report lint expected publish fidelity records dag gallery clean
+.PHONY: all figures numbers paper test test-fast bench reproduce report lint expected publish fidelity records republish dag gallery clean
 
 all: figures numbers
 
@@ -89,6 +89,19 @@ fidelity: $(STAMP)  ## the nr shortcuts measured at paper scale (outside all) ->
 	$(SNAKE) fidelity -j$(JOBS)
 	$(BIN)/python -m railradio.nr.study.records publish fidelity results/nr/fidelity/key_numbers.json
 	cp results/nr/fidelity/nr_fidelity.png docs/gallery/
+
+# After a change to code or config in an nr record's closure: the three records from one
+# paper-scale run (both cores busy), published; then every paper-scale key number merged with
+# the new records (a merge that ran before them would carry the old ones); then the CI-scale
+# expectation, whose merge reads the fidelity record too
+republish: $(STAMP)  ## the nr records, paper/numbers.json and tests/expected after an nr change (commit paper/, docs/, tests/expected/)
+	$(SNAKE) records fidelity -j$(JOBS)
+	$(BIN)/python -m railradio.nr.study.records publish map results/nr/map/key_numbers.json
+	$(BIN)/python -m railradio.nr.study.records publish cases results/nr/cases/key_numbers.json
+	$(BIN)/python -m railradio.nr.study.records publish fidelity results/nr/fidelity/key_numbers.json
+	cp results/nr/fidelity/nr_fidelity.png docs/gallery/
+	$(MAKE) publish
+	$(MAKE) expected
 
 GALLERY := fusion_rmse_vs_distance nr_position_error_cdf nr_sensitivity tunnel_position_error_cdf \
            tunnel_source_vs_physical handover_stages_vs_speed nr_sweeps chain_success_vs_sigma \

@@ -2,6 +2,7 @@
 targets, so a stale record must fail here, and the merge must read only a current one."""
 
 import json
+import subprocess
 from pathlib import Path
 
 import pytest
@@ -22,8 +23,33 @@ def _config() -> dict:
 @pytest.mark.parametrize("name", sorted(RECORDS))
 def test_published_records_are_from_this_code_and_config(name):
     """paper/<name>_numbers.json comes from `make <name>`: its provenance must name the code
-    and config that are here, or its numbers are stale (re-run `make fidelity` / `make records`)."""
-    assert RECORDS[name].stale(ROOT, _config()) == [], f"paper/{name}_numbers.json is stale: re-run `make {name}`"
+    and config that are here, or its numbers are stale (re-run `make republish`)."""
+    assert RECORDS[name].stale(ROOT, _config()) == [], (
+        f"paper/{name}_numbers.json is stale: re-run `make republish` "
+        "(the three records, then the paper-scale merge and the CI expectation)"
+    )
+
+
+def test_republish_publishes_every_record_before_the_merge_that_reads_them():
+    """`make republish` (dry run): the three records are published before the paper-scale merge
+    copied to paper/numbers.json, and the CI expectation is made last (its merge reads the
+    fidelity record). A merge that ran before a record's publication carried the old record into
+    paper/numbers.json, which CI's reproduction then found beyond tolerance."""
+    lines = subprocess.run(
+        ["make", "-n", "--no-print-directory", "republish"], cwd=ROOT, capture_output=True, text=True, check=True
+    ).stdout.splitlines()
+
+    def at(pattern: str, but: str = "\0") -> int:
+        hits = [i for i, line in enumerate(lines) if pattern in line and but not in line]
+        assert len(hits) == 1, (pattern, lines)
+        return hits[0]
+
+    published = [at(f"railradio.nr.study.records publish {name} ") for name in sorted(RECORDS)]
+    merge = at("snakemake numbers -j", but="(cd ")  # the paper-scale merge, not the CI-scale one
+    copy = at("cp results/key_numbers.json paper/numbers.json")
+    expected = at("--configfile config/ci.yaml")
+    assert at("snakemake records fidelity") < min(published)
+    assert max(published) < merge < copy < expected
 
 
 def test_a_record_goes_stale_with_its_code_its_rule_file_or_its_config(tmp_path):
