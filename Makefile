@@ -80,15 +80,23 @@ publish: numbers  ## copy the paper-scale key numbers to paper/numbers.json and 
 	cp results/key_numbers.json paper/numbers.json
 	$(BIN)/python -m railradio.keytable docs paper/numbers.json docs/keys.md
 
+# publishing the nr records from results/ (the targets records, fidelity and republish)
+define PUBLISH_MAP_CASES
+$(BIN)/python -m railradio.nr.study.records publish map results/nr/map/key_numbers.json
+$(BIN)/python -m railradio.nr.study.records publish cases results/nr/cases/key_numbers.json
+endef
+define PUBLISH_FIDELITY
+$(BIN)/python -m railradio.nr.study.records publish fidelity results/nr/fidelity/key_numbers.json
+cp results/nr/fidelity/nr_fidelity.png docs/gallery/
+endef
+
 records: $(STAMP)  ## the nr reproduction map and sensitivity cases at paper scale -> paper/{map,cases}_numbers.json (commit them)
 	$(SNAKE) records -j$(JOBS)
-	$(BIN)/python -m railradio.nr.study.records publish map results/nr/map/key_numbers.json
-	$(BIN)/python -m railradio.nr.study.records publish cases results/nr/cases/key_numbers.json
+	$(PUBLISH_MAP_CASES)
 
 fidelity: $(STAMP)  ## the nr shortcuts measured at paper scale (outside all) -> paper/fidelity_numbers.json (commit it)
 	$(SNAKE) fidelity -j$(JOBS)
-	$(BIN)/python -m railradio.nr.study.records publish fidelity results/nr/fidelity/key_numbers.json
-	cp results/nr/fidelity/nr_fidelity.png docs/gallery/
+	$(PUBLISH_FIDELITY)
 
 # After a change to code or config in an nr record's closure: the three records from one
 # paper-scale run (both cores busy), published; then every paper-scale key number merged with
@@ -96,10 +104,8 @@ fidelity: $(STAMP)  ## the nr shortcuts measured at paper scale (outside all) ->
 # expectation, whose merge reads the fidelity record too
 republish: $(STAMP)  ## the nr records, paper/numbers.json and tests/expected after an nr change (commit paper/, docs/, tests/expected/)
 	$(SNAKE) records fidelity -j$(JOBS)
-	$(BIN)/python -m railradio.nr.study.records publish map results/nr/map/key_numbers.json
-	$(BIN)/python -m railradio.nr.study.records publish cases results/nr/cases/key_numbers.json
-	$(BIN)/python -m railradio.nr.study.records publish fidelity results/nr/fidelity/key_numbers.json
-	cp results/nr/fidelity/nr_fidelity.png docs/gallery/
+	$(PUBLISH_MAP_CASES)
+	$(PUBLISH_FIDELITY)
 	$(MAKE) publish
 	$(MAKE) expected
 

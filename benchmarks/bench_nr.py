@@ -46,15 +46,24 @@ from railradio.nr.waveform.numerology import Numerology
 from railradio.nr.waveform.ssb import qpsk_pool, reference_waveform
 from railradio.workflow import JOB_ENV
 
-# A shard-like run in a fresh process: consecutive epochs of realization r0 through
-# simulate_epochs (channel, synthesis, both receivers), as the nr_shard jobs run them.
+# A shard-like run in a fresh process: consecutive epochs of realization r0 from epoch 2 500
+# (an acquisition epoch first, as a shard starts) through simulate_epochs (channel, synthesis,
+# both receivers), as the nr_shard jobs run them; from a source tree (argv[4], or this one's
+# when empty: FILED_COMMIT's flat nr package has simulate_epochs in railradio.nr.simulate) and
+# with the taps' spill as configured or set (argv[3]).
 _SHARD_RUN = """
 import json, resource, sys, time, yaml
-from railradio.nr.engine.epochs import simulate_epochs
-from railradio.nr.engine.simulate import scenario_from_config
+if sys.argv[4]:
+    sys.path.insert(0, sys.argv[4])
+try:
+    from railradio.nr.engine.epochs import simulate_epochs
+    from railradio.nr.engine.simulate import scenario_from_config
+except ImportError:
+    from railradio.nr.simulate import scenario_from_config, simulate_epochs
 from railradio.rng import spawn_key
 cfg = yaml.safe_load(open(sys.argv[1]))
-cfg["nr"]["channel"]["exact_spill"] = sys.argv[3] == "exact_spill"
+if sys.argv[3] != "as_configured":
+    cfg["nr"]["channel"]["exact_spill"] = sys.argv[3] == "exact_spill"
 scn = scenario_from_config(cfg["nr"])
 ep = list(range(2500, 2500 + int(sys.argv[2])))
 simulate_epochs(scn, ep[:3], cfg["seed"], spawn_key("nr", 0))  # warm-up: kernels, caches
@@ -66,21 +75,25 @@ print(json.dumps({"wall_s": t1 - t0, "user_s": r1.ru_utime - r0.ru_utime,
 """
 
 
-def shard_run(config: str, n_epochs: int, tunables: bool, exact_spill: bool = False) -> dict:
+def shard_run(
+    config: str, n_epochs: int, tunables: bool, exact_spill: bool | None = False, src: str = "", cwd: str | None = None
+) -> dict:
     """Time ``n_epochs`` bursts in a fresh process with or without the jobs' malloc
     settings (glibc reads them at process start, hence the subprocess), the taps' spill
-    wrapped (the shortcut, ``exact_spill`` false) or exact (``nr.channel.exact_spill``, as
-    configured)."""
+    wrapped (the shortcut, ``exact_spill`` false), exact (``nr.channel.exact_spill``) or as
+    ``config`` sets it (None), the library from ``src`` (default: this tree's)."""
     env = {**os.environ, **JOB_ENV}
     if not tunables:
         del env["GLIBC_TUNABLES"]
+    spill = "as_configured" if exact_spill is None else "exact_spill" if exact_spill else "wrapped"
     out = subprocess.run(
-        [sys.executable, "-c", _SHARD_RUN, config, str(n_epochs), "exact_spill" if exact_spill else "wrapped"],
+        [sys.executable, "-c", _SHARD_RUN, config, str(n_epochs), spill, src],
         env=env,
         check=True,
         capture_output=True,
         text=True,
         timeout=1800,
+        cwd=cwd,
     ).stdout
     return json.loads(out.strip().splitlines()[-1])
 
@@ -92,42 +105,19 @@ the front end, the Estimator's cell search and both receivers, each correlating 
 on a paper-scale config whose nr bursts are the current one's (the same deployment, channel,
 traffic and receivers; the differences since are comments and study keys outside the bursts)."""
 
-# Consecutive bursts of realization r0 from epoch 2 500 (an acquisition epoch first, as a
-# shard starts) through a tree's own simulate_epochs and config, in a fresh process: the
-# process's CPU time per burst (user + system; the BLAS on one thread).
-_TREE_RUN = """
-import json, resource, sys, time, yaml
-sys.path.insert(0, sys.argv[1])
-try:
-    from railradio.nr.engine.epochs import simulate_epochs
-    from railradio.nr.engine.simulate import scenario_from_config
-except ImportError:  # the flat nr package of FILED_COMMIT
-    from railradio.nr.simulate import scenario_from_config, simulate_epochs
-from railradio.rng import spawn_key
-cfg = yaml.safe_load(open(sys.argv[2]))
-scn = scenario_from_config(cfg["nr"])
-ep = list(range(2500, 2500 + int(sys.argv[3])))
-simulate_epochs(scn, ep[:3], cfg["seed"], spawn_key("nr", 0))  # warm-up: kernels, caches
-r0 = resource.getrusage(resource.RUSAGE_SELF)
-simulate_epochs(scn, ep, cfg["seed"], spawn_key("nr", 0))
-r1 = resource.getrusage(resource.RUSAGE_SELF)
-cpu = (r1.ru_utime - r0.ru_utime) + (r1.ru_stime - r0.ru_stime)
-print(json.dumps({"cpu_s": cpu, "n": len(ep), "module": simulate_epochs.__module__}))
-"""
-
 
 def filed_engine(config: str, n_epochs: int, repeat: int = 2) -> dict:
-    """The shard-like run (:data:`_TREE_RUN`) of the code in this tree against the same run of
-    :data:`FILED_COMMIT`'s tree (``src`` and ``config`` from ``git archive``), in fresh
-    processes with the jobs' environment, alternated, the smaller CPU time of ``repeat`` each:
-    ``filed_engine.ms_per_burst.{filed,now}`` and their ratio ``filed_engine.speedup``. Empty
-    (with a line saying why) when the commit is not in this clone's history."""
+    """The shard-like run (:func:`shard_run`, the jobs' environment, the spill as configured)
+    of the code in this tree against the same run of :data:`FILED_COMMIT`'s tree (``src`` and
+    ``config`` from ``git archive``), alternated, the smaller process CPU time (user + system)
+    of ``repeat`` each: ``filed_engine.ms_per_burst.{filed,now}`` and their ratio
+    ``filed_engine.speedup``. Empty (with a line saying why) when the commit is not in this
+    clone's history."""
     root = subprocess.run(["git", "rev-parse", "--show-toplevel"], capture_output=True, text=True).stdout.strip()
     have = root and subprocess.run(["git", "-C", root, "cat-file", "-e", FILED_COMMIT + "^{commit}"]).returncode == 0
     if not have:
         print(f"filed_engine: commit {FILED_COMMIT[:7]} not in this clone's history, not measured")
         return {}
-    env = {**os.environ, **JOB_ENV, "OPENBLAS_NUM_THREADS": "1"}
     with tempfile.TemporaryDirectory() as tmp:
         archive = subprocess.run(
             ["git", "-C", root, "archive", FILED_COMMIT, "src", "config"], capture_output=True, check=True
@@ -137,17 +127,8 @@ def filed_engine(config: str, n_epochs: int, repeat: int = 2) -> dict:
         best: dict[str, float] = {}
         for _ in range(repeat):
             for name, (src, cfg) in trees.items():
-                out = subprocess.run(
-                    [sys.executable, "-c", _TREE_RUN, src, cfg, str(n_epochs)],
-                    env=env,
-                    check=True,
-                    capture_output=True,
-                    text=True,
-                    timeout=3600,
-                    cwd=tmp,
-                ).stdout
-                run = json.loads(out.strip().splitlines()[-1])
-                best[name] = min(best.get(name, np.inf), 1e3 * run["cpu_s"] / run["n"])
+                run = shard_run(cfg, n_epochs, True, exact_spill=None, src=src, cwd=tmp)
+                best[name] = min(best.get(name, np.inf), 1e3 * (run["user_s"] + run["sys_s"]) / run["n"])
     return {
         "filed_engine.commit": FILED_COMMIT,
         "filed_engine.bursts": n_epochs,

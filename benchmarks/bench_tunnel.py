@@ -52,9 +52,9 @@ def main() -> None:
 
     # tabulated channel vs direct tracing of every slot-receiver pair
     grid = offset_grid_m(0.04, 1000.0, rect.slot_spacing_m)
-    t0 = time.perf_counter()
     with open(args.config, encoding="utf-8") as fh:
         window_m = local_mean_window(yaml.safe_load(fh)["tunnel"])
+    t0 = time.perf_counter()
     table = tabulate(
         fam_img, rect, cab, grid, eps=CONCRETE_900MHZ, polarization="paraxial", local_mean_window_m=window_m
     )
