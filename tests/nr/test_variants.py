@@ -60,6 +60,9 @@ def test_every_variant_equals_its_own_synthesis_to_float32_rounding(paper):
             np.testing.assert_allclose(g.z, want.z, rtol=0, atol=2e-6 * np.abs(want.z).max(), err_msg=f"variant {i}")
     # the variants do differ: M_T and the data rule change the burst far beyond rounding
     z = [b.z for b in got]
+    # the variant with another receiver reads the first variant's burst, which no receiver may write
+    assert z[-1] is z[0] and not z[0].flags.writeable
+    assert all(zi is not z[0] for zi in z[1:-1])
     assert np.abs(z[1] - z[0]).max() > 1e-2 * np.abs(z[0]).max()
     assert np.abs(z[2] - z[0]).max() > 1e-2 * np.abs(z[0]).max()
 
@@ -98,14 +101,14 @@ def test_parts_reject_what_they_cannot_split(paper):
 
 
 def test_variant_epochs_equal_each_variant_run_on_its_own(paper):
-    """A shard of two variants from one synthesis gives each variant's estimates as its own
-    run (simulate_epochs) does: the same neighbour lists and detections, TOAs and AODs to
-    float32 rounding."""
+    """A shard of two variants and a receiver-only twin of the first (which reads its burst)
+    from one synthesis gives each variant's estimates as its own run (simulate_epochs) does:
+    the same neighbour lists and detections, TOAs and AODs to float32 rounding."""
     from railradio.nr.engine.epochs import simulate_epochs
     from railradio.nr.engine.variants import simulate_variant_epochs
 
     cfg, base = paper
-    scns = _variants(base)[:2]
+    scns = _variants(base)[:2] + _variants(base)[-1:]
     epochs = np.arange(2500, 2503)  # from an acquisition epoch, as a shard starts
     key = spawn_key("nr", 0)
     got = simulate_variant_epochs(scns, epochs, cfg["seed"], key)

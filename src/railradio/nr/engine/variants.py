@@ -7,7 +7,8 @@ synthesizes each link's unit parts once (:mod:`railradio.nr.synthesis.parts`,
 :mod:`railradio.nr.synthesis.edge_parts`) and returns each variant's burst on the lag grid as
 :class:`railradio.nr.engine.frontend.SpectralSynthesis` of that variant returns it (equal to
 float32 rounding, ``tests/nr/test_variants.py``). Receiver settings may differ freely: they
-read the bursts.
+read the bursts, and variants with the same amplitudes and front end read one burst (the
+map's cells that change only the receiver: its window, template or selection).
 """
 
 from __future__ import annotations
@@ -171,13 +172,18 @@ class VariantSynthesis:
             self.parts.cfg.num.sample_rate_hz
         ) + t
         out = []
+        made: dict[tuple, np.ndarray] = {}  # the bursts by amplitudes and front end
         for scn, o, (x, v, a, lb, serving) in zip(self.scns, self.own, truths, strict=True):
             link_rrh = lb.rrh if lb.link_rrh is None else lb.link_rrh
             serv = np.asarray(link_rrh) == serving
             w = self.weights(scn, lb.links, draws, serv, sp, t_sym)
-            z = weigh(parts, w)
-            spec = self.edges.weigh(edges, m_full, w)
-            out.append(Burst(front_end(z, o.down, o.up, spec), parts.s_min, x, v, a, lb, serving))
+            seen = (w.tobytes(), o.down, o.up)
+            if seen not in made:  # a variant differing from an earlier one only in its receivers reads its burst
+                z = weigh(parts, w)
+                spec = self.edges.weigh(edges, m_full, w)
+                made[seen] = front_end(z, o.down, o.up, spec)
+                made[seen].flags.writeable = False  # the receivers read a burst, never write it
+            out.append(Burst(made[seen], parts.s_min, x, v, a, lb, serving))
         return out
 
     def weights(self, scn: Scenario, links, draws, serving, sp, t_sym) -> np.ndarray:
