@@ -292,11 +292,17 @@ def main() -> None:
     )
     ap.add_argument("--variant-epochs", type=int, default=3, help="epochs of the map's variants from one synthesis")
     ap.add_argument("--filed-epochs", type=int, default=100, help="bursts of the runs against FILED_COMMIT's engine")
+    ap.add_argument(
+        "--repeat",
+        type=int,
+        default=2,
+        help="runs of each process-level comparison (heap settings, spill, filed engine), the best kept",
+    )
     ap.add_argument("--filed-only", action="store_true", help="only the run against FILED_COMMIT's engine")
     ap.add_argument("--out", default=None)
     args = ap.parse_args()
     if args.filed_only:
-        emit(filed_engine(args.config, args.filed_epochs), args.out)
+        emit(filed_engine(args.config, args.filed_epochs, args.repeat), args.out)
         return
     with open(args.config, encoding="utf-8") as fh:
         scn = scenario_from_config(yaml.safe_load(fh)["nr"])
@@ -365,11 +371,11 @@ def main() -> None:
         "paper_scale_epochs": 3 * scn.trajectory.n_epochs,
     }
     # the jobs' heap settings (railradio.workflow.JOB_ENV) against glibc's defaults, same
-    # bursts, each in a fresh process, alternated and best of two, with the configured
+    # bursts, each in a fresh process, alternated and best of --repeat, with the configured
     # (exact) spill; and the wrapped spill (nr.channel.exact_spill false) with the jobs'
     # settings, whose band edges take the tone-by-tone path
     runs = {"malloc_default": [], "malloc_tuned": [], "wrapped_spill": []}
-    for _ in range(2):
+    for _ in range(args.repeat):
         for name in runs:
             runs[name].append(
                 shard_run(args.config, args.shard_epochs, name != "malloc_default", exact_spill=name != "wrapped_spill")
@@ -382,7 +388,7 @@ def main() -> None:
     report["exact_spill_cost_ratio"] = report["malloc_tuned_ms_per_burst"] / report["wrapped_spill_ms_per_burst"]
     report.update(fft_backends())
     report.update(burst_engine(args.config, max(args.epochs, 2) * 5))
-    report.update(filed_engine(args.config, args.filed_epochs))
+    report.update(filed_engine(args.config, args.filed_epochs, args.repeat))
     report.update(variant_bursts(args.config, args.variant_epochs))
     report.update(exact_costs(args.config, args.exact_epochs))
     emit(report, args.out)

@@ -43,11 +43,16 @@ def rng() -> np.random.Generator:
 
 def copy_workflow(dest: Path) -> Path:
     """A private copy of the workflow (workflow/: Snakefile, rules, profiles; config, paper,
-    library) in ``dest``."""
+    library) in ``dest``. The library's ``__pycache__`` comes along, with the times of the
+    sources kept (``copy2``): the bytecode and numba's compiled kernels stay valid in the copy
+    (both check the source's time and size; numba also the CPU), so its jobs load the
+    kernels the session has compiled instead of compiling them again (≈ 5 s of CPU a process
+    for the nr kernels). A test that edits a module changes its time and size, which
+    invalidates both."""
     for name in ("workflow", "config", "paper", "src"):
         src = ROOT / name
         if src.is_dir():
-            shutil.copytree(src, dest / name, ignore=shutil.ignore_patterns("__pycache__", "*.egg-info"))
+            shutil.copytree(src, dest / name, ignore=shutil.ignore_patterns("*.egg-info"))
         else:
             shutil.copy2(src, dest / name)
     return dest

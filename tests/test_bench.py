@@ -33,6 +33,8 @@ def test_bench_nr_smoke(tmp_path):
             "1",
             "--filed-epochs",
             "1",
+            "--repeat",
+            "1",
             "--out",
             str(out),
         ],
